@@ -1,0 +1,325 @@
+"""The message bus: a thin wrapper over one eclipse-zenoh session.
+
+Every key lives under ``dura/<robot>/``. Payloads are JSON objects; published
+messages carry the sender's component name as caller id (the zenoh attachment)
+and a source timestamp. The executive opens the bus listening on its endpoint
+(router mode); components and the CLI connect to it as clients. Multicast
+scouting is always off: processes meet at explicit endpoints only.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import re
+import threading
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import zenoh
+
+from knowledge.description import DEFAULT_ENDPOINT
+from knowledge.errors import BusError, DuraError
+
+log = logging.getLogger("dura.bus")
+
+_BAD_KEY = re.compile(r"[*$?#\s]|//")
+
+Handler = Callable[["Message"], None]
+RequestHandler = Callable[[dict[str, Any]], Mapping[str, Any]]
+
+
+def check_name(name: str, what: str = "name") -> str:
+    """A topic or component name usable in a key expression (no wildcards, no spaces)."""
+    name = name.strip("/")
+    if not name or _BAD_KEY.search(name):
+        raise BusError(f"invalid {what} '{name}' for the bus (no *, $, ?, #, spaces or //)")
+    return name
+
+
+def encode(payload: Mapping[str, Any]) -> bytes:
+    return json.dumps(payload, separators=(",", ":")).encode()
+
+
+def decode(raw: bytes, key: str = "") -> dict[str, Any]:
+    """A JSON object from bytes.
+
+    Raises:
+        BusError: the payload is not a JSON object.
+    """
+    try:
+        value = json.loads(raw)
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise BusError(f"{key}: malformed payload (not JSON: {e})") from e
+    if not isinstance(value, dict):
+        raise BusError(f"{key}: malformed payload (a JSON {type(value).__name__}, not an object)")
+    return value
+
+
+@dataclass
+class Message:
+    """One received message. ``payload`` is decoded on first use (hot paths skip it)."""
+
+    key: str
+    raw: bytes
+    caller_id: str = ""
+    sent: float | None = None
+    received: float = 0.0
+    _payload: dict[str, Any] | None = field(default=None, repr=False)
+
+    @property
+    def payload(self) -> dict[str, Any]:
+        if self._payload is None:
+            self._payload = decode(self.raw, self.key)
+        return self._payload
+
+    @property
+    def stamp(self) -> float | None:
+        """The ``stamp`` field of the payload, if it is a number."""
+        value = self.payload.get("stamp")
+        return float(value) if isinstance(value, (int, float)) else None
+
+
+class _Dropped:
+    """Counts dropped malformed messages per key; logs the first and then every 100th."""
+
+    def __init__(self) -> None:
+        self._counts: dict[str, int] = {}
+        self._lock = threading.Lock()
+
+    def __call__(self, key: str, reason: str) -> None:
+        with self._lock:
+            n = self._counts[key] = self._counts.get(key, 0) + 1
+        if n == 1 or n % 100 == 0:
+            log.warning("dropped malformed message #%d on %s: %s", n, key, reason)
+
+
+def session_config(*, listen: tuple[str, ...] = (), connect: tuple[str, ...] = ()) -> zenoh.Config:
+    """A zenoh configuration: router if it listens, else client; no multicast scouting."""
+    config = zenoh.Config()
+    config.insert_json5("mode", json.dumps("router" if listen else "client"))
+    if listen:
+        config.insert_json5("listen/endpoints", json.dumps(list(listen)))
+    if connect:
+        config.insert_json5("connect/endpoints", json.dumps(list(connect)))
+    config.insert_json5("scouting/multicast/enabled", "false")
+    config.insert_json5("scouting/gossip/enabled", "false")
+    return config
+
+
+class Bus:
+    """A zenoh session namespaced under ``dura/<robot>/``.
+
+    Args:
+        robot: the robot's name, the first level of every key.
+        name: this process's component name, sent as caller id.
+        endpoint: where the executive listens, e.g. ``tcp/127.0.0.1:7447``.
+        listen: listen on ``endpoint`` (the executive) instead of connecting to it.
+        connect: further endpoints to connect to (other machines).
+
+    Raises:
+        BusError: the endpoint is unusable: in use (listen) or nobody listens (connect).
+    """
+
+    def __init__(
+        self,
+        robot: str,
+        *,
+        name: str = "",
+        endpoint: str = DEFAULT_ENDPOINT,
+        listen: bool = False,
+        connect: tuple[str, ...] = (),
+    ) -> None:
+        self.robot = check_name(robot, "robot name")
+        self.name = name
+        self.endpoint = endpoint
+        self.prefix = f"dura/{self.robot}/"
+        self._attachment = name.encode()
+        self._dropped = _Dropped()
+        self._publishers: dict[str, zenoh.Publisher] = {}
+        self._declared: list[Any] = []
+        self._lock = threading.Lock()
+        config = session_config(
+            listen=(endpoint,) if listen else (),
+            connect=connect if listen else (endpoint, *connect),
+        )
+        try:
+            self._session = zenoh.open(config)
+        except zenoh.ZError as e:
+            if listen:
+                raise BusError(
+                    f"cannot listen on {endpoint}: {_short(e)} (is an executive already running?)"
+                ) from e
+            raise BusError(f"no executive for robot '{robot}' at {endpoint} ({_short(e)})") from e
+
+    # --- lifecycle --------------------------------------------------------------------
+
+    def close(self) -> None:
+        """Undeclare everything and close the session (idempotent)."""
+        with self._lock:
+            if self._session.is_closed():
+                return
+            for entity in reversed(self._declared):
+                with contextlib.suppress(zenoh.ZError):
+                    entity.undeclare()
+            self._declared.clear()
+            self._publishers.clear()
+            self._session.close()  # type: ignore[no-untyped-call]
+
+    def __enter__(self) -> Bus:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    @property
+    def closed(self) -> bool:
+        return bool(self._session.is_closed())
+
+    def key(self, relative: str) -> str:
+        return self.prefix + relative
+
+    # --- publish / subscribe ----------------------------------------------------------
+
+    def publish(self, key: str, payload: Mapping[str, Any]) -> None:
+        """Publish a JSON object on ``dura/<robot>/<key>``; adds ``stamp`` if missing."""
+        if "stamp" not in payload:
+            payload = {**payload, "stamp": time.time()}
+        self.publish_raw(key, encode(payload))
+
+    def publish_raw(self, key: str, data: bytes) -> None:
+        """Publish bytes that already are a JSON object (hot paths)."""
+        publisher = self._publishers.get(key)
+        if publisher is None:
+            with self._lock:
+                publisher = self._publishers.get(key)
+                if publisher is None:
+                    publisher = self._session.declare_publisher(self.key(key))
+                    self._publishers[key] = publisher
+                    self._declared.append(publisher)
+        publisher.put(data, attachment=self._attachment, timestamp=self._session.new_timestamp())
+
+    def subscribe(self, key: str, handler: Handler, *, decoded: bool = True) -> Any:
+        """Call ``handler`` for every message on ``dura/<robot>/<key>`` (wildcards allowed).
+
+        With ``decoded`` (the default) malformed payloads are logged and dropped before
+        the handler sees them; without it the handler gets the raw message and decodes
+        lazily. Exceptions in the handler are logged, never raised into zenoh.
+        """
+        prefix_len = len(self.prefix)
+        dropped = self._dropped
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            key_expr = str(sample.key_expr)
+            attachment = sample.attachment
+            stamp = sample.timestamp
+            message = Message(
+                key_expr[prefix_len:],
+                sample.payload.to_bytes(),
+                attachment.to_bytes().decode(errors="replace") if attachment is not None else "",
+                stamp.get_time().timestamp() if stamp is not None else None,
+                time.time(),
+            )
+            try:
+                if decoded:
+                    message.payload  # noqa: B018 - decode now, drop if malformed
+                handler(message)
+            except BusError as e:
+                dropped(message.key, str(e))
+            except Exception:
+                log.exception("handler for %s failed", message.key)
+
+        subscriber = self._session.declare_subscriber(self.key(key), on_sample)
+        with self._lock:
+            self._declared.append(subscriber)
+        return subscriber
+
+    # --- request / reply --------------------------------------------------------------
+
+    def serve(self, key: str, handler: RequestHandler) -> Any:
+        """Answer requests on ``dura/<robot>/<key>`` with ``handler(payload) -> reply``.
+
+        A :class:`DuraError` raised by the handler becomes an error reply with its
+        message; a malformed request gets an error reply naming the problem.
+        """
+
+        def on_query(query: zenoh.Query) -> None:
+            key_expr = str(query.key_expr)
+            try:
+                raw = query.payload.to_bytes() if query.payload is not None else b"{}"
+                reply = handler(decode(raw, key_expr))
+                query.reply(query.key_expr, encode(reply))
+            except DuraError as e:
+                query.reply_err(str(e).encode())
+            except Exception as e:
+                log.exception("request handler for %s failed", key_expr)
+                query.reply_err(f"internal error: {type(e).__name__}: {e}".encode())
+
+        queryable = self._session.declare_queryable(self.key(key), on_query)
+        with self._lock:
+            self._declared.append(queryable)
+        return queryable
+
+    def request(
+        self,
+        key: str,
+        payload: Mapping[str, Any] | None = None,
+        *,
+        timeout: float = 5.0,
+    ) -> dict[str, Any]:
+        """Send a request and return the first reply.
+
+        Raises:
+            BusError: nobody answered in time, or the answer is an error (its message).
+        """
+        replies = self._session.get(
+            self.key(key),
+            payload=encode(payload or {}),
+            attachment=self._attachment,
+            timeout=timeout,
+        )
+        for reply in replies:
+            if reply.ok is not None:
+                return decode(reply.ok.payload.to_bytes(), key)
+            if reply.err is not None:
+                raise BusError(reply.err.payload.to_bytes().decode(errors="replace"))
+        raise BusError(
+            f"no answer on {self.key(key)} within {timeout:g} s (is the executive running?)"
+        )
+
+    # --- liveliness -------------------------------------------------------------------
+
+    def declare_alive(self, key: str) -> Any:
+        """Declare a liveliness token that vanishes when this process or its link dies."""
+        token = self._session.liveliness().declare_token(self.key(key))
+        with self._lock:
+            self._declared.append(token)
+        return token
+
+    def watch_alive(self, key: str, on_change: Callable[[str, bool], None]) -> Any:
+        """Call ``on_change(relative_key, alive)`` when tokens under ``key`` appear or vanish."""
+        prefix_len = len(self.prefix)
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            try:
+                on_change(
+                    str(sample.key_expr)[prefix_len:],
+                    sample.kind == zenoh.SampleKind.PUT,
+                )
+            except Exception:
+                log.exception("liveliness handler for %s failed", key)
+
+        subscriber = self._session.liveliness().declare_subscriber(
+            self.key(key), on_sample, history=True
+        )
+        with self._lock:
+            self._declared.append(subscriber)
+        return subscriber
+
+
+def _short(error: Exception) -> str:
+    """A zenoh error without its Rust source location."""
+    return str(error).split(" at /")[0].strip().rstrip("!.")

@@ -1,0 +1,5 @@
+"""``python -m executive.cli`` is ``dura``."""
+
+from executive.cli import entry
+
+entry()

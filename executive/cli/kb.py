@@ -1,0 +1,112 @@
+"""``dura kb show``: the knowledge base, readably or as JSON."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+from typing import Any
+
+from executive.cli.output import add_json_flag, print_json, section, shown, table
+from knowledge.errors import DuraError
+from knowledge.knowledge_base import KnowledgeBase
+from knowledge.robot import read_robot
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser("kb", help="inspect the knowledge base")
+    kb_sub = p.add_subparsers(dest="kb_command", metavar="KB_COMMAND")
+    kb_sub.required = True
+    show = kb_sub.add_parser(
+        "show",
+        help="print goals, plans, tasks, facts, components and recent events",
+        description="Print a robot's knowledge base. Name the robot description (its KB "
+        "is ./.dura/<robot>.db unless it says otherwise) or the database file.",
+    )
+    where = show.add_mutually_exclusive_group(required=True)
+    where.add_argument(
+        "robot", metavar="ROBOT.yaml", type=Path, nargs="?", help="the robot description"
+    )
+    where.add_argument("--db", type=Path, help="the knowledge base file")
+    show.add_argument(
+        "--events", type=int, default=20, metavar="N", help="how many recent events (20)"
+    )
+    add_json_flag(show)
+    show.set_defaults(run=run_show)
+
+
+def database_path(args: argparse.Namespace) -> Path:
+    """The KB file named by ``--db`` or by a robot description."""
+    if args.db is not None:
+        return Path(args.db)
+    robot, findings = read_robot(args.robot)
+    errors = [f for f in findings if f.is_error]
+    if robot is None:
+        raise DuraError(str(errors[0]) if errors else f"{args.robot}: unusable")
+    return robot.kb_path()
+
+
+def _clock(stamp: float) -> str:
+    return time.strftime("%H:%M:%S", time.localtime(stamp))
+
+
+def run_show(args: argparse.Namespace) -> int:
+    if args.events < 0:
+        raise DuraError(f"--events must be 0 or more, not {args.events}")
+    with KnowledgeBase(database_path(args), readonly=True) as kb:
+        data = kb.snapshot(events=args.events)
+    if args.json:
+        print_json(data)
+        return 0
+    print(f"knowledge base {shown(data['path'])} (schema {data['schema_version']})")
+    section("goals")
+    table(
+        ["id", "state", "priority", "deadline", "source", "expression", "reason"],
+        [
+            [
+                g["id"],
+                g["state"],
+                g["priority"],
+                g["deadline"],
+                g["source"],
+                g["expression"],
+                g["reason"],
+            ]
+            for g in data["goals"]
+        ],
+    )
+    section("plans")
+    table(
+        ["id", "state", "engine", "goals", "steps"],
+        [[p["id"], p["state"], p["engine"], p["goal_ids"], len(p["steps"])] for p in data["plans"]],
+    )
+    section("tasks")
+    table(
+        ["id", "state", "action", "behavior", "args", "reason"],
+        [
+            [t["id"], t["state"], t["action"], t["behavior"], t["args"], t["reason"]]
+            for t in data["tasks"]
+        ],
+    )
+    section("objects")
+    table(["name", "type"], sorted(data["objects"].items()))
+    section("facts")
+    for fact in data["facts"]:
+        print(f"  {fact}")
+    section("components")
+    table(
+        ["name", "rating", "faults", "permanent", "reason"],
+        [
+            [c["name"], c["rating"], c["fault_count"], c["permanent_fault"], c["reason"]]
+            for c in data["components"]
+        ],
+    )
+    section(f"last {args.events} events")
+    table(
+        ["id", "time", "kind", "subject", "data"],
+        [
+            [e["id"], _clock(e["stamp"]), e["kind"], e["subject"], e["data"] or ""]
+            for e in data["events"]
+        ],
+    )
+    return 0

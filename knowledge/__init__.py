@@ -1,0 +1,1 @@
+"""dura's knowledge: robot descriptions, PDDL domains and the knowledge base."""

@@ -1,0 +1,163 @@
+"""The robot description: typed, frozen data read from a robot's YAML file.
+
+A robot has functionalities (components that run until stopped and provide
+capabilities), behaviors (components that run a goal to completion) and tasks
+(the mapping of a PDDL action onto a behavior and its goal). See
+``knowledge/robot.py`` for reading and validating it.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
+DEFAULT_ENGINE = "kairos"
+
+
+class Kind(enum.Enum):
+    FUNCTIONALITY = "functionality"
+    BEHAVIOR = "behavior"
+
+
+@dataclass(frozen=True)
+class ObserverSpec:
+    """One observer entry in the thesis/tug schema (thesis 6.2.5), kept as written."""
+
+    type: str
+    config: Mapping[str, Any]
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class Component:
+    """What functionalities and behaviors have in common."""
+
+    name: str
+    command: tuple[str, ...]
+    requires: tuple[str, ...] = ()
+    publishes: tuple[str, ...] = ()
+    subscribes: tuple[str, ...] = ()
+    params: Mapping[str, Any] = field(default_factory=dict)
+    observers: tuple[ObserverSpec, ...] = ()
+    startup_timeout: float = 10.0
+    line: int = 0
+    lines: Mapping[str, int] = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def kind(self) -> Kind:
+        raise NotImplementedError
+
+    def line_of(self, key: str) -> int:
+        """The line of one of this component's keys (its own line if absent)."""
+        return self.lines.get(key, self.line)
+
+
+@dataclass(frozen=True)
+class Functionality(Component):
+    """A continuously running component that provides capabilities."""
+
+    provides: tuple[str, ...] = ()
+    shareable: bool = True
+    rating: float = 1.0
+    max_faults: int = 3
+
+    @property
+    def kind(self) -> Kind:
+        return Kind.FUNCTIONALITY
+
+
+@dataclass(frozen=True)
+class Behavior(Component):
+    """A component that executes one goal and returns a result."""
+
+    interruptible: bool = True
+    reconfigurable: bool = True
+    max_restarts: int = 2
+
+    @property
+    def kind(self) -> Kind:
+        return Kind.BEHAVIOR
+
+
+@dataclass(frozen=True)
+class GoalArg:
+    """A behavior goal field: an action parameter (``?to``) or a constant."""
+
+    parameter: str | None = None
+    constant: Any = None
+
+    def resolve(self, bindings: Mapping[str, str]) -> Any:
+        return bindings[self.parameter] if self.parameter is not None else self.constant
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """A PDDL action carried out by a behavior."""
+
+    action: str
+    behavior: str
+    goal: Mapping[str, GoalArg] = field(default_factory=dict)
+    line: int = 0
+    lines: Mapping[str, int] = field(default_factory=dict, compare=False, repr=False)
+
+
+@dataclass(frozen=True)
+class PlannerSpec:
+    engine: str = DEFAULT_ENGINE
+    timeout: float = 30.0
+
+
+@dataclass(frozen=True)
+class RobotDescription:
+    """A whole robot; paths are absolute, resolved against the YAML file's folder."""
+
+    name: str
+    path: Path
+    domain: Path
+    functionalities: Mapping[str, Functionality] = field(default_factory=dict)
+    behaviors: Mapping[str, Behavior] = field(default_factory=dict)
+    tasks: Mapping[str, TaskSpec] = field(default_factory=dict)
+    problem: Path | None = None
+    rules: tuple[Path, ...] = ()
+    integrity: tuple[Path, ...] = ()
+    planner: PlannerSpec = PlannerSpec()
+    endpoint: str = DEFAULT_ENDPOINT
+    knowledge_base: Path | None = None
+
+    @property
+    def components(self) -> dict[str, Component]:
+        """Every component by name, functionalities first."""
+        out: dict[str, Component] = dict(self.functionalities)
+        out.update(self.behaviors)
+        return out
+
+    def component(self, name: str) -> Component:
+        return self.components[name]
+
+    @property
+    def capabilities(self) -> list[str]:
+        """Every capability some functionality provides, sorted."""
+        return sorted({c for f in self.functionalities.values() for c in f.provides})
+
+    def providers(self, capability: str) -> list[Functionality]:
+        """The functionalities that provide a capability, highest rating first."""
+        found = [f for f in self.functionalities.values() if capability in f.provides]
+        return sorted(found, key=lambda f: (-f.rating, f.name))
+
+    @property
+    def topics(self) -> list[str]:
+        """Every topic some component publishes or subscribes, sorted."""
+        names: set[str] = set()
+        for c in self.components.values():
+            names.update(c.publishes, c.subscribes)
+        return sorted(names)
+
+    def kb_path(self, cwd: Path | None = None) -> Path:
+        """Where this robot's knowledge base lives (default ``./.dura/<robot>.db``)."""
+        if self.knowledge_base is not None:
+            return self.knowledge_base
+        return (cwd or Path.cwd()) / ".dura" / f"{self.name}.db"

@@ -1,0 +1,42 @@
+"""The one exception hierarchy of dura.
+
+Every error a user can cause (bad YAML, PDDL, ASP, CLI arguments or bus messages)
+is a :class:`DuraError`. Its message is one line and names the file, the place and
+the reason, e.g. ``robot.yaml:14: functionality 'lidar_filter' requires unknown
+capability 'scna'``. Commands print it and exit non-zero; they never show a traceback.
+"""
+
+from __future__ import annotations
+
+
+class DuraError(Exception):
+    """Root of every error dura reports to a user."""
+
+
+class ConfigError(DuraError):
+    """A configuration file (robot description, observers, rules) is invalid."""
+
+
+class DomainError(DuraError):
+    """A PDDL domain or problem cannot be read or does not fit the robot."""
+
+
+class PlanningError(DuraError):
+    """A planner could not be run (not: found no plan, which is a result)."""
+
+
+class AspError(DuraError):
+    """An ASP program is invalid or clingo failed."""
+
+
+class KnowledgeError(DuraError):
+    """The knowledge base refused a change or cannot be opened."""
+
+
+class BusError(DuraError):
+    """The message bus failed: no answer, no executive, a malformed message."""
+
+
+def located(path: object, line: int | None, message: str) -> str:
+    """Format ``file:line: message`` (or ``file: message`` without a line)."""
+    return f"{path}:{line}: {message}" if line else f"{path}: {message}"

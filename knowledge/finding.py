@@ -1,0 +1,57 @@
+"""A problem found in a user's input, located at a file and line."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+from knowledge.errors import located
+
+
+class Severity(enum.Enum):
+    ERROR = "error"
+    WARNING = "warning"
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One problem in one file: ``path:line: message``."""
+
+    path: str
+    line: int | None
+    message: str
+    severity: Severity = Severity.ERROR
+
+    @property
+    def is_error(self) -> bool:
+        return self.severity is Severity.ERROR
+
+    def __str__(self) -> str:
+        prefix = "warning: " if self.severity is Severity.WARNING else ""
+        return located(self.path, self.line, prefix + self.message)
+
+    def as_json(self) -> dict[str, object]:
+        return {
+            "file": self.path,
+            "line": self.line,
+            "severity": self.severity.value,
+            "message": self.message,
+        }
+
+
+class Report:
+    """Collects the findings about one file, in the order they are found."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+        self.findings: list[Finding] = []
+
+    def error(self, line: int | None, message: str) -> None:
+        self.findings.append(Finding(self.path, line, message))
+
+    def warning(self, line: int | None, message: str) -> None:
+        self.findings.append(Finding(self.path, line, message, Severity.WARNING))
+
+    @property
+    def errors(self) -> list[Finding]:
+        return [f for f in self.findings if f.is_error]

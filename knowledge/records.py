@@ -1,0 +1,151 @@
+"""What the knowledge base stores, as typed frozen records (thesis tables 5.1-5.3)."""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+
+class GoalState(enum.Enum):
+    PENDING = "pending"
+    PLANNED = "planned"
+    EXECUTING = "executing"
+    ACHIEVED = "achieved"
+    FAILED = "failed"
+    UNREACHABLE = "unreachable"
+    CANCELLED = "cancelled"
+
+    @property
+    def is_open(self) -> bool:
+        return self in (GoalState.PENDING, GoalState.PLANNED, GoalState.EXECUTING)
+
+
+class PlanState(enum.Enum):
+    PENDING = "pending"
+    EXECUTING = "executing"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    SUPERSEDED = "superseded"
+
+
+class TaskState(enum.Enum):
+    PENDING = "pending"
+    SCHEDULED = "scheduled"
+    RUNNING = "running"
+    PAUSED = "paused"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    CANCELLED = "cancelled"
+
+    @property
+    def is_final(self) -> bool:
+        return self in (TaskState.SUCCEEDED, TaskState.FAILED, TaskState.CANCELLED)
+
+
+@dataclass(frozen=True)
+class Goal:
+    """A PDDL goal expression to achieve, with its lifecycle."""
+
+    id: int
+    expression: str
+    state: GoalState
+    priority: int = 0
+    deadline: float | None = None
+    source: str = "user"
+    reason: str = ""
+    created: float = 0.0
+    updated: float = 0.0
+
+
+@dataclass(frozen=True)
+class PlanStep:
+    """One action of a plan: what, with which objects, when and for how long."""
+
+    index: int
+    action: str
+    args: tuple[str, ...]
+    start: float
+    duration: float | None = None
+
+
+@dataclass(frozen=True)
+class Plan:
+    id: int
+    state: PlanState
+    steps: tuple[PlanStep, ...]
+    engine: str = ""
+    goal_ids: tuple[int, ...] = ()
+    reason: str = ""
+    created: float = 0.0
+    updated: float = 0.0
+
+
+@dataclass(frozen=True)
+class Task:
+    """A request to run a behavior for a PDDL action (or for a user)."""
+
+    id: int
+    action: str
+    behavior: str
+    args: Mapping[str, Any]
+    state: TaskState
+    plan_id: int | None = None
+    step: int | None = None
+    result: Any = None
+    reason: str = ""
+    created: float = 0.0
+    updated: float = 0.0
+
+
+@dataclass(frozen=True)
+class Fact:
+    """A ground PDDL atom and its value: True for a predicate, a number for a function."""
+
+    name: str
+    args: tuple[str, ...] = ()
+    value: bool | float = True
+
+    def __str__(self) -> str:
+        atom = "(" + " ".join((self.name, *self.args)) + ")"
+        if isinstance(self.value, bool):
+            return atom if self.value else f"(not {atom})"
+        return f"(= {atom} {self.value:g})"
+
+
+@dataclass(frozen=True)
+class ComponentRecord:
+    """What the robot remembers about a component across restarts."""
+
+    name: str
+    rating: float
+    fault_count: int = 0
+    permanent_fault: bool = False
+    reason: str = ""
+    updated: float = 0.0
+
+
+@dataclass(frozen=True)
+class Event:
+    """One entry of the append-only execution trace."""
+
+    id: int
+    stamp: float
+    kind: str
+    subject: str = ""
+    data: Mapping[str, Any] = field(default_factory=dict)
+
+
+def to_plain(record: object) -> Any:
+    """A record (or a structure of records) as JSON-ready data; enums by value."""
+    if dataclasses.is_dataclass(record) and not isinstance(record, type):
+        return {f.name: to_plain(getattr(record, f.name)) for f in dataclasses.fields(record)}
+    if isinstance(record, enum.Enum):
+        return record.value
+    if isinstance(record, (list, tuple)):
+        return [to_plain(x) for x in record]
+    if isinstance(record, Mapping):
+        return {str(k): to_plain(v) for k, v in record.items()}
+    return record

@@ -1,0 +1,196 @@
+"""Cross-check a robot description: components among themselves and with the domain.
+
+Each check adds findings to a report; :func:`validate` runs them all on one file
+and returns every finding, so ``dura validate`` can list each problem on a line.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import networkx as nx
+
+from knowledge.description import RobotDescription
+from knowledge.domain import DomainInfo, parse_problem, read_domain
+from knowledge.errors import DomainError
+from knowledge.finding import Finding, Report, Severity
+from knowledge.robot import read_robot
+from knowledge.yamlsource import did_you_mean
+
+RESERVED_PREFIXES = ("AB", "/AB")
+
+
+@dataclass(frozen=True)
+class Validation:
+    """Everything ``dura validate`` learnt about a robot description."""
+
+    robot: RobotDescription | None
+    domain: DomainInfo | None
+    findings: tuple[Finding, ...]
+
+    @property
+    def errors(self) -> list[Finding]:
+        return [f for f in self.findings if f.severity is Severity.ERROR]
+
+    @property
+    def warnings(self) -> list[Finding]:
+        return [f for f in self.findings if f.severity is Severity.WARNING]
+
+    @property
+    def ok(self) -> bool:
+        return self.robot is not None and not self.errors
+
+
+def _reserved(name: str) -> bool:
+    return name.startswith(RESERVED_PREFIXES)
+
+
+def check_names(robot: RobotDescription, report: Report) -> None:
+    """No component or topic may start with AB (the diagnosis engine's own names)."""
+    both = set(robot.functionalities) & set(robot.behaviors)
+    for name in sorted(both):
+        report.error(
+            robot.behaviors[name].line,
+            f"'{name}' is both a functionality and a behavior; component names must be unique",
+        )
+    for c in robot.components.values():
+        if _reserved(c.name):
+            report.error(c.line, f"{c.kind.value} name '{c.name}' must not start with 'AB'")
+        for key in ("publishes", "subscribes"):
+            for topic in getattr(c, key):
+                if _reserved(topic):
+                    report.error(
+                        c.line_of(key),
+                        f"topic '{topic}' of {c.kind.value} '{c.name}' must not start with 'AB'",
+                    )
+
+
+def check_capabilities(robot: RobotDescription, report: Report) -> None:
+    """Every required capability has a provider; `requires` has no cycle."""
+    capabilities = robot.capabilities
+    for c in robot.components.values():
+        for capability in c.requires:
+            if not robot.providers(capability):
+                report.error(
+                    c.line_of("requires"),
+                    f"{c.kind.value} '{c.name}' requires unknown capability '{capability}'"
+                    f"{did_you_mean(capability, capabilities)}",
+                )
+    graph: nx.DiGraph = nx.DiGraph()
+    for f in robot.functionalities.values():
+        graph.add_node(f.name)
+        for capability in f.requires:
+            for provider in robot.providers(capability):
+                graph.add_edge(f.name, provider.name)
+    reported: set[frozenset[str]] = set()
+    for cycle in nx.simple_cycles(graph):
+        key = frozenset(cycle)
+        if key in reported:
+            continue
+        reported.add(key)
+        first = robot.functionalities[min(cycle, key=lambda n: robot.functionalities[n].line)]
+        start = cycle.index(first.name)
+        ring = cycle[start:] + cycle[:start] + [first.name]
+        report.error(first.line_of("requires"), f"requires cycle: {' -> '.join(ring)}")
+
+
+def check_topics(robot: RobotDescription, report: Report) -> None:
+    """Warn about subscriptions nobody publishes to."""
+    published = {t for c in robot.components.values() for t in c.publishes}
+    for c in robot.components.values():
+        for topic in c.subscribes:
+            if topic not in published:
+                report.warning(
+                    c.line_of("subscribes"),
+                    f"{c.kind.value} '{c.name}' subscribes to '{topic}', which no component "
+                    f"publishes{did_you_mean(topic, sorted(published))}",
+                )
+
+
+def check_tasks(
+    robot: RobotDescription, domain: DomainInfo, report: Report, domain_report: Report
+) -> None:
+    """Every task names a domain action, a behavior, and only that action's parameters.
+
+    Actions without a task are reported against the domain file.
+    """
+    for task in robot.tasks.values():
+        action = domain.actions.get(task.action)
+        if action is None:
+            report.error(
+                task.line,
+                f"task '{task.action}' names no action of domain '{domain.name}'"
+                f"{did_you_mean(task.action, sorted(domain.actions))}",
+            )
+        if task.behavior not in robot.behaviors:
+            report.error(
+                task.lines.get("behavior", task.line),
+                f"task '{task.action}' names unknown behavior '{task.behavior}'"
+                f"{did_you_mean(task.behavior, sorted(robot.behaviors))}",
+            )
+        if action is None:
+            continue
+        for field, arg in task.goal.items():
+            if arg.parameter is not None and arg.parameter not in action.parameter_names:
+                names = ", ".join("?" + p for p in action.parameter_names) or "none"
+                report.error(
+                    task.lines.get(f"goal.{field}", task.line),
+                    f"goal field '{field}' of task '{task.action}' names unknown parameter "
+                    f"'?{arg.parameter}' (action '{action.name}' has {names})",
+                )
+    for name, action in domain.actions.items():
+        if name not in robot.tasks:
+            domain_report.warning(
+                action.line,
+                f"action '{name}' has no task in {robot.path.name}: "
+                "it will be applied without running a behavior",
+            )
+
+
+def _components_checks(robot: RobotDescription, report: Report) -> None:
+    check_names(robot, report)
+    check_capabilities(robot, report)
+    check_topics(robot, report)
+
+
+def validate(path: Path, text: str | None = None) -> Validation:
+    """Read a robot description and run every check, the PDDL domain included."""
+    robot, findings = read_robot(Path(path), text)
+    report = Report(str(path))
+    domain: DomainInfo | None = None
+    if robot is not None:
+        _components_checks(robot, report)
+        if robot.domain.is_file():
+            try:
+                domain = read_domain(robot.domain)
+            except DomainError as e:
+                findings.append(_from_error(e))
+        if domain is not None:
+            domain_report = Report(str(robot.domain))
+            check_tasks(robot, domain, report, domain_report)
+            findings.extend(domain_report.findings)
+            if robot.problem is not None and robot.problem.is_file():
+                try:
+                    text_of_problem = robot.problem.read_text(encoding="utf-8")
+                    parse_problem(robot.domain, text_of_problem, str(robot.problem))
+                except (OSError, UnicodeDecodeError) as e:
+                    report.error(None, f"cannot read problem {robot.problem}: {e}")
+                except DomainError as e:
+                    findings.append(_from_error(e))
+    all_findings = tuple(sorted(findings + report.findings, key=_order))
+    return Validation(robot, domain, all_findings)
+
+
+def _order(f: Finding) -> tuple[str, int, int]:
+    return (f.path, f.line or 0, 0 if f.is_error else 1)
+
+
+def _from_error(error: DomainError) -> Finding:
+    """A finding from an error message of the form ``file:line: message``."""
+    text = str(error)
+    head, _, rest = text.partition(": ")
+    path, _, line = head.rpartition(":")
+    if path and line.isdigit():
+        return Finding(path, int(line), rest)
+    return Finding(head, None, rest)

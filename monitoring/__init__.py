@@ -1,0 +1,1 @@
+"""dura's monitoring: observers, resource monitor, diagnosis and repair."""

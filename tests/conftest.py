@@ -1,0 +1,53 @@
+"""Shared fixtures: the use-case robot, free bus endpoints, the dura command."""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+USECASE = ROOT / "examples" / "usecase" / "robot.yaml"
+
+
+def free_endpoint() -> str:
+    """A loopback TCP endpoint nobody listens on (yet)."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return f"tcp/127.0.0.1:{s.getsockname()[1]}"
+
+
+@pytest.fixture
+def endpoint() -> str:
+    return free_endpoint()
+
+
+@pytest.fixture
+def usecase_path() -> Path:
+    return USECASE
+
+
+def run_dura(
+    *args: str, cwd: Path | None = None, timeout: float = 120
+) -> subprocess.CompletedProcess[str]:
+    """Run the dura command line in a fresh interpreter, as a user would."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.run(
+        [sys.executable, "-m", "executive.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd or ROOT,
+        env=env,
+        timeout=timeout,
+        check=False,
+    )
+
+
+@pytest.fixture
+def dura() -> Callable[..., subprocess.CompletedProcess[str]]:
+    return run_dura

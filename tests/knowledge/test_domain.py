@@ -1,0 +1,58 @@
+"""Reading PDDL through unified-planning, with errors that name file and line."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from knowledge.domain import parse_problem, read_domain
+from knowledge.errors import DomainError
+from tests.conftest import ROOT
+
+DOMAIN = ROOT / "domains" / "usecase" / "domain.pddl"
+
+
+def test_the_use_case_domain_has_durative_actions_with_typed_parameters() -> None:
+    info = read_domain(DOMAIN)
+    assert info.name == "usecase"
+    move_to = info.actions["move_to"]
+    assert move_to.durative
+    assert move_to.parameters == (("from", "place"), ("to", "place"))
+    assert move_to.line is not None
+    assert "(:durative-action move_to" in DOMAIN.read_text().splitlines()[move_to.line - 1]
+    assert info.predicates["connected"] == ("place", "place")
+    assert info.functions["travel_time"] == ("place", "place")
+    assert info.types == ("place",)
+
+
+def test_an_empty_functions_block_is_accepted(tmp_path: Path) -> None:
+    path = tmp_path / "d.pddl"
+    path.write_text(
+        "(define (domain d) (:requirements :strips :typing)\n (:types t)\n"
+        " (:predicates (p ?x - t))\n (:functions )\n"
+        " (:action a :parameters (?x - t) :precondition (p ?x) :effect (not (p ?x))))"
+    )
+    assert list(read_domain(path).actions) == ["a"]
+
+
+def test_a_syntax_error_names_the_line(tmp_path: Path) -> None:
+    path = tmp_path / "d.pddl"
+    path.write_text(
+        "(define (domain d)\n (:requirements :strips)\n (:predicates (p)\n (:action a))\n"
+    )
+    with pytest.raises(DomainError, match=rf"^{path}:4: PDDL: "):
+        read_domain(path)
+
+
+def test_an_unreadable_file_is_named(tmp_path: Path) -> None:
+    with pytest.raises(DomainError, match=r"nope\.pddl: cannot read"):
+        read_domain(tmp_path / "nope.pddl")
+
+
+def test_a_problem_is_parsed_against_the_domain_and_its_errors_name_the_problem() -> None:
+    problem = parse_problem(DOMAIN, (ROOT / "examples/usecase/problem.pddl").read_text())
+    assert {o.name for o in problem.all_objects} == {"dock", "lab", "office"}
+    bad = "(define (problem p) (:domain usecase)\n (:objects a - place)\n (:init (robot_at b)))"
+    with pytest.raises(DomainError, match=r"^world.pddl:3: PDDL: "):
+        parse_problem(DOMAIN, bad, "world.pddl")

@@ -1,0 +1,191 @@
+"""The knowledge base: typed records, one transaction per change, crash safety."""
+
+from __future__ import annotations
+
+import signal
+import sqlite3
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from knowledge.errors import KnowledgeError
+from knowledge.knowledge_base import KnowledgeBase
+from knowledge.records import Fact, GoalState, PlanState, PlanStep, TaskState
+from knowledge.schema import VERSION
+from tests.conftest import ROOT
+
+
+@pytest.fixture
+def kb(tmp_path: Path) -> KnowledgeBase:
+    with KnowledgeBase(tmp_path / "robot.db") as base:
+        yield base  # type: ignore[misc]
+
+
+def test_a_new_knowledge_base_uses_wal_and_the_current_schema(tmp_path: Path) -> None:
+    with KnowledgeBase(tmp_path / "sub" / "r.db") as kb:
+        assert kb.schema_version == VERSION
+    db = sqlite3.connect(tmp_path / "sub" / "r.db")
+    assert db.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+    db.close()
+
+
+def test_a_database_from_a_newer_dura_is_refused(tmp_path: Path) -> None:
+    db = sqlite3.connect(tmp_path / "r.db")
+    db.execute(f"PRAGMA user_version={VERSION + 1}")
+    db.close()
+    with pytest.raises(KnowledgeError, match="newer than this dura"):
+        KnowledgeBase(tmp_path / "r.db")
+
+
+def test_a_goal_goes_through_its_lifecycle_and_leaves_events(kb: KnowledgeBase) -> None:
+    goal = kb.add_goal("(picture_taken lab)", priority=3, deadline=60.0)
+    assert goal.state is GoalState.PENDING and goal.priority == 3 and goal.deadline == 60.0
+    assert kb.open_goals() == [goal]
+    kb.set_goal_state(goal.id, GoalState.PLANNED)
+    done = kb.set_goal_state(goal.id, GoalState.ACHIEVED)
+    assert done.state is GoalState.ACHIEVED
+    assert kb.open_goals() == []
+    assert [e.kind for e in kb.events()] == ["GOAL_ADDED", "GOAL_PLANNED", "GOAL_ACHIEVED"]
+
+
+def test_an_unknown_goal_is_an_error_and_changes_nothing(kb: KnowledgeBase) -> None:
+    with pytest.raises(KnowledgeError, match="no goal 42"):
+        kb.set_goal_state(42, GoalState.CANCELLED)
+    assert kb.events() == []
+
+
+def test_a_failed_transaction_leaves_nothing_behind(kb: KnowledgeBase) -> None:
+    with pytest.raises(KnowledgeError), kb.transaction():
+        kb.add_goal("(a)")
+        kb.set_fact(Fact("b"))
+        kb.set_goal_state(999, GoalState.FAILED)
+    assert kb.goals() == [] and kb.facts() == [] and kb.events() == []
+
+
+def test_a_new_plan_supersedes_the_open_one(kb: KnowledgeBase) -> None:
+    first = kb.store_plan([PlanStep(0, "move_to", ("dock", "lab"), 0.0, 4.0)], engine="kairos")
+    kb.set_plan_state(first.id, PlanState.EXECUTING)
+    second = kb.store_plan(
+        [
+            PlanStep(0, "take_picture", ("lab",), 0.0, 2.0),
+            PlanStep(1, "move_to", ("lab", "dock"), 2.0, 4.0),
+        ],
+        goal_ids=[7],
+    )
+    assert kb.plan(first.id).state is PlanState.SUPERSEDED
+    assert kb.latest_plan() == second
+    assert second.steps[1].args == ("lab", "dock") and second.goal_ids == (7,)
+
+
+def test_tasks_keep_their_arguments_state_and_result(kb: KnowledgeBase) -> None:
+    task = kb.add_task("move_to", "move_to", {"start": "dock", "target": "lab"})
+    kb.set_task_state(task.id, TaskState.RUNNING)
+    kb.set_task_state(task.id, TaskState.SUCCEEDED, result={"distance": 4.2})
+    stored = kb.task(task.id)
+    assert stored.args == {"start": "dock", "target": "lab"}
+    assert stored.state is TaskState.SUCCEEDED and stored.result == {"distance": 4.2}
+    assert kb.tasks([TaskState.RUNNING]) == []
+
+
+def test_facts_hold_atoms_and_numbers_and_effects_apply_deletes_first(kb: KnowledgeBase) -> None:
+    kb.add_object("dock", "place")
+    kb.update_facts(add=[Fact("robot_at", ("dock",)), Fact("travel_time", ("dock", "lab"), 4.0)])
+    kb.update_facts(remove=[Fact("robot_at", ("dock",))], add=[Fact("robot_at", ("dock",))])
+    assert [str(f) for f in kb.facts()] == ["(robot_at dock)", "(= (travel_time dock lab) 4)"]
+    kb.unset_fact(Fact("robot_at", ("dock",)))
+    assert kb.facts("robot_at") == []
+    assert kb.objects() == {"dock": "place"}
+
+
+def test_a_component_becomes_permanently_faulty_at_max_faults_and_can_be_reset(
+    kb: KnowledgeBase,
+) -> None:
+    kb.register_component("lidar", 10)
+    counts = [kb.record_fault("lidar", "crashed", max_faults=3) for _ in range(3)]
+    assert [(c.fault_count, c.permanent_fault) for c in counts] == [
+        (1, False),
+        (2, False),
+        (3, True),
+    ]
+    assert kb.register_component("lidar", 99).fault_count == 3  # history survives re-registration
+    assert [e.kind for e in kb.events(kind="PERMANENT_FAULT")] == ["PERMANENT_FAULT"]
+    reset = kb.reset_component("lidar")
+    assert (reset.fault_count, reset.permanent_fault) == (0, False)
+
+
+def test_achievements_parameters_and_return_values_round_trip(kb: KnowledgeBase) -> None:
+    kb.set_achievement("move_to", "waypoint", 3)
+    kb.set_parameter("lidar", "rate", 5.0)
+    task = kb.add_task("take_picture", "take_picture")
+    kb.store_return_value("take_picture", {"file": "lab.png"}, task_id=task.id)
+    assert kb.achievements("move_to") == {"waypoint": 3}
+    assert kb.parameters("lidar") == {"rate": 5.0}
+    assert kb.return_values(task_id=task.id) == [{"file": "lab.png"}]
+    kb.clear_achievements("move_to")
+    assert kb.achievements("move_to") == {}
+
+
+def test_a_reader_is_not_blocked_by_an_open_write_transaction(tmp_path: Path) -> None:
+    writer = KnowledgeBase(tmp_path / "r.db")
+    writer.add_goal("(first)")
+    reader = KnowledgeBase(tmp_path / "r.db", readonly=True)
+    inside = threading.Event()
+    release = threading.Event()
+
+    def hold() -> None:
+        with writer.transaction():
+            writer.add_goal("(second)")
+            inside.set()
+            release.wait(5)
+
+    holder = threading.Thread(target=hold)
+    holder.start()
+    inside.wait(5)
+    started = time.monotonic()
+    assert [g.expression for g in reader.goals()] == ["(first)"]
+    assert time.monotonic() - started < 1.0
+    release.set()
+    holder.join()
+    assert [g.expression for g in reader.goals()] == ["(first)", "(second)"]
+    with pytest.raises(KnowledgeError, match="read-only"):
+        reader.add_goal("(third)")
+    reader.close()
+    writer.close()
+
+
+def test_a_read_only_open_of_a_missing_file_is_an_error(tmp_path: Path) -> None:
+    with pytest.raises(KnowledgeError, match="no knowledge base here"):
+        KnowledgeBase(tmp_path / "none.db", readonly=True)
+
+
+def test_every_committed_change_survives_a_sigkill_of_the_writer(tmp_path: Path) -> None:
+    path = tmp_path / "crash.db"
+    writer = subprocess.Popen(
+        [sys.executable, "-m", "tests.knowledge.kb_writer", str(path)],
+        stdout=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+    )
+    assert writer.stdout is not None
+    committed: list[int] = []
+    for line in writer.stdout:
+        committed.append(int(line))
+        if len(committed) >= 300:
+            break
+    writer.send_signal(signal.SIGKILL)
+    writer.wait(10)
+    writer.stdout.close()
+    assert writer.returncode == -signal.SIGKILL
+    with KnowledgeBase(path) as kb:
+        assert kb.integrity_check() == "ok"
+        goal_ids = {g.id for g in kb.goals()}
+        assert set(committed) <= goal_ids
+        n = len(goal_ids)
+        # each iteration was all-or-nothing: goal, fact, fault and event together
+        assert len(kb.facts("visited")) == n
+        assert kb.component("lidar").fault_count == n
+        assert len(kb.events(kind="TICK")) == n
