@@ -84,3 +84,103 @@ class ComponentState:
             reason=str(payload.get("reason", "")),
             stamp=float(payload.get("stamp", 0.0)),
         )
+
+
+# --- observations (thesis 6.2.1) ---------------------------------------------------------
+
+GENERAL_OK = 0
+GENERAL_ERROR = -1
+NO_STATE_FITS = -2
+NOT_AVAILABLE = -3
+TIMEOUT = -4
+
+
+@dataclass(frozen=True)
+class ObservationInfo:
+    """The payload of ``observations``: what one observer saw of its resources.
+
+    ``resource`` lists the observed topics and/or nodes: one topic or node for most
+    observer types, two topics for timing, two topics and optionally a behavior for
+    movement. ``callerids`` restricts a topic observation to those publishers (empty:
+    all of them). A negative ``observation`` is a fault.
+    """
+
+    type: str
+    resource: tuple[str, ...]
+    observation: int
+    observation_msg: str = ""
+    verbose_observation_msg: str = ""
+    callerids: tuple[str, ...] = ()
+    stamp: float = 0.0
+
+    @property
+    def failed(self) -> bool:
+        return self.observation < 0
+
+    def to_payload(self) -> dict[str, Any]:
+        return {
+            "type": self.type,
+            "resource": list(self.resource),
+            "observation": self.observation,
+            "observation_msg": self.observation_msg,
+            "verbose_observation_msg": self.verbose_observation_msg,
+            "callerids": list(self.callerids),
+            "stamp": self.stamp,
+        }
+
+    @classmethod
+    def from_payload(cls, payload: dict[str, Any]) -> ObservationInfo:
+        """Read a payload; a single resource name is accepted for a list of one.
+
+        Raises ``KeyError``/``ValueError``/``TypeError`` on a malformed payload.
+        """
+        resource = payload["resource"]
+        resources = (resource,) if isinstance(resource, str) else tuple(str(r) for r in resource)
+        return cls(
+            type=str(payload["type"]),
+            resource=resources,
+            observation=int(payload["observation"]),
+            observation_msg=str(payload.get("observation_msg", "")),
+            verbose_observation_msg=str(payload.get("verbose_observation_msg", "")),
+            callerids=tuple(str(c) for c in payload.get("callerids", ())),
+            stamp=float(payload.get("stamp", 0.0)),
+        )
+
+
+# --- resources (thesis 6.2.4) ------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class NodeInfo:
+    """CPU and memory of one component's process tree; ``error`` says it vanished."""
+
+    name: str
+    pid: int
+    hostname: str
+    cpu: float  # percent of one core, summed over the process tree
+    memory: int  # resident bytes, summed over the process tree
+    error: str = ""
+
+    def to_payload(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "pid": self.pid,
+            "hostname": self.hostname,
+            "cpu": self.cpu,
+            "memory": self.memory,
+            "error": self.error,
+        }
+
+    @classmethod
+    def from_payload(cls, payload: dict[str, Any]) -> NodeInfo:
+        return cls(
+            str(payload["name"]),
+            int(payload["pid"]),
+            str(payload["hostname"]),
+            float(payload["cpu"]),
+            int(payload["memory"]),
+            str(payload.get("error", "")),
+        )
+
+
+# The payload of ``resources``: {"stamp": float, "hostname": str, "nodes": [NodeInfo payloads]}
