@@ -25,11 +25,25 @@ class Kind(enum.Enum):
 
 @dataclass(frozen=True)
 class ObserverSpec:
-    """One observer entry in the thesis/tug schema (thesis 6.2.5), kept as written."""
+    """One observer entry in the thesis/tug schema (thesis 6.2.5), kept as written.
+
+    ``lines`` maps the dotted path of every key and list item inside the entry
+    (``topics.0.callerids.0.filter.window_size``) to its line, so that whoever
+    interprets the configuration can report ``file:line`` errors.
+    """
 
     type: str
     config: Mapping[str, Any]
     line: int = 0
+    lines: Mapping[str, int] = field(default_factory=dict, compare=False, repr=False)
+
+    def line_of(self, path: str) -> int:
+        """The line of a dotted path, or of its nearest enclosing entry."""
+        while path:
+            if path in self.lines:
+                return self.lines[path]
+            path = path.rpartition(".")[0]
+        return self.line
 
 
 @dataclass(frozen=True)

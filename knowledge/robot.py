@@ -24,7 +24,7 @@ from knowledge.description import (
 )
 from knowledge.errors import ConfigError
 from knowledge.finding import Finding, Report
-from knowledge.yamlsource import Section, compose, describe, line_of, to_python
+from knowledge.yamlsource import Section, compose, describe, line_of, paths, to_python
 
 ENGINES = ("kairos", "aries", "fast-downward", "tamer")
 
@@ -59,7 +59,9 @@ def _observers(section: Section, key: str, report: Report) -> tuple[ObserverSpec
         if kind is None:
             continue
         config = to_python(node)
-        out.append(ObserverSpec(kind, config if isinstance(config, dict) else {}, entry.line))
+        out.append(
+            ObserverSpec(kind, config if isinstance(config, dict) else {}, entry.line, paths(node))
+        )
     return tuple(out)
 
 

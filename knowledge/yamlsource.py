@@ -94,6 +94,22 @@ def _check_duplicate_keys(node: yaml.Node, report: Report) -> None:
             _check_duplicate_keys(item, report)
 
 
+def paths(node: yaml.Node, prefix: str = "") -> dict[str, int]:
+    """The line of every key and list item below a node, by dotted path."""
+    out: dict[str, int] = {}
+    if isinstance(node, yaml.MappingNode):
+        for key, value in node.value:
+            path = f"{prefix}{key.value}"
+            out[path] = line_of(key)
+            out.update(paths(value, path + "."))
+    elif isinstance(node, yaml.SequenceNode):
+        for i, item in enumerate(node.value):
+            path = f"{prefix}{i}"
+            out[path] = line_of(item)
+            out.update(paths(item, path + "."))
+    return out
+
+
 def did_you_mean(word: str, choices: object) -> str:
     """`` (did you mean 'x'?)`` for the closest choice, or an empty string."""
     names = [str(c) for c in choices]  # type: ignore[attr-defined]

@@ -65,6 +65,14 @@ def test_observers_keep_the_thesis_schema_as_written(usecase_path: Path) -> None
     assert lidar.observers[0].config["topics"][0]["name"] == "scan"
 
 
+def test_every_key_inside_an_observer_entry_keeps_its_line(usecase_path: Path) -> None:
+    spec = load_robot(usecase_path).component("lidar").observers[0]
+    lines = usecase_path.read_text().splitlines()
+    window = spec.line_of("topics.0.callerids.0.filter.window_size")
+    assert "window_size: 10" in lines[window - 1]
+    assert "filter:" in lines[spec.line_of("topics.0.callerids.0.filter.absent") - 1]
+
+
 def test_task_goals_map_action_parameters_onto_behavior_fields(usecase_path: Path) -> None:
     task = load_robot(usecase_path).tasks["move_to"]
     assert task.behavior == "move_to"
