@@ -260,7 +260,7 @@ class Bus:
                 log.exception("request handler for %s failed", key_expr)
                 query.reply_err(f"internal error: {type(e).__name__}: {e}".encode())
             finally:
-                query.drop()
+                query.drop()  # type: ignore[no-untyped-call]
 
         def on_query(query: zenoh.Query) -> None:
             if threaded:

@@ -67,7 +67,7 @@ def _object(request: Mapping[str, Any], key: str) -> dict[str, Any]:
     return value
 
 
-class Component(ABC):
+class Component:
     """What functionalities and behaviors share: lifecycle, bus helpers, parameters.
 
     Override the ``on_*`` hooks; the public lifecycle methods check that the command
@@ -399,7 +399,7 @@ class Component(ABC):
             return 1
 
 
-class Functionality(Component):
+class Functionality(Component, ABC):
     """A component that runs until it is stopped and provides capabilities."""
 
     kind = Kind.FUNCTIONALITY
@@ -409,7 +409,7 @@ class Functionality(Component):
         """Start publishing: rate loops (:meth:`at_rate`) and subscriptions."""
 
 
-class Behavior(Component):
+class Behavior(Component, ABC):
     """A component that carries out goals, one at a time, and returns their results.
 
     :meth:`execute` runs on a thread of its own; it should call :meth:`checkpoint`

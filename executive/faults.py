@@ -23,6 +23,8 @@ from knowledge.errors import ComponentError
 
 log = logging.getLogger("dura.faults")
 
+CRASH_DELAY = 0.05  # seconds: a crash on command comes after the command's answer
+
 
 class FaultMode(enum.Enum):
     CRASH = "crash"  # exit at once with exit_code
@@ -70,8 +72,7 @@ class Fault:
         for key, value in options.items():
             if key not in known:
                 raise ComponentError(
-                    f"unknown option {key!r} for fault {mode.value!r} "
-                    f"(options: {', '.join(known)})"
+                    f"unknown option {key!r} for fault {mode.value!r} (options: {', '.join(known)})"
                 )
             kind = int if key == "exit_code" else float
             if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -95,8 +96,9 @@ class FaultInjector:
 
     def inject(self, fault: Fault) -> None:
         """Make a fault strike now, or after ``fault.after`` seconds."""
-        if fault.after > 0:
-            timer = threading.Timer(fault.after, self._strike, (fault,))
+        delay = max(fault.after, CRASH_DELAY if fault.mode is FaultMode.CRASH else 0.0)
+        if delay > 0:
+            timer = threading.Timer(delay, self._strike, (fault,))
             timer.daemon = True
             timer.start()
         else:

@@ -35,7 +35,7 @@ from executive import protocol
 from executive.bus import Bus, Message
 from executive.logfile import LogFile, tail
 from executive.protocol import Command, ComponentState, GoalResult, GoalStatus, Lifecycle
-from executive.spawn import command, signal_group, spawn
+from executive.spawn import command, describe_exit, exit_status, signal_group, spawn
 from knowledge.description import Component, Kind, RobotDescription
 from knowledge.errors import BusError, ComponentError, DuraError
 from knowledge.knowledge_base import KnowledgeBase
@@ -49,15 +49,6 @@ Listener = Callable[[ComponentState], None]
 def local_endpoint(endpoint: str) -> str:
     """Where a child on this machine reaches an executive listening on ``endpoint``."""
     return endpoint.replace("/0.0.0.0:", "/127.0.0.1:").replace("/[::]:", "/[::1]:")
-
-
-def describe_exit(exit_code: int | None, signum: int | None) -> str:
-    if signum is not None:
-        try:
-            return f"killed by {signal.Signals(signum).name}"
-        except ValueError:
-            return f"killed by signal {signum}"
-    return f"exited with code {exit_code}"
 
 
 class GoalHandle:
@@ -209,9 +200,7 @@ class Launcher:
         self._listeners: list[Listener] = []
         self._selector = selectors.DefaultSelector()
         self._wake = os.eventfd(0, os.EFD_CLOEXEC | os.EFD_NONBLOCK)
-        self._calls: queue.SimpleQueue[tuple[Callable[[], Any], Future[Any]]] = (
-            queue.SimpleQueue()
-        )
+        self._calls: queue.SimpleQueue[tuple[Callable[[], Any], Future[Any]]] = queue.SimpleQueue()
         self._notices: queue.SimpleQueue[ComponentState | None] = queue.SimpleQueue()
         self._declared: list[Any] = []
         self._running = False
@@ -490,7 +479,9 @@ class Launcher:
             if slot.state.state is after:
                 return slot.state
             if slot.state.state is not before:
-                raise ComponentError(f"cannot {verb.value} '{name}': it is {slot.state.state.value}")
+                raise ComponentError(
+                    f"cannot {verb.value} '{name}': it is {slot.state.state.value}"
+                )
             self.command(name, verb)
             with self._lock:
                 process = slot.process
@@ -670,7 +661,7 @@ class Launcher:
         if process.pipe >= 0:
             self._pump(process)
             self._close_pipe(process)
-        exit_code, signum = (returncode, None) if returncode >= 0 else (None, -returncode)
+        exit_code, signum = exit_status(returncode)
         how = describe_exit(exit_code, signum)
         slot = self._slots[process.name]
         with self._lock:
@@ -682,14 +673,14 @@ class Launcher:
                 state, reason = Lifecycle.FAILED, f"{how} before it was ready"
             else:
                 state, reason = Lifecycle.EXITED, how
-            final = self._set(
+            process.log.write(f"--- dura: {state.value}: {how} {_now()}\n".encode())
+            process.log.close()
+            self._set(
                 slot, state, pid=process.pid, exit_code=exit_code, signum=signum, reason=reason
             )
             slot.process = None
             process.exited.set()
             process.woken.set()
-        process.log.write(f"--- dura: {final.state.value}: {how} {_now()}\n".encode())
-        process.log.close()
         for handle in list(slot.goals.values()):
             status = GoalStatus.CANCELLED if process.stopping else GoalStatus.FAILED
             self._finish_goal(

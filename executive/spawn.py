@@ -74,3 +74,18 @@ def signal_group(pgid: int, signum: int) -> bool:
     except (ProcessLookupError, PermissionError):
         return False
     return True
+
+
+def exit_status(returncode: int) -> tuple[int | None, int | None]:
+    """A Popen return code as (exit code, signal): negative means killed by a signal."""
+    return (returncode, None) if returncode >= 0 else (None, -returncode)
+
+
+def describe_exit(exit_code: int | None, signum: int | None) -> str:
+    """``exited with code 1`` or ``killed by SIGKILL``."""
+    if signum is not None:
+        try:
+            return f"killed by {signal.Signals(signum).name}"
+        except ValueError:
+            return f"killed by signal {signum}"
+    return f"exited with code {exit_code}"

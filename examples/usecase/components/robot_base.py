@@ -52,7 +52,13 @@ class RobotBase(Functionality):
             wheels = OUT_OF_RANGE_SPEED
         self.publish(
             "odom",
-            {"x": self.x, "y": self.y, "theta": self.theta, "linear": wheels, "angular": self.angular},
+            {
+                "x": self.x,
+                "y": self.y,
+                "theta": self.theta,
+                "linear": wheels,
+                "angular": self.angular,
+            },
         )
         self.publish(
             "imu",
