@@ -13,6 +13,7 @@ behavior comes from the launcher (``DURA_KIND``).
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import signal
@@ -119,7 +120,8 @@ class _Host(Component):
         def end() -> None:
             self.log.warning("the program ended on its own (return code %d)", returncode)
             if returncode < 0:
-                signal.signal(-returncode, signal.SIG_DFL)
+                with contextlib.suppress(OSError, ValueError):  # SIGKILL has no handler
+                    signal.signal(-returncode, signal.SIG_DFL)
                 os.kill(os.getpid(), -returncode)
             self.stop()
             self._exit_code = returncode
@@ -155,4 +157,7 @@ def main(argv: Sequence[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    # Run the module proper: plug-ins subclass its Translator, not this __main__ copy's.
+    from executive import translator  # noqa: PLW0406
+
+    translator.main()
