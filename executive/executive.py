@@ -57,18 +57,18 @@ class Executive:
                 Bus(self.robot.name, name="executive", endpoint=self.endpoint, listen=True)
             )
             self.kb = stack.enter_context(KnowledgeBase(self.kb_path))
-            self.launcher = stack.enter_context(
-                Launcher(self.robot, self.bus, self.kb, log_dir=self.log_dir, grace=self.grace)
-            )
-            for service in self.services(Context(self.robot, self.bus, self.kb)):
-                service.start()
-                stack.callback(service.stop)
             self.kb.log_event(
                 "EXECUTIVE_STARTED",
                 self.robot.name,
                 {"endpoint": self.endpoint, "pid": os.getpid()},
             )
             stack.callback(self.kb.log_event, "EXECUTIVE_STOPPED", self.robot.name)
+            self.launcher = stack.enter_context(
+                Launcher(self.robot, self.bus, self.kb, log_dir=self.log_dir, grace=self.grace)
+            )
+            for service in self.services(Context(self.robot, self.bus, self.kb)):
+                service.start()
+                stack.callback(service.stop)
             self.bus.declare_alive(EXECUTIVE_ALIVE)
             self._stack = stack.pop_all()
         return self

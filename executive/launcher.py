@@ -204,6 +204,7 @@ class Launcher:
         self._notices: queue.SimpleQueue[ComponentState | None] = queue.SimpleQueue()
         self._declared: list[Any] = []
         self._running = False
+        self._closing = False
         self._loop_thread = threading.Thread(target=self._loop, name="launcher", daemon=True)
         self._notice_thread = threading.Thread(
             target=self._notify, name="launcher-notices", daemon=True
@@ -230,6 +231,7 @@ class Launcher:
         """Stop every component (all at once), then the launcher's threads."""
         if not self._running:
             return
+        self._closing = True
         stoppers = [
             threading.Thread(target=self.stop, args=(name,), name=f"stop-{name}")
             for name, slot in self._slots.items()
@@ -307,6 +309,8 @@ class Launcher:
         with slot.lock:
             if slot.state.state.is_alive:
                 return slot.state
+            if self._closing:
+                raise ComponentError(f"cannot start '{name}': the launcher is closing")
             deadline = time.monotonic() + slot.spec.startup_timeout
             try:
                 process = self._in_loop(lambda: self._spawn(slot))
@@ -606,6 +610,8 @@ class Launcher:
 
     def _in_loop(self, fn: Callable[[], T]) -> T:
         """Run ``fn`` on the launcher thread and return its result (or raise)."""
+        if not self._running:
+            raise ComponentError("the launcher is closed")
         outcome: Future[T] = Future()
         self._calls.put((fn, outcome))
         os.eventfd_write(self._wake, 1)
@@ -634,6 +640,12 @@ class Launcher:
                     key.data()
                 except Exception:
                     log.exception("the launcher thread failed to handle an event")
+        while True:  # calls that came too late
+            try:
+                _, outcome = self._calls.get_nowait()
+            except queue.Empty:
+                return
+            outcome.set_exception(ComponentError("the launcher is closed"))
 
     def _pump(self, process: _Process) -> None:
         """Copy what the process wrote into its log file."""

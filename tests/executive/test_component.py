@@ -15,19 +15,20 @@ from executive import protocol
 from executive.bus import Bus
 from executive.faults import Fault, FaultMode
 from executive.protocol import Lifecycle, component, topic
+from knowledge.description import Component
 from knowledge.errors import BusError, ComponentError
 from tests.conftest import ROOT, USECASE, wait_for
 from tests.executive.rig import Recorder, rig, robot, scripted, usecase
 
 
-def probe(**params: object) -> object:
+def probe(**params: object) -> Component:
     return scripted("probe", "tests.executive.probe", params=params)
 
 
 def test_the_hooks_run_in_lifecycle_order_with_their_arguments(
     endpoint: str, tmp_path: Path
 ) -> None:
-    with rig(robot(probe(rate=5.0)), endpoint, tmp_path) as r:  # type: ignore[arg-type]
+    with rig(robot(probe(rate=5.0)), endpoint, tmp_path) as r:
         hooks = Recorder(r.bus, topic("probe/hooks"))
         r.kb.set_achievement("probe", "seen", 3)
         r.launcher.start("probe")
@@ -52,7 +53,7 @@ def test_the_hooks_run_in_lifecycle_order_with_their_arguments(
 def test_an_exception_in_a_rate_loop_ends_the_component_with_exit_code_1(
     endpoint: str, tmp_path: Path
 ) -> None:
-    with rig(robot(probe(explode=True)), endpoint, tmp_path) as r:  # type: ignore[arg-type]
+    with rig(robot(probe(explode=True)), endpoint, tmp_path) as r:
         r.launcher.start("probe")
         assert r.states.wait(lambda p: p["state"] == "exited")
         assert r.launcher.state("probe").exit_code == 1
@@ -60,7 +61,7 @@ def test_an_exception_in_a_rate_loop_ends_the_component_with_exit_code_1(
 
 
 def test_sigterm_stops_a_component_gracefully(endpoint: str, tmp_path: Path) -> None:
-    with rig(robot(probe()), endpoint, tmp_path) as r:  # type: ignore[arg-type]
+    with rig(robot(probe()), endpoint, tmp_path) as r:
         hooks = Recorder(r.bus, topic("probe/hooks"))
         pid = r.launcher.start("probe").pid
         assert pid is not None
@@ -75,7 +76,7 @@ def lone_probe(endpoint: str) -> Iterator[tuple[Bus, subprocess.Popen[bytes]]]:
     """A probe process started by hand, next to a bus that plays the executive."""
     with Bus("testbot", name="executive", endpoint=endpoint, listen=True) as bus:
         tokens: list[str] = []
-        bus.watch_alive(protocol.component_alive("probe"), lambda k, a: a and tokens.append(k))
+        bus.watch_alive(protocol.component_alive("probe"), lambda key, _: tokens.append(key))
         env = {
             **os.environ,
             protocol.ENV_ROBOT: "testbot",

@@ -10,13 +10,14 @@ import psutil
 from executive.protocol import GoalStatus, Lifecycle
 from executive.translator import load
 from executive.translators.process import ProcessTranslator
+from knowledge.description import Component
 from tests.conftest import wait_for
 from tests.executive.rig import rig, robot, scripted
 
 PLAIN = ("--", "python", "-m", "tests.executive.plain_program")
 
 
-def translated(name: str, *args: str, behavior: bool = False) -> object:
+def translated(name: str, *args: str, behavior: bool = False) -> Component:
     return scripted(name, "executive.translator", "process", *PLAIN, *args, behavior=behavior)
 
 
@@ -35,7 +36,7 @@ def test_the_process_translator_is_registered_as_a_plug_in() -> None:
 def test_a_translated_program_starts_pauses_resumes_and_stops_with_its_host(
     endpoint: str, tmp_path: Path
 ) -> None:
-    with rig(robot(translated("driver")), endpoint, tmp_path) as r:  # type: ignore[arg-type]
+    with rig(robot(translated("driver")), endpoint, tmp_path) as r:
         state = r.launcher.start("driver")
         assert state.state is Lifecycle.READY
         program = program_of(state.pid)
@@ -52,7 +53,7 @@ def test_a_translated_program_starts_pauses_resumes_and_stops_with_its_host(
 def test_a_translated_program_that_dies_takes_its_host_along_the_same_way(
     endpoint: str, tmp_path: Path
 ) -> None:
-    with rig(robot(translated("driver")), endpoint, tmp_path) as r:  # type: ignore[arg-type]
+    with rig(robot(translated("driver")), endpoint, tmp_path) as r:
         program = program_of(r.launcher.start("driver").pid)
         program.send_signal(signal.SIGKILL)
         assert r.states.wait(lambda p: p["state"] == "exited")
@@ -63,7 +64,7 @@ def test_a_translated_behavior_returns_its_programs_exit_code_as_the_result(
     endpoint: str, tmp_path: Path
 ) -> None:
     job = translated("job", "{seconds}", "{code}", behavior=True)
-    with rig(robot(job), endpoint, tmp_path) as r:  # type: ignore[arg-type]
+    with rig(robot(job), endpoint, tmp_path) as r:
         r.launcher.start("job")
         done = r.launcher.send_goal("job", {"seconds": 0.1, "code": 0}).wait(10)
         assert done is not None and done.status is GoalStatus.SUCCEEDED
@@ -78,7 +79,7 @@ def test_a_translated_behavior_returns_its_programs_exit_code_as_the_result(
 
 def test_cancelling_a_translated_goal_ends_its_program(endpoint: str, tmp_path: Path) -> None:
     job = translated("job", "{seconds}", behavior=True)
-    with rig(robot(job), endpoint, tmp_path) as r:  # type: ignore[arg-type]
+    with rig(robot(job), endpoint, tmp_path) as r:
         host = r.launcher.start("job").pid
         handle = r.launcher.send_goal("job", {"seconds": 60})
         assert wait_for(lambda: len(psutil.Process(host).children()) == 1)
