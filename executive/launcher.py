@@ -198,6 +198,7 @@ class Launcher:
         }
         self._lock = threading.Lock()
         self._listeners: list[Listener] = []
+        self._tokens: set[str] = set()  # instances whose liveliness token is there
         self._selector = selectors.DefaultSelector()
         self._wake = os.eventfd(0, os.EFD_CLOEXEC | os.EFD_NONBLOCK)
         self._calls: queue.SimpleQueue[tuple[Callable[[], Any], Future[Any]]] = queue.SimpleQueue()
@@ -395,16 +396,26 @@ class Launcher:
         with self._lock:
             slot.process = process
             self._set(slot, Lifecycle.STARTING, pid=popen.pid)
+            self._announce(process)  # in case its token came first
         return process
 
     def _on_token(self, key: str, alive: bool) -> None:
         """A component process declared (or dropped) its liveliness token."""
         parts = key.split("/")
-        if not alive or len(parts) != 4:
+        if len(parts) != 4:
             return
-        slot = self._slots.get(parts[2])
-        process = slot.process if slot is not None else None
-        if process is not None and process.instance == parts[3]:
+        with self._lock:
+            if not alive:
+                self._tokens.discard(parts[3])
+                return
+            self._tokens.add(parts[3])
+            slot = self._slots.get(parts[2])
+            if slot is not None and slot.process is not None:
+                self._announce(slot.process)
+
+    def _announce(self, process: _Process) -> None:
+        """Wake the start of a process whose token is there (with ``self._lock`` held)."""
+        if process.instance in self._tokens:
             process.announced = True
             process.woken.set()
 
@@ -423,7 +434,6 @@ class Launcher:
                 if process is None or process.exited.is_set():
                     return slot.state
                 process.stopping = True
-                process.failure = ""
                 self._set(slot, Lifecycle.STOPPING, pid=process.pid, reason=reason)
             if process.announced:
                 with contextlib.suppress(BusError):
