@@ -1,12 +1,5 @@
-"""Fixtures of the monitoring tests: component processes find ``tests.*`` on PYTHONPATH."""
+"""Fixtures of the monitoring tests: the runtime tests' (component processes import tests.*)."""
 
-from __future__ import annotations
+from tests.executive.conftest import tests_importable
 
-import pytest
-
-from tests.conftest import ROOT
-
-
-@pytest.fixture(autouse=True)
-def tests_importable(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setenv("PYTHONPATH", str(ROOT))
+__all__ = ["tests_importable"]
