@@ -239,14 +239,16 @@ class Bus:
 
     # --- request / reply --------------------------------------------------------------
 
-    def serve(self, key: str, handler: RequestHandler) -> Any:
+    def serve(self, key: str, handler: RequestHandler, *, threaded: bool = False) -> Any:
         """Answer requests on ``dura/<robot>/<key>`` with ``handler(payload) -> reply``.
 
         A :class:`DuraError` raised by the handler becomes an error reply with its
-        message; a malformed request gets an error reply naming the problem.
+        message; a malformed request gets an error reply naming the problem. With
+        ``threaded`` each request is answered from a thread of its own: handlers that
+        wait (for other messages, for processes) must not hold zenoh's callback thread.
         """
 
-        def on_query(query: zenoh.Query) -> None:
+        def respond(query: zenoh.Query) -> None:
             key_expr = str(query.key_expr)
             try:
                 raw = query.payload.to_bytes() if query.payload is not None else b"{}"
@@ -257,6 +259,14 @@ class Bus:
             except Exception as e:
                 log.exception("request handler for %s failed", key_expr)
                 query.reply_err(f"internal error: {type(e).__name__}: {e}".encode())
+            finally:
+                query.drop()  # type: ignore[no-untyped-call]
+
+        def on_query(query: zenoh.Query) -> None:
+            if threaded:
+                threading.Thread(target=respond, args=(query,), daemon=True).start()
+            else:
+                respond(query)
 
         queryable = self._session.declare_queryable(self.key(key), on_query)
         with self._lock:

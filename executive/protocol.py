@@ -184,3 +184,134 @@ class NodeInfo:
 
 
 # The payload of ``resources``: {"stamp": float, "hostname": str, "nodes": [NodeInfo payloads]}
+
+
+@dataclass(frozen=True)
+class ResourceInfo:
+    """The payload of ``resources``, published by the resource monitor at its rate."""
+
+    hostname: str
+    nodes: tuple[NodeInfo, ...]
+    stamp: float = 0.0
+
+    def to_payload(self) -> dict[str, Any]:
+        return {
+            "stamp": self.stamp,
+            "hostname": self.hostname,
+            "nodes": [n.to_payload() for n in self.nodes],
+        }
+
+    @classmethod
+    def from_payload(cls, payload: dict[str, Any]) -> ResourceInfo:
+        return cls(
+            str(payload["hostname"]),
+            tuple(NodeInfo.from_payload(n) for n in payload["nodes"]),
+            float(payload.get("stamp", 0.0)),
+        )
+
+
+# --- component processes (launcher <-> component SDK) ------------------------------------
+
+# The environment of every component process, set by the launcher and read by the SDK.
+ENV_ROBOT = "DURA_ROBOT"  # the robot's name
+ENV_COMPONENT = "DURA_COMPONENT"  # the component's name
+ENV_ENDPOINT = "DURA_ENDPOINT"  # where the executive's bus listens
+ENV_KIND = "DURA_KIND"  # "functionality" or "behavior"
+ENV_INSTANCE = "DURA_INSTANCE"  # unique per started process; names its liveliness token
+
+
+def component_alive(name: str, instance: str = "*") -> str:
+    """The liveliness token a component process declares once it takes commands."""
+    return f"alive/component/{name}/{instance}"
+
+
+class Command(enum.Enum):
+    """The verbs of a request on ``component/<name>/cmd``: ``{"cmd": verb, ...}``.
+
+    Fields per verb: configure ``{"params": {}, "achievements": {}}``; reconfigure
+    ``{"params": {}}``; goal ``{"goal_id": str, "goal": {}}`` (behaviors; the reply
+    comes at once, the result later on ``component/<name>/result``); cancel
+    ``{"goal_id": str}``; inject_fault ``{"fault": "crash" | {"mode": "crash", ...}}``
+    (see :mod:`executive.faults`). start, pause, resume and stop have no fields. The
+    reply is ``{"phase": Phase value}``; a refused command is an error reply.
+    """
+
+    CONFIGURE = "configure"
+    START = "start"
+    PAUSE = "pause"
+    RESUME = "resume"
+    RECONFIGURE = "reconfigure"
+    STOP = "stop"
+    GOAL = "goal"
+    CANCEL = "cancel"
+    INJECT_FAULT = "inject_fault"
+
+
+class Phase(enum.Enum):
+    """Where a component is in its lifecycle, as the component itself sees it."""
+
+    CREATED = "created"
+    CONFIGURED = "configured"
+    RUNNING = "running"
+    PAUSED = "paused"
+    STOPPED = "stopped"
+
+
+class GoalStatus(enum.Enum):
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    CANCELLED = "cancelled"
+
+
+@dataclass(frozen=True)
+class GoalResult:
+    """The payload of ``component/<name>/result``: how a behavior's goal ended.
+
+    Published by the behavior; the launcher stores it as a return value in the KB.
+    When a behavior process ends with a goal still open, the launcher makes the result
+    itself (FAILED, or CANCELLED if it was asked to stop).
+    """
+
+    component: str
+    goal_id: str
+    status: GoalStatus
+    value: dict[str, Any]
+    reason: str = ""
+    stamp: float = 0.0
+
+    def to_payload(self) -> dict[str, Any]:
+        return {
+            "component": self.component,
+            "goal_id": self.goal_id,
+            "status": self.status.value,
+            "value": self.value,
+            "reason": self.reason,
+            "stamp": self.stamp,
+        }
+
+    @classmethod
+    def from_payload(cls, payload: dict[str, Any]) -> GoalResult:
+        value = payload.get("value") or {}
+        if not isinstance(value, dict):
+            raise ValueError(f"result value must be an object, not {type(value).__name__}")
+        return cls(
+            str(payload["component"]),
+            str(payload["goal_id"]),
+            GoalStatus(payload["status"]),
+            value,
+            str(payload.get("reason", "")),
+            float(payload.get("stamp", 0.0)),
+        )
+
+
+# The payload of ``component/<name>/feedback`` (behaviors, while a goal runs):
+#   {"component": str, "goal_id": str, "feedback": {...}, "stamp": float}
+
+# Requests the executive serves for components and the CLI (all replies are JSON objects):
+#   executive/api/component/achieve  {"component", "key", "value"} -> {}
+#       a behavior stores an achievement in the KB (handed back in configure: warm start)
+#   executive/api/component/list     {} -> {"components": [{"kind", "log", **ComponentState}]}
+#   executive/api/component/start    {"name"} -> ComponentState payload (READY or FAILED)
+#   executive/api/component/stop     {"name"} -> ComponentState payload (STOPPED)
+#   executive/api/component/restart  {"name"} -> ComponentState payload (READY or FAILED)
+#   executive/api/component/logs     {"name", "lines": int} -> {"name", "path", "lines": [str]}

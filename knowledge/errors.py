@@ -37,6 +37,10 @@ class BusError(DuraError):
     """The message bus failed: no answer, no executive, a malformed message."""
 
 
+class ComponentError(DuraError):
+    """A component process refused a command, or could not be started or reached."""
+
+
 def located(path: object, line: int | None, message: str) -> str:
     """Format ``file:line: message`` (or ``file: message`` without a line)."""
     return f"{path}:{line}: {message}" if line else f"{path}: {message}"

@@ -13,7 +13,7 @@ import zenoh
 
 from executive.bus import Bus, Message, check_name, session_config
 from knowledge.errors import BusError
-from tests.conftest import ROOT
+from tests.conftest import ROOT, wait_for
 
 
 @pytest.fixture
@@ -39,15 +39,6 @@ def peer(executive_bus: Bus) -> Iterator[subprocess.Popen[str]]:
         process.kill()
     process.wait(10)
     process.stdout.close()
-
-
-def wait_for(condition: object, timeout: float = 5.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if condition():  # type: ignore[operator]
-            return True
-        time.sleep(0.01)
-    return False
 
 
 def test_a_request_to_another_process_gets_its_reply(executive_bus: Bus, peer: object) -> None:

@@ -1,0 +1,78 @@
+"""How commands find the running executive they talk to.
+
+``dura run`` writes ``.dura/executive.json`` (robot, endpoint, pid) in its working
+folder; commands run in the same folder find the executive there. ``--robot
+ROBOT.yaml`` (with ``--endpoint``, if the executive listens elsewhere) names it instead.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+from executive.bus import Bus
+from knowledge.errors import DuraError
+from knowledge.robot import read_robot
+
+RUN_FILE = Path(".dura") / "executive.json"
+
+
+def add_client_options(parser: Any) -> None:
+    parser.add_argument(
+        "--robot",
+        metavar="ROBOT.yaml",
+        type=Path,
+        help="the robot whose executive to ask (default: the one 'dura run' runs in this folder)",
+    )
+    parser.add_argument("--endpoint", help="where that executive listens (default: the robot's)")
+
+
+def write_run_file(robot: str, endpoint: str, description: Path) -> None:
+    RUN_FILE.parent.mkdir(parents=True, exist_ok=True)
+    text = json.dumps(
+        {"robot": robot, "endpoint": endpoint, "pid": os.getpid(), "description": str(description)}
+    )
+    RUN_FILE.write_text(text + "\n")
+
+
+def remove_run_file() -> None:
+    """Remove the run file if this process wrote it."""
+    try:
+        if json.loads(RUN_FILE.read_text()).get("pid") == os.getpid():
+            RUN_FILE.unlink()
+    except (OSError, ValueError, AttributeError):
+        pass
+
+
+def _target(args: argparse.Namespace) -> tuple[str, str]:
+    """The robot's name and the endpoint of its executive."""
+    if args.robot is not None:
+        robot, findings = read_robot(args.robot)
+        if robot is None:
+            errors = [f for f in findings if f.is_error]
+            raise DuraError(str(errors[0]) if errors else f"{args.robot}: unusable")
+        return robot.name, args.endpoint or robot.endpoint
+    try:
+        found = json.loads(RUN_FILE.read_text())
+        name, endpoint = str(found["robot"]), str(found["endpoint"])
+    except FileNotFoundError:
+        raise DuraError(
+            f"no executive runs in this folder (no {RUN_FILE}): start one with "
+            "'dura run ROBOT.yaml' or name its robot with --robot ROBOT.yaml"
+        ) from None
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise DuraError(f"{RUN_FILE}: unreadable ({e}); name the robot with --robot") from e
+    return name, args.endpoint or endpoint
+
+
+def connect(args: argparse.Namespace) -> Bus:
+    """A bus session with the executive the command line names.
+
+    Raises:
+        DuraError: no executive is named, or none answers at its endpoint.
+    """
+    name, endpoint = _target(args)
+    return Bus(name, name="cli", endpoint=endpoint)

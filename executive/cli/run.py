@@ -1,0 +1,90 @@
+"""``dura run ROBOT.yaml``: run the executive in the foreground until Ctrl-C or SIGTERM."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import sys
+import threading
+from pathlib import Path
+from typing import Any
+
+from executive.cli.client import remove_run_file, write_run_file
+from executive.cli.output import add_json_flag, print_json, shown
+from executive.executive import Executive
+from executive.launcher import local_endpoint
+from knowledge.errors import DuraError
+from knowledge.robot import load_robot
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser(
+        "run",
+        help="run the executive for a robot in the foreground",
+        description="Run the executive for a robot: its bus (listening), knowledge base, "
+        "launcher and resource monitor. Components are started with 'dura component start'. "
+        "Ctrl-C or SIGTERM stops every component and then the executive.",
+    )
+    p.add_argument("robot", metavar="ROBOT.yaml", type=Path, help="the robot description")
+    p.add_argument("--endpoint", help="listen here instead of the robot's bus endpoint")
+    p.add_argument("--db", type=Path, help="the knowledge base file (default: the robot's)")
+    p.add_argument(
+        "--log-dir",
+        type=Path,
+        default=Path(".dura") / "logs",
+        help="where component logs go (default .dura/logs)",
+    )
+    p.add_argument(
+        "--resource-rate",
+        type=float,
+        default=1.0,
+        metavar="HZ",
+        help="how often the resource monitor publishes (default 1)",
+    )
+    p.add_argument(
+        "--grace",
+        type=float,
+        default=3.0,
+        metavar="SECONDS",
+        help="time a component gets to stop, before SIGTERM and again before SIGKILL (default 3)",
+    )
+    add_json_flag(p)
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    for option in ("resource_rate", "grace"):
+        if getattr(args, option) <= 0:
+            flag = "--" + option.replace("_", "-")
+            raise DuraError(f"{flag} must be positive, not {getattr(args, option):g}")
+    robot = load_robot(args.robot)
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+    executive = Executive(
+        robot,
+        endpoint=args.endpoint,
+        kb_path=args.db,
+        log_dir=args.log_dir.resolve(),
+        resource_rate=args.resource_rate,
+        grace=args.grace,
+    )
+    with executive:
+        endpoint = local_endpoint(executive.endpoint)
+        write_run_file(robot.name, endpoint, robot.path)
+        try:
+            if args.json:
+                print_json({"robot": robot.name, "endpoint": endpoint, "pid": os.getpid()})
+            else:
+                print(
+                    f"dura: executive of robot '{robot.name}' runs on {endpoint} (pid "
+                    f"{os.getpid()}, knowledge base {shown(executive.kb_path)}); Ctrl-C stops it"
+                )
+            sys.stdout.flush()
+            stop.wait()
+        finally:
+            remove_run_file()
+    if not args.json:
+        print(f"dura: executive of robot '{robot.name}' stopped")
+    return 0

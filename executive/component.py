@@ -1,0 +1,530 @@
+"""The component SDK: a functionality or a behavior as a normal Python program.
+
+    class Lidar(Functionality):
+        def on_configure(self, params, achievements):
+            self.rate = self.param("rate", 10.0)
+
+        def on_start(self):
+            self.at_rate(self.rate, self.scan)
+
+        def scan(self):
+            self.publish("scan", {"ranges": [1.0, 1.2]})
+
+    if __name__ == "__main__":
+        Lidar.main()
+
+The executive starts the program with the robot, the component's name and the bus
+endpoint in its environment (``protocol.ENV_*``). :meth:`Component.main` connects to
+the bus, takes lifecycle commands on ``component/<name>/cmd`` and runs every lifecycle
+hook on the main thread; rate loops run on threads of their own, subscription handlers
+on the bus's. The process ends with exit code 0 when it is stopped (a command, SIGTERM
+or SIGINT, or the executive's liveliness token vanishing) and with 1 when an exception
+escapes a loop or a handler.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import queue
+import signal
+import sys
+import threading
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Mapping
+from concurrent.futures import Future
+from typing import Any, ClassVar, TypeVar
+
+from executive import protocol
+from executive.bus import Bus, Message
+from executive.faults import Fault, FaultInjector
+from executive.protocol import Command, GoalResult, GoalStatus, Phase
+from knowledge.description import Kind
+from knowledge.errors import BusError, ComponentError, DuraError
+
+T = TypeVar("T")
+
+# After the executive vanished, a component that has not ended by then is ended hard.
+EXECUTIVE_GONE_DEADLINE = 1.5
+# How long stop waits for a running goal to publish its (cancelled) result.
+GOAL_STOP_TIMEOUT = 2.0
+
+
+class GoalFailed(Exception):
+    """Raise in :meth:`Behavior.execute` to fail the goal; the message is the reason."""
+
+
+class GoalCancelled(Exception):
+    """Raised by :meth:`Behavior.checkpoint` once the goal is cancelled or stopped."""
+
+
+def _object(request: Mapping[str, Any], key: str) -> dict[str, Any]:
+    value = request.get(key) or {}
+    if not isinstance(value, dict):
+        raise ComponentError(f"'{key}' must be an object, not {json.dumps(value)}")
+    return value
+
+
+class Component:
+    """What functionalities and behaviors share: lifecycle, bus helpers, parameters.
+
+    Override the ``on_*`` hooks; the public lifecycle methods check that the command
+    fits the current phase and then call them.
+    """
+
+    kind: ClassVar[Kind]
+
+    def __init__(self, name: str, bus: Bus) -> None:
+        self.name = name
+        self.bus = bus
+        self.params: dict[str, Any] = {}
+        self.log = logging.getLogger(f"dura.component.{name}")
+        self.faults = FaultInjector(on_hang=self._hang)
+        self._phase = Phase.CREATED
+        self._hung = False
+        self._changed = threading.Condition()
+        self._jobs: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()
+        self._pending = 0
+        self._exit_code: int | None = None
+        self._start_fault: Fault | None = None
+
+    # --- hooks ------------------------------------------------------------------------
+
+    def on_configure(self, params: dict[str, Any], achievements: dict[str, Any]) -> None:
+        """Read parameters (:meth:`param`) and, for a warm start, achievements."""
+
+    def on_start(self) -> None:
+        """Start working: rate loops (:meth:`at_rate`) and subscriptions."""
+
+    def on_pause(self) -> None:
+        """Loops and subscription handlers are already held; release what else runs."""
+
+    def on_resume(self) -> None:
+        """Take up again what :meth:`on_pause` released."""
+
+    def on_reconfigure(self, params: dict[str, Any]) -> None:
+        """React to changed parameters (already merged into :attr:`params`)."""
+
+    def on_stop(self) -> None:
+        """Release resources; loops have ended (called only if the component started)."""
+
+    # --- helpers ----------------------------------------------------------------------
+
+    @property
+    def phase(self) -> Phase:
+        return self._phase
+
+    @property
+    def running(self) -> bool:
+        return self._phase is Phase.RUNNING and not self._hung
+
+    @property
+    def ended(self) -> bool:
+        return self._phase is Phase.STOPPED
+
+    def param(self, key: str, default: T) -> T:
+        """A parameter, of the type of its default (an int is accepted for a float).
+
+        Raises:
+            ComponentError: the parameter has another type.
+        """
+        value = self.params.get(key, default)
+        if isinstance(default, float) and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        if default is not None and type(value) is not type(default):
+            raise ComponentError(
+                f"parameter {key!r} of '{self.name}' must be a {type(default).__name__}, "
+                f"not {value!r}"
+            )
+        return value  # type: ignore[no-any-return]
+
+    def publish(self, topic: str, payload: Mapping[str, Any]) -> None:
+        """Publish on ``topic/<topic>``; ``stamp`` defaults to now."""
+        if self.faults.silent:
+            return
+        stamp = payload["stamp"] if "stamp" in payload else time.time()
+        self.bus.publish(protocol.topic(topic), {**payload, "stamp": self.faults.stamp(stamp)})
+
+    def subscribe(self, topic: str, handler: Callable[[Message], None]) -> None:
+        """Call ``handler`` for each message on ``topic/<topic>`` while running."""
+
+        def deliver(message: Message) -> None:
+            if not self.running:
+                return
+            try:
+                handler(message)
+            except Exception:
+                self._fail(f"the handler of topic '{topic}'")
+
+        self.bus.subscribe(protocol.topic(topic), deliver)
+
+    def at_rate(self, hz: float, step: Callable[[], None]) -> None:
+        """Call ``step`` ``hz`` times a second while running (held while paused).
+
+        Deadlines are absolute, so the rate does not drift; a loop that falls more
+        than a period behind skips ahead instead of bursting.
+        """
+        if hz <= 0:
+            raise ComponentError(f"a rate must be positive, not {hz}")
+        period = 1.0 / hz
+
+        def loop() -> None:
+            due = time.monotonic()
+            while self._wait_running():
+                try:
+                    step()
+                except Exception:
+                    self._fail(f"the rate loop {getattr(step, '__name__', step)!r}")
+                    return
+                due += period / self.faults.rate_factor()
+                now = time.monotonic()
+                if due < now - period:
+                    due = now
+                with self._changed:
+                    self._changed.wait_for(lambda: self.ended, timeout=max(0.0, due - now))
+
+        threading.Thread(target=loop, daemon=True, name=f"rate-{self.name}").start()
+
+    def _wait_running(self) -> bool:
+        """Block while not running; False once the component has ended."""
+        with self._changed:
+            self._changed.wait_for(lambda: self.running or self.ended)
+            return not self.ended
+
+    # --- lifecycle --------------------------------------------------------------------
+
+    def _set_phase(self, phase: Phase) -> None:
+        with self._changed:
+            self._phase = phase
+            self._changed.notify_all()
+
+    def _expect(self, verb: str, *phases: Phase) -> None:
+        if self._phase not in phases:
+            raise ComponentError(f"cannot {verb} '{self.name}': it is {self._phase.value}")
+
+    def configure(self, params: dict[str, Any], achievements: dict[str, Any]) -> None:
+        self._expect("configure", Phase.CREATED, Phase.CONFIGURED)
+        self.params = dict(params)
+        fault = self.params.get("fault")
+        self._start_fault = Fault.parse(fault) if fault is not None else None
+        self.on_configure(self.params, achievements)
+        self._set_phase(Phase.CONFIGURED)
+
+    def start(self) -> None:
+        self._expect("start", Phase.CONFIGURED)
+        self.on_start()
+        self._set_phase(Phase.RUNNING)
+        if self._start_fault is not None:
+            self.faults.inject(self._start_fault)
+
+    def pause(self) -> None:
+        self._expect("pause", Phase.RUNNING)
+        self._set_phase(Phase.PAUSED)
+        self.on_pause()
+
+    def resume(self) -> None:
+        self._expect("resume", Phase.PAUSED)
+        self.on_resume()
+        self._set_phase(Phase.RUNNING)
+
+    def reconfigure(self, params: dict[str, Any]) -> None:
+        self._expect("reconfigure", Phase.CONFIGURED, Phase.RUNNING, Phase.PAUSED)
+        self.params.update(params)
+        self.on_reconfigure(params)
+
+    def stop(self) -> None:
+        """Stop for good: loops end, the process exits with code 0."""
+        if self.ended:
+            return
+        started = self._phase in (Phase.RUNNING, Phase.PAUSED)
+        self._set_phase(Phase.STOPPED)
+        if started:
+            try:
+                self.on_stop()
+            except Exception:
+                self.log.exception("on_stop failed")
+        if self._exit_code is None:
+            self._exit_code = 0
+
+    def take_goal(self, goal_id: str, goal: dict[str, Any]) -> None:
+        raise ComponentError(f"'{self.name}' is a {self.kind.value}: it takes no goals")
+
+    def cancel_goal(self, goal_id: str) -> None:
+        raise ComponentError(f"'{self.name}' is a {self.kind.value}: it has no goals")
+
+    # --- commands ---------------------------------------------------------------------
+
+    def _command(self, request: dict[str, Any]) -> dict[str, Any]:
+        """Carry out one command (on the main thread)."""
+        verb = request.get("cmd")
+        try:
+            command = Command(verb)
+        except ValueError:
+            verbs = ", ".join(c.value for c in Command)
+            raise ComponentError(f"unknown command {verb!r} (choose from {verbs})") from None
+        try:
+            if command is Command.CONFIGURE:
+                self.configure(_object(request, "params"), _object(request, "achievements"))
+            elif command is Command.START:
+                self.start()
+            elif command is Command.PAUSE:
+                self.pause()
+            elif command is Command.RESUME:
+                self.resume()
+            elif command is Command.RECONFIGURE:
+                self.reconfigure(_object(request, "params"))
+            elif command is Command.STOP:
+                self.stop()
+            elif command is Command.GOAL:
+                self.take_goal(str(request.get("goal_id", "")), _object(request, "goal"))
+            elif command is Command.CANCEL:
+                self.cancel_goal(str(request.get("goal_id", "")))
+            else:
+                self.faults.inject(Fault.parse(request.get("fault")))
+        except DuraError:
+            raise
+        except Exception as e:
+            self.log.exception("%s failed", command.value)
+            raise ComponentError(f"{command.value} failed: {type(e).__name__}: {e}") from e
+        return {"phase": self._phase.value}
+
+    def _on_command(self, request: dict[str, Any]) -> dict[str, Any]:
+        """Hand a command to the main thread and wait for its outcome (a bus thread)."""
+        outcome: Future[dict[str, Any]] = Future()
+
+        def job() -> None:
+            try:
+                outcome.set_result(self._command(request))
+            except Exception as e:
+                outcome.set_exception(e)
+
+        with self._changed:
+            self._pending += 1
+        try:
+            self._jobs.put(job)
+            return outcome.result()
+        finally:
+            with self._changed:
+                self._pending -= 1
+                self._changed.notify_all()
+
+    def _stop_soon(self) -> None:
+        """Stop from any thread or a signal handler (SimpleQueue.put is reentrant)."""
+        self._jobs.put(self.stop)
+
+    def _fail(self, where: str) -> None:
+        self.log.exception("unhandled exception in %s: '%s' ends", where, self.name)
+
+        def end() -> None:
+            self._set_phase(Phase.STOPPED)
+            self._exit_code = 1
+
+        self._jobs.put(end)
+
+    def _hang(self) -> None:
+        with self._changed:
+            self._hung = True
+            self._changed.notify_all()
+
+        def block() -> None:
+            for signum in (signal.SIGTERM, signal.SIGINT):
+                signal.signal(signum, signal.SIG_IGN)
+            threading.Event().wait()
+
+        self._jobs.put(block)
+
+    def _on_executive(self, key: str, alive: bool) -> None:
+        if alive:
+            return
+        self.log.warning("the executive is gone: '%s' stops", self.name)
+        deadline = threading.Timer(EXECUTIVE_GONE_DEADLINE, os._exit, (1,))
+        deadline.daemon = True
+        deadline.start()
+        self._stop_soon()
+
+    # --- process ----------------------------------------------------------------------
+
+    def run(self, instance: str) -> int:
+        """Take commands until stopped; returns the exit code. Call on the main thread."""
+        for signum in (signal.SIGTERM, signal.SIGINT):
+            signal.signal(signum, lambda *_: self._stop_soon())
+        self.bus.serve(protocol.component(self.name, "cmd"), self._on_command, threaded=True)
+        self.bus.watch_alive(protocol.EXECUTIVE_ALIVE, self._on_executive)
+        self.bus.declare_alive(protocol.component_alive(self.name, instance))
+        while self._exit_code is None:
+            self._jobs.get()()
+        with self._changed:  # let the last command (stop) be answered
+            self._changed.wait_for(lambda: self._pending == 0, timeout=1.0)
+        return self._exit_code
+
+    @classmethod
+    def main(cls) -> None:
+        """Run this component as its process's program; exits with its exit code."""
+        sys.exit(cls.run_process())
+
+    @classmethod
+    def run_process(cls, *args: Any) -> int:
+        """Connect to the executive named in the environment and run until stopped.
+
+        ``args`` go to the constructor after the name and the bus.
+        """
+        missing = [
+            v
+            for v in (protocol.ENV_ROBOT, protocol.ENV_COMPONENT, protocol.ENV_ENDPOINT)
+            if not os.environ.get(v)
+        ]
+        if missing:
+            print(
+                f"{sys.argv[0]}: {', '.join(missing)} not set: components are started by the "
+                "executive ('dura component start NAME')",
+                file=sys.stderr,
+            )
+            return 2
+        name = os.environ[protocol.ENV_COMPONENT]
+        logging.basicConfig(
+            level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
+        )
+        try:
+            with Bus(
+                os.environ[protocol.ENV_ROBOT],
+                name=name,
+                endpoint=os.environ[protocol.ENV_ENDPOINT],
+            ) as bus:
+                instance = os.environ.get(protocol.ENV_INSTANCE) or str(os.getpid())
+                return cls(name, bus, *args).run(instance)
+        except DuraError as e:
+            logging.getLogger(f"dura.component.{name}").error("%s", e)
+            return 1
+
+
+class Functionality(Component, ABC):
+    """A component that runs until it is stopped and provides capabilities."""
+
+    kind = Kind.FUNCTIONALITY
+
+    @abstractmethod
+    def on_start(self) -> None:
+        """Start publishing: rate loops (:meth:`at_rate`) and subscriptions."""
+
+
+class Behavior(Component, ABC):
+    """A component that carries out goals, one at a time, and returns their results.
+
+    :meth:`execute` runs on a thread of its own; it should call :meth:`checkpoint`
+    (or :meth:`sleep`) often: that is where it waits while paused and where a
+    cancellation or a stop reaches it.
+    """
+
+    kind = Kind.BEHAVIOR
+
+    def __init__(self, name: str, bus: Bus) -> None:
+        super().__init__(name, bus)
+        self.achievements: dict[str, Any] = {}
+        self._goal_id: str | None = None
+        self._cancelled = False
+        self._goal_thread: threading.Thread | None = None
+
+    @abstractmethod
+    def execute(self, goal: dict[str, Any]) -> dict[str, Any] | None:
+        """Carry out one goal and return the result's value; raise :class:`GoalFailed` to fail."""
+
+    # --- helpers ----------------------------------------------------------------------
+
+    def feedback(self, **values: Any) -> None:
+        """Publish feedback on the running goal (``component/<name>/feedback``)."""
+        goal_id = self._goal_id
+        if goal_id is None or self.faults.silent:
+            return
+        self.bus.publish(
+            protocol.component(self.name, "feedback"),
+            {"component": self.name, "goal_id": goal_id, "feedback": values},
+        )
+
+    def achieve(self, key: str, value: Any) -> None:
+        """Store an achievement in the KB (through the executive) for a warm start."""
+        self.achievements[key] = value
+        try:
+            self.bus.request(
+                protocol.api("component/achieve"),
+                {"component": self.name, "key": key, "value": value},
+                timeout=2.0,
+            )
+        except BusError as e:
+            self.log.warning("achievement %r not stored: %s", key, e)
+
+    def checkpoint(self) -> None:
+        """Wait while paused; raise :class:`GoalCancelled` once cancelled or stopped."""
+        with self._changed:
+            self._changed.wait_for(lambda: self.running or self.ended or self._cancelled)
+            if self.ended or self._cancelled:
+                raise GoalCancelled("stopped" if self.ended else "cancelled")
+
+    def sleep(self, seconds: float) -> None:
+        """Sleep ``seconds`` of running time (time paused does not count)."""
+        remaining = seconds
+        while True:
+            self.checkpoint()
+            if remaining <= 0:
+                return
+            began = time.monotonic()
+            with self._changed:
+                self._changed.wait_for(
+                    lambda: not self.running or self._cancelled, timeout=remaining
+                )
+            remaining -= time.monotonic() - began
+
+    # --- lifecycle --------------------------------------------------------------------
+
+    def configure(self, params: dict[str, Any], achievements: dict[str, Any]) -> None:
+        self.achievements = dict(achievements)
+        super().configure(params, achievements)
+
+    def stop(self) -> None:
+        super().stop()
+        thread = self._goal_thread
+        if thread is not None:
+            thread.join(GOAL_STOP_TIMEOUT)
+
+    def take_goal(self, goal_id: str, goal: dict[str, Any]) -> None:
+        if not goal_id:
+            raise ComponentError("a goal needs a 'goal_id'")
+        if not self.running:
+            raise ComponentError(f"'{self.name}' is {self._phase.value}: it takes no goal now")
+        if self._goal_id is not None:
+            raise ComponentError(f"'{self.name}' is busy with goal {self._goal_id}")
+        with self._changed:
+            self._goal_id, self._cancelled = goal_id, False
+        self._goal_thread = threading.Thread(
+            target=self._run_goal, args=(goal_id, goal), daemon=True, name=f"goal-{goal_id}"
+        )
+        self._goal_thread.start()
+
+    def cancel_goal(self, goal_id: str) -> None:
+        if goal_id != self._goal_id:
+            raise ComponentError(f"'{self.name}' has no running goal {goal_id!r}")
+        with self._changed:
+            self._cancelled = True
+            self._changed.notify_all()
+
+    def _run_goal(self, goal_id: str, goal: dict[str, Any]) -> None:
+        status, value, reason = GoalStatus.FAILED, {}, ""
+        try:
+            returned = self.execute(goal)
+            if returned is not None and not isinstance(returned, dict):
+                raise GoalFailed(f"execute returned a {type(returned).__name__}, not a dict")
+            json.dumps(returned)
+            status, value = GoalStatus.SUCCEEDED, returned or {}
+        except GoalCancelled as e:
+            status, reason = GoalStatus.CANCELLED, str(e)
+        except GoalFailed as e:
+            reason = str(e)
+            self.log.warning("goal %s failed: %s", goal_id, reason)
+        except Exception as e:
+            reason = f"{type(e).__name__}: {e}"
+            self.log.exception("goal %s failed", goal_id)
+        with self._changed:
+            self._goal_id = None
+        result = GoalResult(self.name, goal_id, status, value, reason, time.time())
+        self.bus.publish(protocol.component(self.name, "result"), result.to_payload())

@@ -1,0 +1,84 @@
+"""The executive process: its bus (listening), knowledge base, launcher and services.
+
+Services start in order and stop in reverse; the launcher stops every component when
+the executive closes. While it runs, the executive holds the liveliness token
+``alive/executive``: components end themselves when it vanishes.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from pathlib import Path
+
+from executive.bus import Bus
+from executive.component_api import ComponentApi
+from executive.launcher import Launcher
+from executive.protocol import EXECUTIVE_ALIVE
+from executive.service import Context, Service
+from knowledge.description import RobotDescription
+from knowledge.knowledge_base import KnowledgeBase
+from monitoring.resource_monitor import ResourceMonitor
+
+
+class Executive:
+    """Everything the executive process runs, opened and closed together.
+
+    Args:
+        robot: the robot to run.
+        endpoint: where to listen (default: the robot's bus endpoint).
+        kb_path: the knowledge base (default: the robot's, ``./.dura/<robot>.db``).
+        log_dir: where component logs go (default ``./.dura/logs``).
+        resource_rate: how often the resource monitor publishes, in Hz.
+        grace: seconds a component gets at each step of a stop.
+    """
+
+    def __init__(
+        self,
+        robot: RobotDescription,
+        *,
+        endpoint: str | None = None,
+        kb_path: Path | None = None,
+        log_dir: Path | None = None,
+        resource_rate: float = 1.0,
+        grace: float = 3.0,
+    ) -> None:
+        self.robot = robot
+        self.endpoint = endpoint or robot.endpoint
+        self.kb_path = kb_path or robot.kb_path()
+        self.log_dir = log_dir or Path.cwd() / ".dura" / "logs"
+        self.resource_rate = resource_rate
+        self.grace = grace
+        self._stack = contextlib.ExitStack()
+
+    def __enter__(self) -> Executive:
+        with contextlib.ExitStack() as stack:
+            self.bus = stack.enter_context(
+                Bus(self.robot.name, name="executive", endpoint=self.endpoint, listen=True)
+            )
+            self.kb = stack.enter_context(KnowledgeBase(self.kb_path))
+            self.kb.log_event(
+                "EXECUTIVE_STARTED",
+                self.robot.name,
+                {"endpoint": self.endpoint, "pid": os.getpid()},
+            )
+            stack.callback(self.kb.log_event, "EXECUTIVE_STOPPED", self.robot.name)
+            self.launcher = stack.enter_context(
+                Launcher(self.robot, self.bus, self.kb, log_dir=self.log_dir, grace=self.grace)
+            )
+            for service in self.services(Context(self.robot, self.bus, self.kb)):
+                service.start()
+                stack.callback(service.stop)
+            self.bus.declare_alive(EXECUTIVE_ALIVE)
+            self._stack = stack.pop_all()
+        return self
+
+    def services(self, context: Context) -> list[Service]:
+        """The services of the executive, in the order they start."""
+        return [
+            ComponentApi(context, self.launcher),
+            ResourceMonitor(context, rate=self.resource_rate),
+        ]
+
+    def __exit__(self, *exc: object) -> None:
+        self._stack.close()

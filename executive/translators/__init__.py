@@ -1,0 +1,1 @@
+"""The translator plug-ins that come with dura (entry-point group ``dura.translators``)."""

@@ -1,0 +1,119 @@
+"""The resource monitor (thesis 6.2.4): CPU and memory of each component's process tree.
+
+It learns the components' processes from the launcher's reports on
+``component/*/state`` and publishes a :class:`~executive.protocol.ResourceInfo` on
+``resources`` at its rate (default 1 Hz). A component whose process vanished (or is a
+zombie) while it should be alive is reported with an ``error``. CPU is measured between
+two samples, so a process's first report shows 0 %.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import socket
+import threading
+import time
+from typing import Any
+
+import psutil
+
+from executive.bus import Message
+from executive.protocol import RESOURCES, ComponentState, NodeInfo, ResourceInfo, component
+from executive.service import Context, Service
+from knowledge.errors import ConfigError, DuraError
+
+log = logging.getLogger("dura.resources")
+
+
+class ResourceMonitor(Service):
+    """Publishes the resource use of every running component."""
+
+    name = "resource-monitor"
+
+    def __init__(self, context: Context, *, rate: float = 1.0) -> None:
+        super().__init__(context)
+        if rate <= 0:
+            raise ConfigError(f"the resource monitor's rate must be positive, not {rate:g}")
+        self.rate = rate
+        self.hostname = socket.gethostname()
+        self._pids: dict[str, int] = {}
+        self._processes: dict[int, psutil.Process] = {}
+        self._lock = threading.Lock()
+        self._stopped = threading.Event()
+        self._thread = threading.Thread(target=self._loop, name="resource-monitor", daemon=True)
+        self._subscriber: Any = None
+
+    def start(self) -> None:
+        self._subscriber = self.context.bus.subscribe(component("*", "state"), self._on_state)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stopped.set()
+        if self._thread.is_alive():
+            self._thread.join()
+        if self._subscriber is not None:
+            with contextlib.suppress(Exception):
+                self._subscriber.undeclare()
+            self._subscriber = None
+
+    def _on_state(self, message: Message) -> None:
+        try:
+            state = ComponentState.from_payload(message.payload)
+        except (KeyError, ValueError, TypeError) as e:
+            log.warning("malformed state on %s: %s", message.key, e)
+            return
+        with self._lock:
+            if state.state.is_alive and isinstance(state.pid, int):
+                self._pids[state.component] = state.pid
+            else:
+                self._pids.pop(state.component, None)
+
+    def _loop(self) -> None:
+        period = 1.0 / self.rate
+        due = time.monotonic()
+        while not self._stopped.wait(max(0.0, due - time.monotonic())):
+            due = max(due + period, time.monotonic() - period)
+            try:
+                self.context.bus.publish(RESOURCES, self.measure().to_payload())
+            except DuraError as e:
+                log.warning("cannot publish resources: %s", e)
+
+    def measure(self) -> ResourceInfo:
+        """One sample of every tracked component."""
+        with self._lock:
+            pids = sorted(self._pids.items())
+        seen: set[int] = set()
+        nodes = tuple(self._node(name, pid, seen) for name, pid in pids)
+        for pid in set(self._processes) - seen:
+            del self._processes[pid]
+        return ResourceInfo(self.hostname, nodes, time.time())
+
+    def _process(self, pid: int, seen: set[int]) -> psutil.Process:
+        """The same psutil object for a process every time (CPU% needs the last sample)."""
+        seen.add(pid)
+        process = self._processes.get(pid)
+        if process is None or not process.is_running():
+            process = self._processes[pid] = psutil.Process(pid)
+        return process
+
+    def _node(self, name: str, pid: int, seen: set[int]) -> NodeInfo:
+        try:
+            root = self._process(pid, seen)
+            if root.status() == psutil.STATUS_ZOMBIE:
+                return NodeInfo(name, pid, self.hostname, 0.0, 0, f"process {pid} is a zombie")
+            tree = [root, *root.children(recursive=True)]
+        except psutil.NoSuchProcess:
+            return NodeInfo(name, pid, self.hostname, 0.0, 0, f"process {pid} vanished")
+        except psutil.AccessDenied:
+            return NodeInfo(name, pid, self.hostname, 0.0, 0, f"process {pid}: access denied")
+        cpu, memory = 0.0, 0
+        for member in tree:
+            try:
+                process = self._process(member.pid, seen)
+                with process.oneshot():
+                    cpu += process.cpu_percent(None)
+                    memory += process.memory_info().rss
+            except (psutil.NoSuchProcess, psutil.AccessDenied):
+                continue
+        return NodeInfo(name, pid, self.hostname, round(cpu, 1), memory)

@@ -1,0 +1,177 @@
+"""``dura run`` and ``dura component`` through the real command line, in subprocesses."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import signal
+import subprocess
+import sys
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import psutil
+import pytest
+
+from executive.bus import Bus
+from executive.protocol import ComponentState, Lifecycle, component, topic
+from tests.conftest import ROOT, USECASE, run_dura, wait_for
+from tests.executive.rig import Recorder
+
+COMPONENTS = (
+    "lidar",
+    "lidar_filter",
+    "robot_base",
+    "cam",
+    "cam_to_lidar",
+    "move_to",
+    "take_picture",
+)
+RATES = {"scan": 10.0, "odom": 20.0, "imu": 20.0, "image": 15.0, "scan_filtered": 25.0}
+
+
+def gone(process: psutil.Process) -> bool:
+    try:
+        return process.status() == psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
+        return True
+
+
+@contextlib.contextmanager
+def executive(folder: Path, endpoint: str) -> Iterator[subprocess.Popen[str]]:
+    """``dura run`` on the use case in ``folder``; killed, with its children, at the end."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "executive.cli", "run", str(USECASE), "--endpoint", endpoint],
+        cwd=folder,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    children: list[psutil.Process] = []
+    try:
+        assert process.stdout is not None
+        line = process.stdout.readline()
+        assert "runs on" in line, line + process.stderr.read() if process.stderr else ""
+        yield process
+    finally:
+        with contextlib.suppress(psutil.NoSuchProcess):
+            children = psutil.Process(process.pid).children(recursive=True)
+        if process.poll() is None:
+            process.send_signal(signal.SIGTERM)
+            try:
+                process.wait(30)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+        for child in children:
+            with contextlib.suppress(psutil.NoSuchProcess):
+                child.kill()
+        for stream in (process.stdout, process.stderr):
+            if stream is not None:
+                stream.close()
+
+
+def dura_in(folder: Path) -> Callable[..., subprocess.CompletedProcess[str]]:
+    return lambda *args: run_dura(*args, cwd=folder)
+
+
+def pid_of(dura: Callable[..., subprocess.CompletedProcess[str]], name: str) -> int:
+    listed = json.loads(dura("component", "list", "--json").stdout)["components"]
+    return int(next(c["pid"] for c in listed if c["component"] == name))
+
+
+def test_component_commands_say_clearly_when_no_executive_runs(
+    tmp_path: Path, endpoint: str
+) -> None:
+    dura = dura_in(tmp_path)
+    done = dura("component", "list")
+    assert done.returncode == 1
+    assert done.stderr.startswith(
+        "dura: no executive runs in this folder (no .dura/executive.json)"
+    )
+    done = dura("component", "start", "lidar", "--robot", str(USECASE), "--endpoint", endpoint)
+    assert done.returncode == 1
+    assert done.stderr.startswith(f"dura: no executive for robot 'usecase' at {endpoint}")
+
+
+@pytest.mark.slow
+def test_components_are_started_listed_logged_stopped_and_restarted_through_the_cli(
+    tmp_path: Path, endpoint: str
+) -> None:
+    dura = dura_in(tmp_path)
+    with executive(tmp_path, endpoint) as process:
+        run_file = json.loads((tmp_path / ".dura" / "executive.json").read_text())
+        assert run_file["robot"] == "usecase" and run_file["pid"] == process.pid
+
+        started = dura("component", "start", "lidar")
+        assert started.returncode == 0, started.stderr
+        assert started.stdout.startswith("lidar: ready (pid ")
+        listed = json.loads(dura("component", "list", "--json").stdout)["components"]
+        assert [c["component"] for c in listed] == list(COMPONENTS)
+        assert {c["component"]: c["state"] for c in listed}["lidar"] == "ready"
+        table = dura("component", "list").stdout.splitlines()
+        assert table[0].split() == ["NAME", "KIND", "STATE", "PID", "SINCE", "REASON"]
+
+        logs = dura("component", "logs", "lidar", "--json")
+        assert json.loads(logs.stdout)["lines"][0].startswith("--- dura: started lidar")
+        assert Path(json.loads(logs.stdout)["path"]) == tmp_path / ".dura" / "logs" / "lidar.log"
+
+        restarted = json.loads(dura("component", "restart", "lidar", "--json").stdout)
+        assert restarted["state"] == "ready" and restarted["pid"] != listed[0]["pid"]
+        stopped = dura("component", "stop", "lidar")
+        assert stopped.stdout == "lidar: stopped (exited with code 0)\n"
+
+        unknown = dura("component", "start", "lidr")
+        assert unknown.returncode == 1
+        assert unknown.stderr.startswith("dura: no component 'lidr' in robot 'usecase'")
+
+        dura("component", "start", "cam")
+        cam = psutil.Process(pid_of(dura, "cam"))
+        process.send_signal(signal.SIGINT)
+        assert process.wait(30) == 0
+        assert gone(cam)
+        assert not (tmp_path / ".dura" / "executive.json").exists()
+        assert process.stdout is not None
+        assert "executive of robot 'usecase' stopped" in process.stdout.read()
+
+
+@pytest.mark.slow
+def test_all_use_case_components_start_through_the_cli_and_publish_at_their_rates(
+    tmp_path: Path, endpoint: str
+) -> None:
+    dura = dura_in(tmp_path)
+    with executive(tmp_path, endpoint), Bus("usecase", name="test", endpoint=endpoint) as bus:
+        recorders = {name: Recorder(bus, topic(name)) for name in RATES}
+        states = Recorder(bus, component("*", "state"))
+        for name in COMPONENTS:
+            done = dura("component", "start", name)
+            assert done.returncode == 0, done.stderr
+        for recorder in recorders.values():
+            recorder.clear()
+        assert wait_for(lambda: recorders["scan"].count() >= 30, 10)
+        for name, rate in RATES.items():
+            stamps = [m.payload["stamp"] for m in recorders[name].messages]
+            measured = (len(stamps) - 1) / (stamps[-1] - stamps[0])
+            assert rate * 0.75 < measured < rate * 1.25, (name, measured)
+
+        os.kill(pid_of(dura, "lidar"), signal.SIGKILL)
+        assert states.wait(lambda p: p["component"] == "lidar" and p["state"] == "exited")
+        reported = ComponentState.from_payload(states.payloads[-1])
+        assert (reported.state, reported.signal) == (Lifecycle.EXITED, signal.SIGKILL)
+
+
+@pytest.mark.slow
+def test_sigkill_of_the_executive_takes_all_its_components_with_it(
+    tmp_path: Path, endpoint: str
+) -> None:
+    dura = dura_in(tmp_path)
+    with executive(tmp_path, endpoint) as process:
+        for name in ("lidar", "lidar_filter", "cam"):
+            assert dura("component", "start", name).returncode == 0
+        children = psutil.Process(process.pid).children(recursive=True)
+        assert len(children) == 3
+        process.kill()
+        process.wait()
+        assert wait_for(lambda: all(gone(c) for c in children), 10)
