@@ -14,8 +14,10 @@ Configuration, per topic and caller-id group (see :mod:`monitoring.caller_groups
               states:
                 - {state: ok, number: 1, frequency: {type: in_between, lower_bound: 8, upper_bound: 12}}
 
-The filter smooths each publisher's periods (time between two of its messages); the
-frequency of a group is the sum of ``1 / filtered period`` over its publishers, and
+The filter smooths each publisher's periods: the time between two of its messages,
+taken from their send stamps (zenoh source timestamps), so that delays of reception
+(batching, a busy observer) do not distort them. The frequency of a group is the sum
+of ``1 / filtered period`` over its publishers, and
 the states check it (for ``student_t`` the period's std ``s`` becomes ``s / p^2``).
 A slow topic therefore fits a slow state or none (``NO_STATE_FITS``). A publisher is
 *stopped* after ``timeout`` seconds without a message, or by default after
@@ -84,8 +86,9 @@ class _Group:
 class _Topic:
     config: TopicGroups[FrequencySettings]
     groups: list[_Group]
-    arrivals: deque[tuple[str, float]] = field(default_factory=deque)
-    last: dict[str, float] = field(default_factory=dict)  # caller id -> last arrival
+    arrivals: deque[tuple[str, float]] = field(default_factory=deque)  # (caller id, sent)
+    heard: dict[str, float] = field(default_factory=dict)  # caller id -> last received
+    sent: dict[str, float] = field(default_factory=dict)  # caller id -> last drained sent
     members: dict[str, list[_Group]] = field(default_factory=dict)  # caller id -> its groups
 
 
@@ -134,20 +137,25 @@ class FrequencyObserver(Observer):
     def _reset(self, now: float) -> None:
         for feed in self._topics:
             feed.arrivals.clear()
-            feed.last.clear()
+            feed.heard.clear()
+            feed.sent.clear()
             feed.members.clear()
             for group in feed.groups:
                 group.tracks.clear()
 
     def inputs(self) -> list[tuple[str, Handler]]:
-        return [(topic(t.config.name), self._handler(t.arrivals)) for t in self._topics]
+        return [(topic(t.config.name), self._handler(t)) for t in self._topics]
 
     @staticmethod
-    def _handler(arrivals: deque[tuple[str, float]]) -> Handler:
-        append = arrivals.append
+    def _handler(feed: _Topic) -> Handler:
+        append = feed.arrivals.append
+        heard = feed.heard
 
         def on_message(message: Message) -> None:
-            append((message.caller_id, message.received))
+            # periods from the publisher's send times: exact, whatever delays reception
+            sent = message.sent
+            append((message.caller_id, sent if sent is not None else message.received))
+            heard[message.caller_id] = message.received
 
         return on_message
 
@@ -155,9 +163,9 @@ class FrequencyObserver(Observer):
         """Turn the queued arrivals into periods, per publisher and caller-id group."""
         arrivals = feed.arrivals
         for _ in range(len(arrivals)):
-            caller, received = arrivals.popleft()
-            previous = feed.last.get(caller)
-            feed.last[caller] = received
+            caller, sent = arrivals.popleft()
+            previous = feed.sent.get(caller)
+            feed.sent[caller] = sent
             groups = feed.members.get(caller)
             if groups is None:
                 groups = [g for g in feed.groups if g.config.includes(caller)]
@@ -169,7 +177,7 @@ class FrequencyObserver(Observer):
                     bound = settings.timeout or math.inf  # no period known yet
                     group.tracks[caller] = _Track(settings.filter.make(), bound)
                 elif previous is not None:
-                    period = received - previous
+                    period = sent - previous
                     if period > track.bound:
                         track.filter.reset()  # it had stopped: the gap is no period
                     else:
@@ -190,7 +198,7 @@ class FrequencyObserver(Observer):
         live: list[FilterState] = []
         waiting = False
         for caller, track in group.tracks.items():
-            silence = now - feed.last[caller]
+            silence = now - feed.heard[caller]
             periods = track.filter.state()
             if periods is None:
                 track.bound = settings.timeout or math.inf
@@ -210,7 +218,7 @@ class FrequencyObserver(Observer):
         if waiting:
             return None
         if group.tracks:
-            silence = now - max(feed.last[c] for c in group.tracks)
+            silence = now - max(feed.heard[c] for c in group.tracks)
             verbose = f"stopped: no message for {silence:.3g} s"
         else:
             silence = now - self.started
