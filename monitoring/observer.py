@@ -6,15 +6,15 @@ caller-id group) or node. It reports nothing for ``start_up_time`` seconds after
 it is started, nor before its first loop.
 
 An observer type is an :class:`Observer` subclass with a canonical ``type`` name (the
-``type`` of its observations) and aliases. The built-in types are listed below;
+``type`` of its observations). The built-in types and their aliases are listed below;
 third-party types register a class under the entry-point group ``dura.observers``
-(name = type), loaded when a type is first looked up; a plugin that fails to load is
-a warning naming it.
+(name = its ``type``; its ``aliases`` are honoured), loaded when an unknown type is
+first looked up; a plugin that fails to load is a warning naming it.
 
 Messages reach an observer through the handlers of :meth:`Observer.inputs`, called on
-the bus's threads: they only append to a queue. Everything else (filters, checks)
-happens in :meth:`Observer.observe`, on the manager's loop thread. Times are wall
-clock seconds: message ``received`` times and the ``now`` of a loop.
+the bus's threads: they only queue. Everything else (filters, checks) happens in
+:meth:`Observer.observe`, on the manager's loop thread. Times are wall clock seconds:
+the ``now`` of a loop and the ``received`` (and ``sent``) times of messages.
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ from typing import Any, ClassVar
 
 from executive.bus import Message
 from executive.protocol import ObservationInfo
+from knowledge.errors import ConfigError
 from knowledge.yamlsource import did_you_mean
 from monitoring.config_entry import Entry
 from monitoring.state import Verdict
@@ -89,7 +90,7 @@ class Observer(ABC):
     """One configured observer: it reads its configuration, receives messages, reports."""
 
     type: ClassVar[str]
-    aliases: ClassVar[tuple[str, ...]] = ()
+    aliases: ClassVar[tuple[str, ...]] = ()  # other names of a plugin's type
 
     def __init__(self, config: ObserverConfig, environment: Environment | None = None) -> None:
         self.config = config
@@ -228,6 +229,18 @@ def observer_class(name: str) -> type[Observer] | None:
     if name in BUILT_IN:
         return _built_in(name)
     return _plugins()[0].get(name)
+
+
+def make_observer(config: ObserverConfig, environment: Environment | None = None) -> Observer:
+    """A new observer of a configuration's type.
+
+    Raises:
+        ConfigError: no observer type has the configuration's type name.
+    """
+    kind = observer_class(config.type)
+    if kind is None:
+        raise ConfigError(unknown_type(config.type))
+    return kind(config, environment)
 
 
 def type_names() -> list[str]:

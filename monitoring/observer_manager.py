@@ -32,7 +32,7 @@ from executive.service import Context, Service
 from knowledge.description import ObserverSpec
 from knowledge.errors import ConfigError, DuraError
 from knowledge.yamlsource import did_you_mean
-from monitoring.observer import Environment, Handler, Observer, observer_class
+from monitoring.observer import Environment, Handler, Observer, make_observer
 from monitoring.observer_config import config_of
 
 log = logging.getLogger("dura.observers")
@@ -93,7 +93,7 @@ class _Feed:
 
     subscriber: Any = None
     handlers: tuple[Handler, ...] = ()
-    users: set[str] = field(default_factory=set)  # ids of the observers registered on it
+    users: dict[int, _Slot] = field(default_factory=dict)  # the observers on it, by identity
 
     def dispatch(self, message: Message) -> None:
         for handler in self.handlers:
@@ -192,9 +192,9 @@ class ObserverManager(Service):
         with self._lock:
             slot = self._slot(observer_id)
             observer = self._observer(config, slot.component, source)
-            enabled = slot.enabled
-            self._unregister(slot)
-            self._register(_Slot(observer_id, slot.component, observer, observer.inputs(), enabled))
+            inputs = observer.inputs()
+            self._register(_Slot(observer_id, slot.component, observer, inputs, slot.enabled))
+            self._unregister(slot)  # after: a subscription both need stays declared
 
     def remove(self, observer_id: str) -> None:
         """Remove an observer.
@@ -257,16 +257,12 @@ class ObserverManager(Service):
             hint = did_you_mean(owner, sorted(robot.components))
             raise ConfigError(f"{path}: no component '{owner}' in robot '{robot.name}'{hint}")
         where = f"{robot.components[owner].kind.value} '{owner}'" if owner else ""
-        typed = config_of(config, path=path, owner=where)
-        kind = observer_class(typed.type)
-        if kind is None:  # a plugin that vanished since the configuration was read
-            raise ConfigError(f"{path}: unknown observer type '{typed.type}'")
         environment = Environment(
             owner=owner,
             behavior=owner if owner in robot.behaviors else None,
             component_state=self._states.get,
         )
-        return kind(typed, environment)
+        return make_observer(config_of(config, path=path, owner=where), environment)
 
     def _add(self, config: ObserverEntry, owner: str | None, name: str | None, path: str) -> str:
         if name is not None and (not name or name in self._slots):
@@ -288,18 +284,19 @@ class ObserverManager(Service):
             if feed is None:
                 feed = self._feeds[key] = _Feed()
                 feed.subscriber = self.context.bus.subscribe(key, feed.dispatch, decoded=False)
-            feed.users.add(slot.id)
+            feed.users[id(slot)] = slot
         self._refresh(slot)
 
     def _unregister(self, slot: _Slot) -> None:
         slot.enabled = False
         self._refresh(slot)
-        del self._slots[slot.id]
+        if self._slots.get(slot.id) is slot:
+            del self._slots[slot.id]
         for key, _ in slot.inputs:
             feed = self._feeds.get(key)
             if feed is None:
                 continue
-            feed.users.discard(slot.id)
+            feed.users.pop(id(slot), None)
             if not feed.users:
                 del self._feeds[key]
                 try:

@@ -1,4 +1,4 @@
-"""``dura observe ROBOT.yaml [--follow] [--json]``: what the observers of a running robot see."""
+"""``dura observe --robot ROBOT.yaml [--follow] [--json]``: what a running robot's observers see."""
 
 from __future__ import annotations
 
@@ -13,7 +13,6 @@ from typing import Any
 from executive.bus import Bus, Message
 from executive.cli.output import add_json_flag, print_json, table
 from executive.protocol import OBSERVATIONS, observers_api
-from knowledge.description import RobotDescription
 from knowledge.errors import BusError, DuraError
 from knowledge.robot import read_robot
 
@@ -29,7 +28,10 @@ def register(sub: Any) -> None:
         "measured value, age). With --follow, keep watching until Ctrl-C. Exit 1 if no "
         "executive runs.",
     )
-    p.add_argument("robot", metavar="ROBOT.yaml", type=Path, help="the robot description")
+    p.add_argument(
+        "--robot", metavar="ROBOT.yaml", type=Path, help="the robot whose executive to ask"
+    )
+    p.add_argument("--endpoint", help="where that executive listens (default: the robot's)")
     p.add_argument(
         "--follow",
         action="store_true",
@@ -39,12 +41,15 @@ def register(sub: Any) -> None:
     p.set_defaults(run=run)
 
 
-def _robot(path: Path) -> RobotDescription:
-    robot, findings = read_robot(path)
+def _connect(args: argparse.Namespace) -> Bus:
+    """A bus session with the executive of the robot the command line names."""
+    if args.robot is None:
+        raise DuraError("name the robot whose executive to ask with --robot ROBOT.yaml")
+    robot, findings = read_robot(args.robot)
     if robot is None:
         errors = [f for f in findings if f.is_error]
-        raise DuraError(str(errors[0]) if errors else f"{path}: unusable")
-    return robot
+        raise DuraError(str(errors[0]) if errors else f"{args.robot}: unusable")
+    return Bus(robot.name, name="cli", endpoint=args.endpoint or robot.endpoint)
 
 
 def _key(payload: dict[str, Any]) -> tuple[str, str, str, str]:
@@ -113,8 +118,7 @@ def _follow(bus: Bus, as_json: bool) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    robot = _robot(args.robot)
-    with Bus(robot.name, name="dura-observe", endpoint=robot.endpoint) as bus:
+    with _connect(args) as bus:
         if args.follow:
             return _follow(bus, args.json)
         observations = _latest(bus)

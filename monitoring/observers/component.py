@@ -34,7 +34,6 @@ class ComponentConfig(ObserverConfig):
 
 class ComponentObserver(Observer):
     type = "component"
-    aliases = ("activated",)
     config: ComponentConfig
 
     def __init__(self, config: ComponentConfig, environment: Environment | None = None) -> None:

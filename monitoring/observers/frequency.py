@@ -122,7 +122,6 @@ def total(states: list[FilterState]) -> FilterState:
 
 class FrequencyObserver(Observer):
     type = "frequency"
-    aliases = ("hz",)
     config: FrequencyConfig
 
     @classmethod

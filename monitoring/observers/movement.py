@@ -197,7 +197,6 @@ class _Comparison:
 
 class MovementObserver(Observer):
     type = "movement"
-    aliases = ("velocity",)
     config: MovementConfig
 
     def __init__(self, config: MovementConfig, environment: Environment | None = None) -> None:

@@ -64,7 +64,6 @@ def read_topic(entry: Entry, owner: str) -> ScoredTopic | None:
 
 class ScoresObserver(Observer):
     type = "scores"
-    aliases = ("value",)
     config: ScoresConfig
 
     def __init__(self, config: ScoresConfig, environment: Environment | None = None) -> None:

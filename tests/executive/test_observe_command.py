@@ -58,10 +58,18 @@ def test_without_an_executive_observe_says_so_in_one_line(
     dura: Dura, tmp_path: Path, endpoint: str
 ) -> None:
     path = write_robot(tmp_path, endpoint)
-    result = dura("observe", str(path), timeout=60)
+    result = dura("observe", "--robot", str(path), timeout=60)
     assert result.returncode == 1
     assert result.stderr.startswith(f"dura: no executive for robot 'monitored' at {endpoint}")
     assert len(result.stderr.splitlines()) == 1
+
+
+def test_observe_needs_to_know_which_robot(dura: Dura) -> None:
+    result = dura("observe")
+    assert (result.returncode, result.stderr) == (
+        1,
+        "dura: name the robot whose executive to ask with --robot ROBOT.yaml\n",
+    )
 
 
 def test_observe_shows_the_latest_observation_of_every_resource(
@@ -76,13 +84,13 @@ def test_observe_shows_the_latest_observation_of_every_resource(
     manager.add({"type": "timeout", "topics": [{"name": "scan", "timeout": 1.0}]})
     observations.next(seen("frequency", ["scan"], 1))
     observations.next(seen("timeout", ["scan"]))
-    result = dura("observe", str(tmp_path / "robot.yaml"), timeout=60)
+    result = dura("observe", "--robot", str(tmp_path / "robot.yaml"), timeout=60)
     assert result.returncode == 0, result.stderr
     header, *rows = result.stdout.splitlines()
     assert header.split() == ["RESOURCE", "TYPE", "STATE", "VALUE", "AGE"]
     assert rows[0].split()[:5] == ["scan", "[lidar]", "frequency", "ok", "(1)"]
     assert rows[1].split()[:4] == ["scan", "timeout", "ok", "(0)"]
-    shown = json.loads(dura("observe", "--json", str(tmp_path / "robot.yaml")).stdout)
+    shown = json.loads(dura("observe", "--json", "--robot", str(tmp_path / "robot.yaml")).stdout)
     found = {o["type"]: o for o in shown["observations"]}
     assert found["frequency"]["values"]["frequency"] > 10
     assert found["frequency"]["callerids"] == ["lidar"] and found["frequency"]["age"] >= 0
@@ -101,6 +109,7 @@ def test_observe_follow_json_prints_each_observation_as_it_comes(
             "observe",
             "--follow",
             "--json",
+            "--robot",
             str(tmp_path / "robot.yaml"),
         ],
         stdout=subprocess.PIPE,

@@ -190,3 +190,24 @@ def test_third_party_observer_types_come_from_the_entry_point_group(tmp_path: Pa
     assert result.stdout.splitlines() == ["beacon", "None"]
     assert "cannot load observer plugin 'broken' (beacon_plugin:Missing)" in result.stderr
     assert observer_class("beacon") is None
+
+
+def test_the_readme_example_of_every_observer_type_is_valid(tmp_path: Path) -> None:
+    readme = (ROOT / "README.md").read_text()
+    start = readme.index("```yaml\nobservers:\n") + len("```yaml\nobservers:\n")
+    path = tmp_path / "observers.yaml"
+    path.write_text(readme[start : readme.index("```", start)])
+    checked = check_observer_file(path)
+    assert checked is not None
+    specs, findings = checked
+    assert findings == []
+    assert {canonical_type(s.type) for s in specs} == {
+        "frequency",
+        "timeout",
+        "timestamp",
+        "scores",
+        "timing",
+        "movement",
+        "resources",
+        "component",
+    }

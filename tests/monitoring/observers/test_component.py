@@ -6,7 +6,7 @@ import json
 
 from executive.bus import Bus, Message
 from executive.protocol import GENERAL_OK, NOT_AVAILABLE, RESOURCES, Lifecycle, NodeInfo
-from monitoring.observer import Environment, observer_class
+from monitoring.observer import Environment, make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager
 from tests.monitoring.harness import (
@@ -43,9 +43,7 @@ def test_a_crashed_node_is_not_running_for_the_behavior_that_needs_it(
 
 def test_a_node_the_launcher_does_not_know_runs_while_the_resource_info_lists_it() -> None:
     states = {"lidar": Lifecycle.READY}
-    observer = observer_class("component")(  # type: ignore[misc]
-        config_of(COMPONENT), Environment(component_state=states.get)
-    )
+    observer = make_observer(config_of(COMPONENT), Environment(component_state=states.get))
     observer.start(0.0)
     [(key, handler)] = observer.inputs()
     assert key == RESOURCES

@@ -8,7 +8,7 @@ import pytest
 
 from executive.bus import Message
 from executive.protocol import NO_STATE_FITS, TIMEOUT
-from monitoring.observer import observer_class
+from monitoring.observer import make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager
 from tests.monitoring.harness import (
@@ -107,7 +107,7 @@ def arrivals(caller: str, start: float, rate: float, count: int) -> list[Message
 
 def test_a_gap_after_a_stop_is_no_period_once_messages_come_back() -> None:
     config = config_of(frequency([group([], 9, 11)], rate=1.0, start_up=0.0))
-    observer = observer_class("frequency")(config)  # type: ignore[misc]
+    observer = make_observer(config)
     observer.start(0.0)
     [(_, handler)] = observer.inputs()
     for message in arrivals("lidar", 0.0, 10, 20):
@@ -125,7 +125,7 @@ def test_a_gap_after_a_stop_is_no_period_once_messages_come_back() -> None:
 
 def test_a_topic_that_never_publishes_is_stopped_after_the_start_up() -> None:
     config = config_of(frequency([group([], 9, 11)], rate=2.0, start_up=1.5))
-    observer = observer_class("frequency")(config)  # type: ignore[misc]
+    observer = make_observer(config)
     observer.start(100.0)
     assert observer.observe(101.5) == []
     [stopped] = observer.observe(101.6)
@@ -152,7 +152,7 @@ def test_no_state_fits_a_frequency_between_the_states() -> None:
             start_up=0.0,
         )
     )
-    observer = observer_class("frequency")(config)  # type: ignore[misc]
+    observer = make_observer(config)
     observer.start(0.0)
     [(_, handler)] = observer.inputs()
     for message in arrivals("lidar", 0.0, 10, 6):

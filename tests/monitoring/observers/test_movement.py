@@ -6,7 +6,7 @@ from typing import Any
 
 from executive.bus import Bus, Message
 from executive.protocol import Lifecycle
-from monitoring.observer import Environment, observer_class
+from monitoring.observer import Environment, make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager
 from tests.monitoring.harness import (
@@ -76,7 +76,7 @@ def test_slip_is_detected_and_blames_the_moving_behavior(
 
 def test_only_fresh_pairs_are_compared_and_a_functionality_names_no_behavior() -> None:
     config = config_of(MOVEMENT)
-    observer = observer_class("movement")(config, Environment(owner="robot_base"))  # type: ignore[misc]
+    observer = make_observer(config, Environment(owner="robot_base"))
     observer.start(0.0)
     handlers = dict(observer.inputs())
     handlers["topic/odom"](

@@ -6,7 +6,7 @@ import pytest
 
 from executive.bus import Message
 from executive.protocol import GENERAL_ERROR
-from monitoring.observer import observer_class
+from monitoring.observer import make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager
 from tests.monitoring.harness import (
@@ -67,7 +67,7 @@ def test_a_draining_battery_goes_from_charged_to_low(
 
 
 def test_messages_without_the_field_are_an_error_until_a_value_comes() -> None:
-    observer = observer_class("scores")(config_of(SCORES))  # type: ignore[misc]
+    observer = make_observer(config_of(SCORES))
     observer.start(0.0)
     [(key, handler)] = observer.inputs()
     handler(Message(key, b'{"charge": {"cells": [1]}}', "b", None, 1.0))

@@ -6,7 +6,7 @@ from typing import Any
 
 from executive.bus import Message
 from executive.protocol import GENERAL_OK, TIMEOUT
-from monitoring.observer import Observer, observer_class
+from monitoring.observer import Observer, make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager
 from tests.monitoring.harness import (
@@ -34,7 +34,7 @@ def timeout_observer(timeout: float, **settings: Any) -> dict[str, Any]:
 
 
 def started(config: dict[str, Any], now: float = 0.0) -> Observer:
-    observer = observer_class("timeout")(config_of(config))  # type: ignore[misc]
+    observer = make_observer(config_of(config))
     observer.start(now)
     return observer
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from executive.bus import Message
 from executive.protocol import GENERAL_ERROR
-from monitoring.observer import observer_class
+from monitoring.observer import make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager
 from tests.monitoring.harness import (
@@ -56,7 +56,7 @@ def test_stale_stamps_are_reported(
 
 
 def test_messages_without_a_stamp_are_an_error() -> None:
-    observer = observer_class("timestamp")(config_of(TIMESTAMP))  # type: ignore[misc]
+    observer = make_observer(config_of(TIMESTAMP))
     observer.start(0.0)
     [(key, handler)] = observer.inputs()
     handler(Message(key, b'{"data": 1}', "lidar", None, 1.0))

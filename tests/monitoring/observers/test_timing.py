@@ -9,7 +9,7 @@ import pytest
 
 from executive.bus import Message
 from executive.protocol import NO_STATE_FITS
-from monitoring.observer import observer_class
+from monitoring.observer import make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager
 from tests.monitoring.harness import (
@@ -71,7 +71,7 @@ def test_a_component_that_answers_late_leaves_its_state(
 
 def delays(single_shot: bool, events: list[tuple[str, float]]) -> float:
     """The mean measured delay of A and B messages at the given times."""
-    observer = observer_class("timing")(config_of(timing(single_shot)))  # type: ignore[misc]
+    observer = make_observer(config_of(timing(single_shot)))
     observer.start(0.0)
     handlers = {key: handler for key, handler in observer.inputs()}
     for topic, received in events:
