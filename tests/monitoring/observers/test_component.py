@@ -9,17 +9,7 @@ from executive.protocol import GENERAL_OK, NOT_AVAILABLE, RESOURCES, Lifecycle, 
 from monitoring.observer import Environment, make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager
-from tests.monitoring.harness import (
-    Observations,
-    bus,
-    manager,
-    observations,
-    robot,
-    seen,
-    set_state,
-)
-
-__all__ = ["bus", "manager", "observations", "robot"]
+from tests.monitoring.harness import Observations, seen, set_state
 
 COMPONENT = {
     "type": "activated",

@@ -9,20 +9,7 @@ from executive.protocol import Lifecycle
 from monitoring.observer import Environment, make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager
-from tests.monitoring.harness import (
-    Observations,
-    Publish,
-    bus,
-    manager,
-    observations,
-    publish,
-    robot,
-    seen,
-    set_state,
-    stream,
-)
-
-__all__ = ["bus", "manager", "observations", "publish", "robot"]
+from tests.monitoring.harness import Observations, Publish, seen, set_state, stream
 
 MOVEMENT: dict[str, Any] = {
     "type": "velocity",

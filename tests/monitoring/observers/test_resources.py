@@ -6,19 +6,7 @@ from typing import Any
 
 from executive.protocol import NOT_AVAILABLE, RESOURCES, NodeInfo
 from monitoring.observer_manager import ObserverManager
-from tests.monitoring.harness import (
-    Observations,
-    Publish,
-    bus,
-    manager,
-    observations,
-    publish,
-    robot,
-    seen,
-    stream,
-)
-
-__all__ = ["bus", "manager", "observations", "publish", "robot"]
+from tests.monitoring.harness import Observations, Publish, seen, stream
 
 RESOURCES_OBSERVER = {
     "type": "resources",

@@ -7,19 +7,7 @@ from executive.protocol import GENERAL_ERROR
 from monitoring.observer import make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager
-from tests.monitoring.harness import (
-    Observations,
-    Publish,
-    bus,
-    manager,
-    observations,
-    publish,
-    robot,
-    seen,
-    stream,
-)
-
-__all__ = ["bus", "manager", "observations", "publish", "robot"]
+from tests.monitoring.harness import Observations, Publish, seen, stream
 
 TIMESTAMP = {
     "type": "timestamp",
