@@ -15,12 +15,15 @@ from typing import Any
 
 import yaml
 
+from executive.protocol import topic
 from knowledge.description import ObserverSpec, RobotDescription
 from knowledge.errors import ConfigError
 from knowledge.finding import Finding, Report
-from knowledge.yamlsource import compose, line_of, paths, to_python
+from knowledge.yamlsource import compose, did_you_mean, line_of, paths, to_python
 from monitoring.config_entry import Entry, Source
-from monitoring.observer import ObserverConfig, observer_class, unknown_type
+from monitoring.observer import ObserverConfig, make_observer, observer_class, unknown_type
+
+TOPIC_PREFIX = topic("")
 
 
 def read_observer(value: object, source: Source, owner: str = "") -> ObserverConfig | None:
@@ -52,12 +55,27 @@ def read_observer(value: object, source: Source, owner: str = "") -> ObserverCon
 
 
 def check_observers(robot: RobotDescription) -> list[Finding]:
-    """Read every observer of every component; the findings of all their problems."""
+    """Read every observer of every component; the findings of all their problems.
+
+    A topic no component publishes or subscribes to is a warning (a typo, usually).
+    """
     report = Report(str(robot.path))
+    topics = robot.topics
     for component in robot.components.values():
         owner = f"{component.kind.value} '{component.name}'"
         for spec in component.observers:
-            read_observer(spec.config, Source(report, spec.line_of), owner)
+            config = read_observer(spec.config, Source(report, spec.line_of), owner)
+            if config is None:
+                continue
+            keys = dict.fromkeys(key for key, _ in make_observer(config).inputs())
+            for key in keys:
+                name = key.removeprefix(TOPIC_PREFIX)
+                if key.startswith(TOPIC_PREFIX) and name not in topics:
+                    report.warning(
+                        spec.line,
+                        f"the {config.type} observer of {owner} watches topic '{name}', which "
+                        f"no component publishes or subscribes to{did_you_mean(name, topics)}",
+                    )
     return report.findings
 
 

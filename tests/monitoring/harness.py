@@ -206,5 +206,13 @@ def set_state(bus: Bus, name: str, state: Lifecycle) -> None:
     )
 
 
+def wait_until(condition: Callable[[], bool], timeout: float = 15.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"not so within {timeout} s")
+        time.sleep(0.01)
+
+
 def stream(key: str, *phases: dict[str, Any]) -> dict[str, Any]:
     return {"key": key, "phases": list(phases)}

@@ -47,6 +47,22 @@ def test_a_bad_observer_is_reported_with_its_file_and_line(
     assert any(line.startswith(prefix) and case.message in line for line in lines), lines
 
 
+def test_a_topic_no_component_knows_is_a_warning(tmp_path: Path) -> None:
+    case = BrokenRobot(
+        "topic typo",
+        "          - name: scan\n            callerids:\n              - {callerid: [], timeout",
+        "          - name: scna\n            callerids:\n              - {callerid: [], timeout",
+        "- type: timeout",
+        "the timeout observer of functionality 'lidar' watches topic 'scna', which no "
+        "component publishes or subscribes to (did you mean 'scan'?)",
+    )
+    robot, _ = read_robot(case.write(tmp_path))
+    assert robot is not None
+    [warning] = check_observers(robot)
+    assert not warning.is_error and warning.line == case.expected_line(tmp_path)
+    assert warning.message == case.message
+
+
 def test_dura_validate_lists_observer_errors_and_exits_1(dura: Dura, tmp_path: Path) -> None:
     path = BROKEN_OBSERVERS[0].write(tmp_path)
     result = dura("validate", str(path))
