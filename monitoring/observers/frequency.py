@@ -17,9 +17,9 @@ Configuration, per topic and caller-id group (see :mod:`monitoring.caller_groups
 The filter smooths each publisher's periods: the time between two of its messages,
 taken from their send stamps (zenoh source timestamps), so that delays of reception
 (batching, a busy observer) do not distort them. The frequency of a group is the sum
-of ``1 / filtered period`` over its publishers, and
-the states check it (for ``student_t`` the period's std ``s`` becomes ``s / p^2``).
-A slow topic therefore fits a slow state or none (``NO_STATE_FITS``). A publisher is
+of ``1 / filtered period`` over its publishers, and the states check it (for
+``student_t`` the period's std ``s`` becomes ``s / p^2``). A slow topic therefore
+fits a slow state or none (``NO_STATE_FITS``). A publisher is
 *stopped* after ``timeout`` seconds without a message, or by default after
 ``max(one loop, two filtered periods)``: a low-rate topic is not stopped just because
 a loop passed without a message. A group whose publishers all stopped reports
