@@ -315,3 +315,31 @@ class GoalResult:
 #   executive/api/component/stop     {"name"} -> ComponentState payload (STOPPED)
 #   executive/api/component/restart  {"name"} -> ComponentState payload (READY or FAILED)
 #   executive/api/component/logs     {"name", "lines": int} -> {"name", "path", "lines": [str]}
+
+# --- observer manager (monitoring) -------------------------------------------------------
+
+# ``ObservationInfo.type`` is an observer type's canonical name: resources, component,
+# frequency, timeout, timing, timestamp, scores, movement (configurations may also say
+# activated, hz, value, velocity), or a plugin's type.
+
+
+def observers_api(verb: str) -> str:
+    """A request the observer manager serves: ``monitoring/observers/<verb>``.
+
+    Requests and replies (errors are error replies with the reason):
+
+    - ``list`` ``{}`` -> ``{"observers": [{"id", "type", "component", "enabled", "active",
+      "main_loop_rate", "start_up_time"}]}``
+    - ``add`` ``{"config": {observer entry}, "component": str | null, "name": str | null}``
+      -> ``{"id", "active"}``
+    - ``change`` ``{"id", "config"}`` -> ``{"id", "active"}`` (fresh state, same id)
+    - ``remove`` ``{"id"}`` -> ``{"id"}``
+    - ``activate`` / ``deactivate`` ``{"id"}`` -> ``{"id", "active"}``: an activated
+      observer observes while its component is READY (always, if it has none)
+    - ``latest`` ``{}`` -> ``{"observations": [payloads as on ``observations``]}``: the
+      last observation of every resource of every active observer
+
+    Each payload on ``observations`` is :class:`ObservationInfo` plus ``values`` (the
+    measured values by name, e.g. ``{"frequency": 9.98}``) and ``observer`` (its id).
+    """
+    return f"monitoring/observers/{verb}"

@@ -8,11 +8,11 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-from executive.cli import component, kb, run, validate, version
+from executive.cli import component, kb, observe, run, validate, version
 from knowledge.errors import DuraError
 
 # Each module has register(subparsers); its parsers set `run(args) -> int`.
-COMMANDS: tuple[ModuleType, ...] = (validate, kb, run, component, version)
+COMMANDS: tuple[ModuleType, ...] = (validate, kb, run, component, observe, version)
 
 
 class _Parser(argparse.ArgumentParser):

@@ -1,4 +1,4 @@
-"""``dura validate ROBOT.yaml``: check a robot description and its PDDL domain."""
+"""``dura validate ROBOT.yaml``: check a robot description, its PDDL domain and its observers."""
 
 from __future__ import annotations
 
@@ -10,18 +10,25 @@ from typing import Any
 from executive.cli.output import add_json_flag, print_json, shown
 from knowledge.finding import Finding
 from knowledge.validation import validate
+from monitoring.observer_config import check_observer_file, check_observers
 
 
 def register(sub: Any) -> None:
     p = sub.add_parser(
         "validate",
         help="check a robot description and its PDDL domain",
-        description="Check a robot description, its PDDL domain and problem, and the "
-        "task-action mapping. Exit 0 if valid (warnings allowed), 1 if not, 2 on usage errors.",
+        description="Check a robot description, its PDDL domain and problem, the "
+        "task-action mapping and the observer configurations; or a standalone observers "
+        "file (tug form: a list of observers, or 'setup: [...]'). Exit 0 if valid "
+        "(warnings allowed), 1 if not, 2 on usage errors.",
     )
     p.add_argument("robot", metavar="ROBOT.yaml", type=Path, help="the robot description")
     add_json_flag(p)
     p.set_defaults(run=run)
+
+
+def _order(f: Finding) -> tuple[str, int, int]:
+    return (f.path, f.line or 0, 0 if f.is_error else 1)
 
 
 def _line(f: Finding) -> str:
@@ -29,27 +36,47 @@ def _line(f: Finding) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    observers = check_observer_file(args.robot)
+    if observers is not None:
+        specs, findings = observers
+        summary = f"{len(specs)} observers ({', '.join(s.type for s in specs) or 'none'})"
+        return _report(args, findings, True, summary)
     result = validate(args.robot)
+    robot = result.robot
+    findings = list(result.findings)
+    if robot is not None:
+        findings = sorted(findings + check_observers(robot), key=_order)
+    summary = ""
+    if robot is not None:
+        summary = (
+            f"robot '{robot.name}', {len(robot.functionalities)} functionalities, "
+            f"{len(robot.behaviors)} behaviors, {len(robot.tasks)} tasks, "
+            f"domain '{result.domain.name if result.domain else '?'}'"
+        )
+    return _report(args, findings, robot is not None, summary)
+
+
+def _report(args: argparse.Namespace, findings: list[Finding], usable: bool, summary: str) -> int:
+    errors = [f for f in findings if f.is_error]
+    warnings = [f for f in findings if not f.is_error]
+    valid = usable and not errors
     if args.json:
         print_json(
             {
                 "file": str(args.robot),
-                "valid": result.ok,
-                "errors": len(result.errors),
-                "warnings": len(result.warnings),
-                "findings": [{**f.as_json(), "file": shown(f.path)} for f in result.findings],
+                "valid": valid,
+                "errors": len(errors),
+                "warnings": len(warnings),
+                "findings": [{**f.as_json(), "file": shown(f.path)} for f in findings],
             }
         )
-        return 0 if result.ok else 1
-    for f in result.findings:
+        return 0 if valid else 1
+    for f in findings:
         print(_line(f), file=sys.stderr)
-    robot = result.robot
-    if robot is None or not result.ok:
+    if not valid:
         return 1
     print(
-        f"{shown(args.robot)}: valid: robot '{robot.name}', {len(robot.functionalities)} "
-        f"functionalities, {len(robot.behaviors)} behaviors, {len(robot.tasks)} tasks, "
-        f"domain '{result.domain.name if result.domain else '?'}'"
-        + (f", {len(result.warnings)} warnings" if result.warnings else "")
+        f"{shown(args.robot)}: valid: {summary}"
+        + (f", {len(warnings)} warnings" if warnings else "")
     )
     return 0

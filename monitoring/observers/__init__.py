@@ -1,0 +1,1 @@
+"""The built-in observer types, one module each (see :mod:`monitoring.observer`)."""

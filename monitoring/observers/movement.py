@@ -1,0 +1,244 @@
+"""The movement observer (alias ``velocity``): two motion sources that must agree,
+e.g. wheel odometry and an IMU, to detect slip (thesis 5.2.2; tug's velocity observer).
+
+Configuration::
+
+    - type: movement
+      main_loop_rate: 2.0
+      correlations:
+        - source_A: {topic: odom, type: odometry}
+          source_B: {topic: imu, type: imu}
+          rot_z_filter: {type: mean, window_size: 10}      # one filter per compared axis
+          behavior: move_to                                 # optional, see below
+          states:
+            - {state: grip, number: 1, rot_z: {type: gauss, mean: 0.0, std_deviation: 0.1}}
+
+Axes: ``x, y, z`` (linear) and ``rot_x, rot_y, rot_z`` (angular velocity). A source
+reads each axis from a field path of its JSON payload; ``type`` gives the usual paths:
+``twist`` (``linear.x`` ... ``angular.z``), ``odometry`` (``twist.linear.x`` ...
+``twist.angular.z``), ``imu`` (``linear_acceleration.x`` ... ``angular_velocity.z``);
+``fields: {rot_z: yaw_rate}`` sets or overrides paths, ``callerid`` restricts the
+publishers. Linear axes hold whatever the fields hold (a twist's velocity, an IMU's
+acceleration): compare them only between sources of the same kind.
+
+Each message from either source is compared with the latest message of the other
+(if it is at most ``max_delay`` seconds older, default 0.5): the difference A - B of
+every filtered axis goes to that axis' filter, and the states check the filtered
+differences. The observation names both topics and, when a failure may also mean the
+behavior doing the moving is faulty, that behavior: ``behavior`` if given, else the
+observer's component when it is a behavior.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+from executive.bus import Message
+from executive.protocol import topic
+from knowledge.errors import BusError
+from knowledge.yamlsource import did_you_mean
+from monitoring.caller_groups import topic_name
+from monitoring.config_entry import Entry
+from monitoring.field_path import read_number
+from monitoring.filter import Filter, FilterConfig, FilterState, read_filter
+from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
+from monitoring.state import State, classify, read_states
+
+AXES = ("x", "y", "z", "rot_x", "rot_y", "rot_z")
+
+
+def _paths(linear: str, angular: str) -> dict[str, str]:
+    return {
+        **{axis: f"{linear}.{axis}" for axis in ("x", "y", "z")},
+        **{f"rot_{axis}": f"{angular}.{axis}" for axis in ("x", "y", "z")},
+    }
+
+
+SOURCE_TYPES = {
+    "twist": _paths("linear", "angular"),
+    "odometry": _paths("twist.linear", "twist.angular"),
+    "imu": _paths("linear_acceleration", "angular_velocity"),
+}
+
+
+@dataclass(frozen=True)
+class Source:
+    topic: str
+    fields: dict[str, str]  # axis -> field path
+    callerids: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Correlation:
+    source_a: Source
+    source_b: Source
+    filters: dict[str, FilterConfig]  # compared axis -> filter
+    states: tuple[State, ...]
+    behavior: str | None = None
+    max_delay: float = 0.5
+
+
+@dataclass(frozen=True, kw_only=True)
+class MovementConfig(ObserverConfig):
+    correlations: tuple[Correlation, ...]
+
+
+def read_source(entry: Entry | None, axes: list[str]) -> Source | None:
+    if entry is None or not entry.valid:
+        return None
+    name = topic_name(entry, "topic")
+    kind = entry.text("type")
+    fields: dict[str, str] = {}
+    if kind is not None:
+        if kind in SOURCE_TYPES:
+            fields.update(SOURCE_TYPES[kind])
+        else:
+            entry.error(
+                "type",
+                f"unknown source type '{kind}' in {entry.what} (choose from "
+                f"{', '.join(SOURCE_TYPES)}, or give 'fields'){did_you_mean(kind, SOURCE_TYPES)}",
+            )
+    explicit = entry.entry("fields", f"the fields of {entry.what}")
+    if explicit is not None and explicit.valid:
+        for axis in AXES:
+            path = explicit.text(axis)
+            if path is not None:
+                fields[axis] = path
+        explicit.close()
+    callerids = entry.names("callerid")
+    entry.close()
+    for axis in axes:
+        if axis not in fields:
+            entry.error(None, f"{entry.what} has no field for the compared axis '{axis}'")
+    return Source(name, fields, callerids) if name is not None else None
+
+
+def read_correlation(entry: Entry, owner: str) -> Correlation | None:
+    filters: dict[str, FilterConfig] = {}
+    for axis in AXES:
+        sub = entry.entry(f"{axis}_filter", f"the {axis} filter of {entry.what}")
+        config = read_filter(sub)
+        if config is not None:
+            filters[axis] = config
+    axes = [a for a in AXES if entry.has(f"{a}_filter")]
+    if not axes:
+        entry.error(None, f"{entry.what} compares no axis (give e.g. 'rot_z_filter')")
+    a = read_source(entry.entry("source_A", f"source_A of {entry.what}", required=True), axes)
+    b = read_source(entry.entry("source_B", f"source_B of {entry.what}", required=True), axes)
+    behavior = entry.text("behavior")
+    max_delay = entry.number("max_delay", 0.5, above=0.0)
+    states = read_states(entry, AXES)
+    for state in states:
+        for axis in state.checks:
+            if axis not in axes:
+                entry.error(
+                    "states",
+                    f"state '{state.name}' of {entry.what} checks '{axis}', which has no filter",
+                )
+    entry.close()
+    if a is None or b is None or not axes or not states or max_delay is None:
+        return None
+    return Correlation(a, b, filters, states, behavior, max_delay)
+
+
+class _Comparison:
+    """The filtered differences of one correlation, from its queued messages."""
+
+    def __init__(self, config: Correlation) -> None:
+        self.config = config
+        self.queue: deque[tuple[float, bool, Message]] = deque()  # (received, is B, message)
+        self.filters: dict[str, Filter] = {a: f.make() for a, f in config.filters.items()}
+        self.latest: list[tuple[float, dict[str, float]] | None] = [None, None]
+
+    def handler(self, is_b: bool) -> Handler:
+        callerids = (self.config.source_b if is_b else self.config.source_a).callerids
+        append = self.queue.append
+
+        def on_message(message: Message) -> None:
+            if not callerids or message.caller_id in callerids:
+                append((message.received, is_b, message))
+
+        return on_message
+
+    def reset(self) -> None:
+        self.queue.clear()
+        for f in self.filters.values():
+            f.reset()
+        self.latest = [None, None]
+
+    def drain(self) -> None:
+        batch = sorted(
+            (self.queue.popleft() for _ in range(len(self.queue))), key=lambda item: item[0]
+        )
+        for received, is_b, message in batch:
+            source = self.config.source_b if is_b else self.config.source_a
+            try:
+                reading = {a: read_number(message.payload, source.fields[a]) for a in self.filters}
+            except BusError:
+                continue
+            if any(v is None for v in reading.values()):
+                continue
+            values = {a: v for a, v in reading.items() if v is not None}
+            self.latest[is_b] = (received, values)
+            other = self.latest[not is_b]
+            if other is None or received - other[0] > self.config.max_delay:
+                continue
+            a_values, b_values = (other[1], values) if is_b else (values, other[1])
+            for axis, axis_filter in self.filters.items():
+                axis_filter.update(a_values[axis] - b_values[axis])
+
+    def states(self) -> dict[str, FilterState] | None:
+        measured = {a: f.state() for a, f in self.filters.items()}
+        if any(s is None for s in measured.values()):
+            return None
+        return {a: s for a, s in measured.items() if s is not None}
+
+
+class MovementObserver(Observer):
+    type = "movement"
+    config: MovementConfig
+
+    def __init__(self, config: MovementConfig, environment: Environment | None = None) -> None:
+        super().__init__(config, environment)
+        self._comparisons = [_Comparison(c) for c in config.correlations]
+
+    @classmethod
+    def read(cls, entry: Entry, common: ObserverConfig) -> MovementConfig | None:
+        what = f"correlation {{n}} of the {entry.what}"
+        found = [
+            read_correlation(e, entry.what)
+            for e in entry.entries("correlations", what, required=True)
+        ]
+        return MovementConfig(
+            **common.common(), correlations=tuple(c for c in found if c is not None)
+        )
+
+    def inputs(self) -> list[tuple[str, Handler]]:
+        out: list[tuple[str, Handler]] = []
+        for comparison in self._comparisons:
+            out.append((topic(comparison.config.source_a.topic), comparison.handler(False)))
+            out.append((topic(comparison.config.source_b.topic), comparison.handler(True)))
+        return out
+
+    def _reset(self, now: float) -> None:
+        for comparison in self._comparisons:
+            comparison.reset()
+
+    def _observe(self, now: float) -> list[ObserverResult]:
+        results: list[ObserverResult] = []
+        for comparison in self._comparisons:
+            comparison.drain()
+            measured = comparison.states()
+            if measured is None:
+                continue
+            config = comparison.config
+            resource: tuple[str, ...] = (config.source_a.topic, config.source_b.topic)
+            behavior = config.behavior or self.environment.behavior
+            if behavior is not None:
+                resource += (behavior,)
+            verdict = classify(config.states, measured, " (A - B)")
+            callerids = tuple(dict.fromkeys(config.source_a.callerids + config.source_b.callerids))
+            values = {axis: s.value for axis, s in measured.items()}
+            results.append(self.result(resource, verdict, now, values=values, callerids=callerids))
+        return results

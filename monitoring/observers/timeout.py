@@ -1,0 +1,110 @@
+"""The timeout observer: a watchdog on a topic, per caller-id group (thesis 6.2.5).
+
+Configuration (see :mod:`monitoring.caller_groups` for ``topics``)::
+
+    - type: timeout
+      start_up_time: 2.0
+      topics:
+        - name: scan
+          callerids:
+            - {callerid: [], timeout: 0.5, max_timeouts_in_a_row: 2}
+
+Each loop a group reports ``GENERAL_OK`` while its publishers' last message is at most
+``timeout`` seconds old (counted from the start when nothing came yet), else
+``TIMEOUT``; a hang is therefore reported at the first loop after ``timeout``. With
+``max_timeouts_in_a_row`` it reports a silence only that many timeouts long, then
+stays quiet until a message comes (the last report stands). The default loop rate is
+``max(1, 4 / shortest timeout)`` Hz, so a hang is seen within ``timeout * 1.25``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from executive.bus import Message
+from executive.protocol import GENERAL_OK, TIMEOUT, topic
+from monitoring.caller_groups import TopicGroups, read_topics
+from monitoring.config_entry import Entry
+from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
+from monitoring.state import Verdict
+
+
+@dataclass(frozen=True)
+class TimeoutSettings:
+    timeout: float
+    max_timeouts_in_a_row: int | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class TimeoutConfig(ObserverConfig):
+    topics: tuple[TopicGroups[TimeoutSettings], ...]
+
+
+def read_settings(entry: Entry) -> TimeoutSettings | None:
+    timeout = entry.number("timeout", required=True, above=0.0)
+    in_a_row = entry.integer("max_timeouts_in_a_row", minimum=1)
+    return TimeoutSettings(timeout, in_a_row) if timeout is not None else None
+
+
+class TimeoutObserver(Observer):
+    type = "timeout"
+    config: TimeoutConfig
+
+    def __init__(self, config: TimeoutConfig, environment: Environment | None = None) -> None:
+        super().__init__(config, environment)
+        self._last: list[dict[str, float]] = [{} for _ in config.topics]  # caller -> last
+
+    @classmethod
+    def read(cls, entry: Entry, common: ObserverConfig) -> TimeoutConfig | None:
+        return TimeoutConfig(**common.common(), topics=read_topics(entry, read_settings))
+
+    def default_rate(self) -> float:
+        timeouts = [g.settings.timeout for t in self.config.topics for g in t.groups]
+        return max(1.0, 4.0 / min(timeouts)) if timeouts else 1.0
+
+    def inputs(self) -> list[tuple[str, Handler]]:
+        return [
+            (topic(t.name), self._handler(last))
+            for t, last in zip(self.config.topics, self._last, strict=True)
+        ]
+
+    @staticmethod
+    def _handler(last: dict[str, float]) -> Handler:
+        def on_message(message: Message) -> None:
+            last[message.caller_id] = message.received
+
+        return on_message
+
+    def _reset(self, now: float) -> None:
+        for last in self._last:
+            last.clear()
+
+    def _observe(self, now: float) -> list[ObserverResult]:
+        results: list[ObserverResult] = []
+        for config, last in zip(self.config.topics, self._last, strict=True):
+            heard = list(last.items())
+            for group in config.groups:
+                times = [t for caller, t in heard if group.includes(caller)]
+                verdict = self._verdict(group.settings, now, max(times) if times else None)
+                if verdict is not None:
+                    silence = {"silence": now - max(times, default=self.started)}
+                    results.append(
+                        self.result(
+                            (config.name,), verdict, now, values=silence, callerids=group.callerids
+                        )
+                    )
+        return results
+
+    def _verdict(self, settings: TimeoutSettings, now: float, last: float | None) -> Verdict | None:
+        """OK or TIMEOUT; ``None`` once ``max_timeouts_in_a_row`` timeouts were reported."""
+        silence = max(0.0, now - (last if last is not None else self.started))
+        timeout = settings.timeout
+        if silence <= timeout:
+            return Verdict(
+                GENERAL_OK, "ok", f"last message {silence:.3g} s ago (timeout {timeout:g} s)"
+            )
+        limit = settings.max_timeouts_in_a_row
+        if limit is not None and silence // timeout > limit:
+            return None
+        what = "no message" if last is not None else "no message since the start"
+        return Verdict(TIMEOUT, "timeout", f"{what} for {silence:.3g} s (timeout {timeout:g} s)")

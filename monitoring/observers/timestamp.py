@@ -1,0 +1,120 @@
+"""The timestamp observer: how old messages are when they arrive (thesis 6.2.5).
+
+Configuration, per topic and caller-id group (see :mod:`monitoring.caller_groups`)::
+
+    - type: timestamp
+      main_loop_rate: 1.0
+      topics:
+        - name: scan
+          callerids:
+            - callerid: []
+              filter: {type: mean, window_size: 10}
+              states:
+                - {state: fresh, number: 1, age: {type: less_than, less_than: 0.2}}
+
+The age of a message is its arrival time minus the ``stamp`` of its payload (seconds;
+the publisher's clock). A loop in which messages came but none had a numeric
+``stamp`` reports ``GENERAL_ERROR``; before the first age nothing is reported.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+from executive.bus import Message
+from executive.protocol import GENERAL_ERROR, topic
+from knowledge.errors import BusError
+from monitoring.caller_groups import TopicGroups, read_topics
+from monitoring.config_entry import Entry
+from monitoring.filter import Filter, FilterConfig, read_filter
+from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
+from monitoring.state import State, Verdict, classify, read_states
+
+
+@dataclass(frozen=True)
+class TimestampSettings:
+    filter: FilterConfig
+    states: tuple[State, ...]
+
+
+@dataclass(frozen=True, kw_only=True)
+class TimestampConfig(ObserverConfig):
+    topics: tuple[TopicGroups[TimestampSettings], ...]
+
+
+def read_settings(entry: Entry) -> TimestampSettings | None:
+    filter_config = read_filter(entry.entry("filter", f"the filter of {entry.what}", required=True))
+    states = read_states(entry, ("age",), every=True)
+    return TimestampSettings(filter_config, states) if filter_config and states else None
+
+
+class TimestampObserver(Observer):
+    type = "timestamp"
+    config: TimestampConfig
+
+    def __init__(self, config: TimestampConfig, environment: Environment | None = None) -> None:
+        super().__init__(config, environment)
+        self._queues: list[deque[Message]] = [deque() for _ in config.topics]
+        self._filters = [[g.settings.filter.make() for g in t.groups] for t in config.topics]
+
+    @classmethod
+    def read(cls, entry: Entry, common: ObserverConfig) -> TimestampConfig | None:
+        return TimestampConfig(**common.common(), topics=read_topics(entry, read_settings))
+
+    def inputs(self) -> list[tuple[str, Handler]]:
+        return [
+            (topic(t.name), q.append) for t, q in zip(self.config.topics, self._queues, strict=True)
+        ]
+
+    def _reset(self, now: float) -> None:
+        for queue in self._queues:
+            queue.clear()
+        for filters in self._filters:
+            for f in filters:
+                f.reset()
+
+    def _observe(self, now: float) -> list[ObserverResult]:
+        results: list[ObserverResult] = []
+        for config, queue, filters in zip(
+            self.config.topics, self._queues, self._filters, strict=True
+        ):
+            unstamped = self._drain(config, queue, filters)
+            for group, ages in zip(config.groups, filters, strict=True):
+                age = ages.state()
+                values = {"age": age.value} if age is not None else {}
+                if age is not None:
+                    note = f" s over {age.sample_size} messages"
+                    verdict = classify(group.settings.states, {"age": age}, note)
+                elif unstamped:
+                    detail = f"{unstamped} messages without a numeric 'stamp'"
+                    verdict = Verdict(GENERAL_ERROR, "no stamp", detail)
+                else:
+                    continue
+                results.append(
+                    self.result(
+                        (config.name,), verdict, now, values=values, callerids=group.callerids
+                    )
+                )
+        return results
+
+    @staticmethod
+    def _drain(
+        config: TopicGroups[TimestampSettings], queue: deque[Message], filters: list[Filter]
+    ) -> int:
+        """Feed the ages of the queued messages to the filters; returns how many had no stamp."""
+        unstamped = 0
+        for _ in range(len(queue)):
+            message = queue.popleft()
+            try:
+                stamp = message.stamp
+            except BusError:
+                stamp = None
+            if stamp is None:
+                unstamped += 1
+                continue
+            age = message.received - stamp
+            for group, ages in zip(config.groups, filters, strict=True):
+                if group.includes(message.caller_id):
+                    ages.update(age)
+        return unstamped
