@@ -184,3 +184,65 @@ class NodeInfo:
 
 
 # The payload of ``resources``: {"stamp": float, "hostname": str, "nodes": [NodeInfo payloads]}
+
+
+# --- diagnosis (thesis 6.3.3) ----------------------------------------------------------
+
+# Model updates of the diagnosis engine (request/reply). Request:
+#   {"action": "ADD" | "REMOVE" | "UPDATE" | "SET" | "GET",
+#    "nodes": [{"name", "sub_topic": [...], "pub_topic": [...]}],
+#    "observers": [{"type", "resource": [...], "callerids": [...]}]}
+# ADD adds nodes and observers; REMOVE removes the named nodes and the given observers;
+# UPDATE replaces the named nodes (they must exist) and adds the given observers; SET
+# replaces the whole model; GET changes nothing. Reply: {"ok": true, "model": {...}} or
+# {"ok": false, "error": "<reason>"}; a refused update leaves the model as it was.
+DIAGNOSIS_MODEL = "diagnosis/model"
+
+
+@dataclass(frozen=True)
+class DiagnosisInfo:
+    """The payload of ``diagnoses``: the newest diagnosis result.
+
+    ``status`` is OK (the all-clear), DIAGNOSED, INCONSISTENT or TIMEOUT.
+    ``diagnoses`` lists subset-minimal sets of faulty nodes (or behaviors), each
+    sorted, smallest first. ``conflicts`` and ``failed`` are observers as
+    ``{type, resource, callerids}``: the observations that contradict each other
+    (INCONSISTENT) and those that failed.
+    """
+
+    status: str
+    diagnoses: tuple[tuple[str, ...], ...] = ()
+    conflicts: tuple[dict[str, Any], ...] = ()
+    failed: tuple[dict[str, Any], ...] = ()
+    elapsed: float = 0.0
+    stamp: float = 0.0
+
+    @property
+    def possibly_faulty(self) -> frozenset[str]:
+        """Every name that some diagnosis names."""
+        return frozenset(name for diagnosis in self.diagnoses for name in diagnosis)
+
+    def to_payload(self) -> dict[str, Any]:
+        return {
+            "status": self.status,
+            "diagnoses": [list(d) for d in self.diagnoses],
+            "conflicts": list(self.conflicts),
+            "failed": list(self.failed),
+            "elapsed": self.elapsed,
+            "stamp": self.stamp,
+        }
+
+    @classmethod
+    def from_payload(cls, payload: dict[str, Any]) -> DiagnosisInfo:
+        """Read a payload; raises ``KeyError``/``ValueError``/``TypeError`` if malformed."""
+        diagnoses = payload["diagnoses"]
+        if not isinstance(diagnoses, list):
+            raise TypeError("'diagnoses' must be a list")
+        return cls(
+            status=str(payload["status"]),
+            diagnoses=tuple(tuple(str(n) for n in d) for d in diagnoses),
+            conflicts=tuple(dict(c) for c in payload.get("conflicts", ())),
+            failed=tuple(dict(f) for f in payload.get("failed", ())),
+            elapsed=float(payload.get("elapsed", 0.0)),
+            stamp=float(payload.get("stamp", 0.0)),
+        )
