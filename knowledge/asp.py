@@ -185,43 +185,47 @@ class Asp:
         timeout: float | None = None,
         on_answer: Callable[[Answer], bool | None] | None = None,
         keep: bool = True,
+        costs: bool = False,
     ) -> Outcome:
-        """Solve; collect the models (all, or the last one when optimising).
+        """Solve; collect the models (all, or only the last one).
 
         Args:
             assumptions: atoms fixed true or false for this call only.
-            timeout: seconds until the search is cancelled; ``None`` waits for the end.
+            timeout: seconds until the search is interrupted; ``None`` waits for the end.
             on_answer: called with each model; return ``False`` to stop the search.
             keep: keep every model in the outcome (else only the last).
+            costs: record each model's cost and optimality (optimisation; slower).
         """
         answers: list[Answer] = []
-        stop = threading.Event()
+        stopped = False
 
         def on_model(model: clingo.Model) -> bool:
-            answer = _answer(model)
+            nonlocal stopped
+            answer = _answer(model, costs)
             if keep or not answers:
                 answers.append(answer)
             else:
                 answers[-1] = answer
             if on_answer is not None and on_answer(answer) is False:
-                stop.set()
+                stopped = True
                 return False
             return True
 
         core: list[int] = []
+        # A timer interrupts the search: cheaper than an asynchronous solve and a wait.
+        timer = threading.Timer(timeout, self._control.interrupt) if timeout is not None else None
+        if timer is not None:
+            timer.daemon = True
+            timer.start()
         try:
-            with self._control.solve(
-                assumptions=list(assumptions), on_model=on_model, async_=True
-            ) as handle:
-                finished = handle.wait(timeout) if timeout is not None else handle.wait()
-                if not finished:
-                    handle.cancel()
-                result = handle.get()
-                if result.unsatisfiable and assumptions:
-                    core = list(handle.core())
+            result = self._control.solve(
+                assumptions=list(assumptions), on_model=on_model, on_core=core.extend
+            )
         except RuntimeError as e:
             raise self._fail("solving", e) from e
-        interrupted = bool(result.interrupted) and not stop.is_set()
+        finally:
+            if timer is not None:
+                timer.cancel()
         satisfiable: bool | None = None if result.unknown else bool(result.satisfiable)
         if answers and satisfiable is None:
             satisfiable = True
@@ -229,7 +233,7 @@ class Asp:
             answers=answers,
             satisfiable=satisfiable,
             exhausted=bool(result.exhausted),
-            interrupted=interrupted,
+            interrupted=bool(result.interrupted) and not stopped,
             core=self._core_symbols(core) if result.unsatisfiable else [],
         )
 
@@ -238,9 +242,10 @@ class Asp:
         return [a.symbol for a in self._control.symbolic_atoms if a.literal in wanted]
 
 
-def _answer(model: clingo.Model) -> Answer:
+def _answer(model: clingo.Model, costs: bool) -> Answer:
     atoms: dict[str, list[tuple[Value, ...]]] = {}
     for symbol in model.symbols(shown=True):
         atoms.setdefault(symbol.name, []).append(tuple(to_python(a) for a in symbol.arguments))
-    cost = tuple(model.cost)
-    return Answer(atoms, cost, bool(model.optimality_proven))
+    if not costs:
+        return Answer(atoms)
+    return Answer(atoms, tuple(model.cost), bool(model.optimality_proven))

@@ -1,63 +1,89 @@
 """The diagnosis engine: the newest observations against the current model, in clingo.
 
-The model is grounded once per model update (``diagnosis.lp`` plus its facts);
-observations are externals, so a changed observation only re-solves. Every answer
-set of the domain-heuristic enumeration (``--enum-mode=domRec``) is a subset-minimal
-diagnosis. Not thread-safe: the service calls it from one thread.
+Only the part of the model upstream of the failed observations can contribute to a
+minimal diagnosis, so the engine grounds ``diagnosis.lp`` with the facts of that
+region alone: the cost of a diagnosis grows with the region, not with the robot. The
+grounded region is kept and observations are externals: while the failed
+observations stay inside it (a fault disappears, a verdict within it changes), a new
+diagnosis only re-solves. Every answer set of the domain-heuristic enumeration
+(``--enum-mode=domRec``) is a subset-minimal diagnosis. Not thread-safe: the service
+calls it from one thread.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
 import clingo
 
 from executive.protocol import ObservationInfo
-from knowledge.asp import Asp, atom, facts
+from knowledge.asp import Asp, atom
 from knowledge.errors import ConfigError
-from monitoring.diagnosis.model import ModelUpdate, Observer, ObserverType, SystemDescription
+from monitoring.diagnosis.model import (
+    ModelUpdate,
+    Observer,
+    ObserverType,
+    SystemDescription,
+)
 from monitoring.diagnosis.result import DiagnosisResult, Status, ordered
 
 PROGRAM = Path(__file__).with_name("diagnosis.lp")
 OPTIONS = ("--heuristic=Domain", "--enum-mode=domRec", "--project", "--models=0")
 
 
-def model_facts(model: SystemDescription, index: dict[Observer, int]) -> str:
-    """The facts of a system description, observers numbered by ``index``."""
-    out = [atom("candidate", c) for c in model.candidates]
+def model_facts(model: SystemDescription, observers: Iterable[Observer]) -> str:
+    """The facts of a system description (see ``diagnosis.lp``).
+
+    Candidates are numbered in the order of ``model.candidates``, streams (node, topic)
+    in the order of the nodes, observers in the order given: numbers parse, ground
+    and solve faster than names.
+    """
+    candidate = {name: i for i, name in enumerate(model.candidates)}
+    streams: dict[str, list[tuple[int, str]]] = {}  # topic -> (stream, publisher)
+    out = [f"candidate(0..{len(candidate) - 1}).", f"observer(0..{len(model.observers) - 1})."]
+    count = 0
     for node in model.nodes:
-        out += [atom("pub", node.name, m) for m in node.pub_topic]
-        out += [atom("sub", node.name, m) for m in node.sub_topic]
-    for observer, i in index.items():
-        out.append(atom("observer", i))
+        for topic in node.pub_topic:
+            streams.setdefault(topic, []).append((count, node.name))
+            out.append(f"out({count},{candidate[node.name]}).")
+            count += 1
+    for node in model.nodes:
+        inputs = [t for topic in node.sub_topic for t, _ in streams.get(topic, ())]
+        for topic in node.pub_topic:
+            for s, publisher in streams[topic]:
+                if publisher == node.name:
+                    out += [f"dep({s},{t})." for t in inputs]
+    for i, observer in enumerate(observers):
         if observer.type.watches_nodes:
             name = observer.resource[0]
-            out.append(atom("blame", i, name))
-            if observer.type is ObserverType.RESOURCES:
-                watched = model.node(name)
-                out += [atom("feeds", i, m) for m in watched.sub_topic] if watched else []
+            out.append(f"blame({i},{candidate[name]}).")
+            watched = model.node(name)
+            if observer.type is ObserverType.RESOURCES and watched is not None:
+                out += [
+                    f"feeds({i},{t})." for m in watched.sub_topic for t, _ in streams.get(m, ())
+                ]
             continue
         for topic in observer.topics:
-            publishers = model.publishers(topic)
-            chosen = (
-                [p for p in publishers if p in observer.callerids]
-                if observer.callerids
-                else publishers
-            )
-            out += [atom("watch", i, topic, p) for p in chosen]
+            for s, publisher in streams.get(topic, ()):
+                if not observer.callerids or publisher in observer.callerids:
+                    out.append(f"watch({i},{s}).")
         if observer.behavior:
-            out.append(atom("blame", i, observer.behavior))
-    return facts(out)
+            out.append(f"blame({i},{candidate[observer.behavior]}).")
+    return "\n".join(out)
 
 
 @dataclass
 class _Grounded:
-    """The current model, grounded, and what is assigned to its externals."""
+    """A region of the model, grounded, and what is assigned to its externals."""
 
     asp: Asp
-    assigned: dict[clingo.Symbol, bool]
+    nodes: frozenset[str]  # the nodes of the region
+    names: tuple[str, ...]  # candidate names by number
+    index: dict[Observer, int]  # the observers of the region by number
+    assigned: list[tuple[bool, bool]]  # (failed, ok) as assigned, per observer
     bounds: set[int]
 
 
@@ -83,8 +109,9 @@ class DiagnosisEngine:
         self.max_card = max_card
         self.timeout = timeout
         self._model = SystemDescription()
-        self._index: dict[Observer, int] = {}
+        self._observers: frozenset[Observer] = frozenset()
         self._observations: dict[Observer, ObservationInfo] = {}
+        self._known: dict[tuple[str, tuple[str, ...], tuple[str, ...]], Observer] = {}
         self._grounded: _Grounded | None = None
         if model is not None:
             self.set_model(model)
@@ -106,8 +133,9 @@ class DiagnosisEngine:
         if problems:
             raise ConfigError(problems[0][1])
         self._model = model
-        self._index = {o: i for i, o in enumerate(dict.fromkeys(model.observers))}
-        self._observations = {o: v for o, v in self._observations.items() if o in self._index}
+        self._observers = frozenset(model.observers)
+        self._observations = {o: v for o, v in self._observations.items() if o in self._observers}
+        self._known = {key: o for o in model.observers for key in o.spellings}
         self._grounded = None
 
     # --- observations -------------------------------------------------------------------
@@ -121,9 +149,12 @@ class DiagnosisEngine:
             ConfigError: the observation's type is unknown, or no observer of the
                 model made it.
         """
-        observer = Observer.make(info.type, info.resource, info.callerids)
-        if observer not in self._index:
-            raise ConfigError(f"observation of {observer}: no such observer in the model")
+        key = (info.type, info.resource, info.callerids)
+        observer = self._known.get(key)
+        if observer is None:  # not spelled as usual: unknown, or caller ids in another order
+            observer = Observer.make(*key)
+            if observer not in self._observers:
+                raise ConfigError(f"observation of {observer}: no such observer in the model")
         old = self._observations.get(observer)
         if old is not None and info.stamp < old.stamp:
             return False
@@ -145,12 +176,16 @@ class DiagnosisEngine:
         failed = self.failed()
         if not failed:
             return DiagnosisResult(Status.OK, elapsed=time.perf_counter() - start)
-        grounded = self._ground()
-        self._assign(grounded, self._wanted())
+        grounded = self._region(failed)
+        self._assign(grounded, self._wanted(grounded))
         self._bound(grounded, self.max_card)
         outcome = grounded.asp.solve(timeout=self.timeout)
+        names = grounded.names
         found = ordered(
-            [tuple(str(a[0]) for a in answer.get("faulty")) for answer in outcome.answers]
+            [
+                tuple(names[n] for (n,) in answer.get("faulty") if isinstance(n, int))
+                for answer in outcome.answers
+            ]
         )
         if outcome.interrupted:
             status = Status.TIMEOUT
@@ -161,30 +196,102 @@ class DiagnosisEngine:
         conflicts = self._conflicts(grounded) if status is Status.INCONSISTENT else ()
         return DiagnosisResult(status, found, conflicts, failed, time.perf_counter() - start)
 
-    def _ground(self) -> _Grounded:
-        if self._grounded is None:
-            asp = Asp(OPTIONS)
-            asp.load(PROGRAM)
-            asp.add(model_facts(self._model, self._index), source="<model>")
-            asp.ground()
-            self._grounded = _Grounded(asp, {}, set())
+    def _upstream(self, failed: Iterable[Observer]) -> set[str]:
+        """The nodes whose faults could reach a failed observation."""
+        model = self._model
+        nodes: set[str] = set()
+        topics: list[tuple[str, tuple[str, ...]]] = []  # (topic, caller ids)
+        for observer in failed:
+            if observer.type.watches_nodes:
+                name = observer.resource[0]
+                nodes.add(name)
+                node = model.node(name)
+                if observer.type is ObserverType.RESOURCES and node is not None:
+                    topics += [(t, ()) for t in node.sub_topic]
+            else:
+                topics += [(t, observer.callerids) for t in observer.topics]
+        while topics:
+            topic, callerids = topics.pop()
+            for name in model.publishers(topic):
+                if name not in nodes and (not callerids or name in callerids):
+                    nodes.add(name)
+                    node = model.node(name)
+                    topics += [(t, ()) for t in node.sub_topic] if node else []
+        return nodes
+
+    def _touches(self, observer: Observer, nodes: set[str], topics: set[str]) -> bool:
+        """Whether an observer watches a stream (or blames a node) of the region."""
+        if observer.type.watches_nodes:
+            return observer.resource[0] in nodes
+        if topics.isdisjoint(observer.topics):
+            return False
+        return any(
+            p in nodes and (not observer.callerids or p in observer.callerids)
+            for t in observer.topics
+            for p in self._model.publishers(t)
+        )
+
+    def _region(self, failed: tuple[Observer, ...]) -> _Grounded:
+        """The grounded region of the failed observations (kept if it still covers them).
+
+        With exoneration, OK observations of the region belong to it too: they clear
+        its streams.
+        """
+        nodes = self._upstream(failed)
+        topics = {t for n in nodes for t in self._model.node(n).pub_topic}  # type: ignore[union-attr]
+        observers = set(failed)
+        if self.exonerate:
+            observers.update(
+                o
+                for o, info in self._observations.items()
+                if not info.failed and not o.type.watches_nodes and self._touches(o, nodes, topics)
+            )
+        grounded = self._grounded
+        if grounded is not None and nodes <= grounded.nodes and observers <= grounded.index.keys():
+            return grounded
+        ordered_observers = [o for o in self._model.observers if o in observers]
+        # Every observer of the region: a later verdict of one of them re-solves only.
+        ordered_observers += [
+            o
+            for o in self._model.observers
+            if o not in observers
+            and (o in self._observations or self.exonerate)
+            and self._touches(o, nodes, topics)
+        ]
+        index = {o: i for i, o in enumerate(ordered_observers)}
+        region = SystemDescription(
+            tuple(n for n in self._model.nodes if n.name in nodes), tuple(ordered_observers)
+        )
+        asp = Asp(OPTIONS)
+        asp.load(PROGRAM)
+        asp.add(model_facts(region, index), source="<model>")
+        asp.ground()
+        # Externals start false: only observations that say otherwise are assigned.
+        self._grounded = _Grounded(
+            asp, frozenset(nodes), region.candidates, index, [(False, False)] * len(index), set()
+        )
         return self._grounded
 
-    def _wanted(self) -> dict[clingo.Symbol, bool]:
-        """The value of every observation external for the newest observations."""
-        wanted: dict[clingo.Symbol, bool] = {}
-        for observer, i in self._index.items():
+    def _wanted(self, grounded: _Grounded) -> list[tuple[bool, bool]]:
+        """(failed, ok) of every observer of the region for the newest observations."""
+        wanted = [(False, False)] * len(grounded.index)
+        for observer, i in grounded.index.items():
             info = self._observations.get(observer)
-            wanted[atom("failed", i)] = info is not None and info.failed
-            wanted[atom("ok", i)] = info is not None and not info.failed and self.exonerate
+            if info is not None:
+                wanted[i] = (info.failed, not info.failed and self.exonerate)
         return wanted
 
     @staticmethod
-    def _assign(grounded: _Grounded, wanted: dict[clingo.Symbol, bool]) -> None:
-        for symbol, value in wanted.items():
-            if grounded.assigned.get(symbol) is not value:
-                grounded.asp.assign_external(symbol, value)
-                grounded.assigned[symbol] = value
+    def _assign(grounded: _Grounded, wanted: list[tuple[bool, bool]]) -> None:
+        assign = grounded.asp.assign_external
+        for i, value in enumerate(wanted):
+            old = grounded.assigned[i]
+            if old != value:
+                if old[0] != value[0]:
+                    assign(atom("failed", i), value[0])
+                if old[1] != value[1]:
+                    assign(atom("ok", i), value[1])
+                grounded.assigned[i] = value
 
     @staticmethod
     def _bound(grounded: _Grounded, max_card: int | None) -> None:
@@ -210,23 +317,25 @@ class DiagnosisEngine:
         The observations become assumptions: clingo's unsatisfiable core is a first
         conflict, and dropping each member that is not needed makes it minimal.
         """
-        observers = {i: o for o, i in self._index.items()}
-        wanted = self._wanted()
-        present = [s for s, value in wanted.items() if value]
-        for symbol in wanted:
+        wanted = self._wanted(grounded)
+        count = len(wanted)
+        symbols = [atom("failed", i) for i in range(count)] + [atom("ok", i) for i in range(count)]
+        values = [w[0] for w in wanted] + [w[1] for w in wanted]
+        present = [s for s, value in zip(symbols, values, strict=True) if value]
+        for symbol in symbols:
             grounded.asp.assign_external(symbol, None)
-        grounded.assigned.clear()
         self._bound(grounded, None)
         grounded.asp.set("solve.models", "1")
 
         def core_of(chosen: list[clingo.Symbol]) -> list[clingo.Symbol] | None:
             """The failing part of the chosen observations, or None if they are consistent."""
             keep = set(chosen)
-            assumptions = [(s, s in keep) for s in wanted]
+            assumptions = [(s, s in keep) for s in symbols]
             outcome = grounded.asp.solve(assumptions=assumptions, timeout=self.timeout)
             if outcome.satisfiable is not False:
                 return None
-            return [s for s in chosen if s in set(outcome.core)] or chosen
+            core = set(outcome.core)
+            return [s for s in chosen if s in core] or chosen
 
         try:
             core = core_of(present) or present
@@ -237,10 +346,11 @@ class DiagnosisEngine:
                     i += 1  # needed
                 else:
                     core = smaller
-                    i = min(i, len(core))
         finally:
             grounded.asp.set("solve.models", "0")
-            self._assign(grounded, wanted)
+            for symbol, value in zip(symbols, values, strict=True):
+                grounded.asp.assign_external(symbol, value)
             self._bound(grounded, self.max_card)
-        numbers = sorted({int(str(s.arguments[0])) for s in core})
+        observers = list(grounded.index)
+        numbers = sorted({s.arguments[0].number for s in core})
         return tuple(observers[i] for i in numbers)

@@ -112,6 +112,23 @@ class Observer:
     type: ObserverType
     resource: tuple[str, ...]
     callerids: tuple[str, ...] = ()
+    _hash: int = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        # Observers key every lookup of the engine: hash once.
+        object.__setattr__(self, "_hash", hash((self.type.value, self.resource, self.callerids)))
+
+    def __hash__(self) -> int:
+        return self._hash
+
+    @property
+    def spellings(self) -> list[tuple[str, tuple[str, ...], tuple[str, ...]]]:
+        """The (type, resource, caller ids) an observation of this observer may carry."""
+        names = [self.type.value] + [a for a, t in ALIASES.items() if t is self.type]
+        resources = [self.resource]
+        if self.behavior == DEFAULT_BEHAVIOR:
+            resources.append(self.resource[:2])
+        return [(n, r, self.callerids) for n in names for r in resources]
 
     @classmethod
     def make(
