@@ -8,11 +8,11 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-from executive.cli import diagnose, kb, validate, version
+from executive.cli import diagnose, kb, rules, validate, version
 from knowledge.errors import DuraError
 
 # Each module has register(subparsers); its parsers set `run(args) -> int`.
-COMMANDS: tuple[ModuleType, ...] = (validate, kb, diagnose, version)
+COMMANDS: tuple[ModuleType, ...] = (validate, kb, diagnose, rules, version)
 
 
 class _Parser(argparse.ArgumentParser):
