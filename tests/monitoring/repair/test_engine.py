@@ -20,7 +20,9 @@ class Clock:
         return self.now
 
 
-def engine(tmp_path: Path, text: str, clock: Clock | None = None, asp: str | None = None) -> RuleEngine:
+def engine(
+    tmp_path: Path, text: str, clock: Clock | None = None, asp: str | None = None
+) -> RuleEngine:
     if asp is not None:
         (tmp_path / "extra.lp").write_text(asp)
     path = tmp_path / "rules.yaml"
@@ -49,7 +51,9 @@ rules:
 """
 
 
-def test_a_rule_fires_when_its_observations_match_often_enough_in_the_window(tmp_path: Path) -> None:
+def test_a_rule_fires_when_its_observations_match_often_enough_in_the_window(
+    tmp_path: Path,
+) -> None:
     e = engine(tmp_path, RESTART_ON_SLOW_SCAN)
     e.observe(hz(-1))
     assert fired(e) == []
@@ -62,7 +66,9 @@ def test_a_rule_fires_when_its_observations_match_often_enough_in_the_window(tmp
     assert fired(e) == []
 
 
-def test_a_rule_fires_once_when_its_condition_becomes_true_and_again_after_it_was_false(tmp_path: Path) -> None:
+def test_a_rule_fires_once_when_its_condition_becomes_true_and_again_after_it_was_false(
+    tmp_path: Path,
+) -> None:
     e = engine(tmp_path, RESTART_ON_SLOW_SCAN)
     for _ in range(2):
         e.observe(hz(-1))
@@ -77,7 +83,9 @@ def test_a_rule_fires_once_when_its_condition_becomes_true_and_again_after_it_wa
     assert fired(e) == ["slow"]
 
 
-def test_a_rule_fires_again_after_its_recall_duration_while_the_condition_holds(tmp_path: Path) -> None:
+def test_a_rule_fires_again_after_its_recall_duration_while_the_condition_holds(
+    tmp_path: Path,
+) -> None:
     clock = Clock()
     e = engine(tmp_path, RESTART_ON_SLOW_SCAN + "    recall_duration: 10\n", clock)
     e.observe(hz(-1))
@@ -92,7 +100,9 @@ def test_a_rule_fires_again_after_its_recall_duration_while_the_condition_holds(
 
 def test_a_single_shot_rule_fires_only_once(tmp_path: Path) -> None:
     clock = Clock()
-    e = engine(tmp_path, RESTART_ON_SLOW_SCAN + "    single_shot: true\n    recall_duration: 1\n", clock)
+    e = engine(
+        tmp_path, RESTART_ON_SLOW_SCAN + "    single_shot: true\n    recall_duration: 1\n", clock
+    )
     e.observe(hz(-1))
     e.observe(hz(-1))
     assert fired(e) == ["slow"]
@@ -175,8 +185,7 @@ def test_the_firing_names_the_faulty_components_and_failed_observations(tmp_path
 def test_rules_written_in_asp_trigger_and_inhibit_yaml_rules(tmp_path: Path) -> None:
     e = engine(
         tmp_path,
-        TABLE_5_4
-        + "  - {type: log, name: by_asp, message: two at once}\nasp: [extra.lp]\n",
+        TABLE_5_4 + "  - {type: log, name: by_asp, message: two at once}\nasp: [extra.lp]\n",
         asp='trigger("by_asp") :- diagnosis(_,"N1"), failed("frequency","scan").\n'
         'inhibit("second") :- status("DIAGNOSED"), possibly_faulty("N3").\n',
     )
