@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import logging
 import threading
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
@@ -72,17 +73,19 @@ class RuleService(Service):
             info = ObservationInfo.from_payload(message.payload)
         except (KeyError, ValueError, TypeError) as e:
             raise BusError(f"malformed observation: {e}") from e
-        with self._lock:
-            self.engine.observe(info)
-            self._dispatch(self.engine.evaluate())
+        self._take(lambda: self.engine.observe(info))
 
     def _on_diagnosis(self, message: Message) -> None:
         try:
-            info = DiagnosisInfo.from_payload(message.payload)
+            diagnosis = DiagnosisInfo.from_payload(message.payload)
         except (KeyError, ValueError, TypeError) as e:
             raise BusError(f"malformed diagnosis: {e}") from e
+        self._take(lambda: self.engine.diagnosed(diagnosis))
+
+    def _take(self, feed: Callable[[], None]) -> None:
+        """Feed the engine one message, evaluate, and start the actions that fire."""
         with self._lock:
-            self.engine.diagnosed(info)
+            feed()
             self._dispatch(self.engine.evaluate())
 
     def _dispatch(self, fired: list[Fired]) -> None:
