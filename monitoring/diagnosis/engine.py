@@ -110,6 +110,9 @@ class DiagnosisEngine:
         self.timeout = timeout
         self._model = SystemDescription()
         self._observers: frozenset[Observer] = frozenset()
+        self._rank: dict[Observer, int] = {}  # position in the model
+        self._node_rank: dict[str, int] = {}
+        self._watchers: dict[str, list[Observer]] = {}  # node -> observers of its streams
         self._observations: dict[Observer, ObservationInfo] = {}
         self._known: dict[tuple[str, tuple[str, ...], tuple[str, ...]], Observer] = {}
         self._grounded: _Grounded | None = None
@@ -134,6 +137,17 @@ class DiagnosisEngine:
             raise ConfigError(problems[0][1])
         self._model = model
         self._observers = frozenset(model.observers)
+        self._rank = {o: i for i, o in enumerate(model.observers)}
+        self._node_rank = {n.name: i for i, n in enumerate(model.nodes)}
+        watchers: dict[str, list[Observer]] = {}
+        for o in model.observers:
+            if o.type.watches_nodes:
+                watchers.setdefault(o.resource[0], []).append(o)
+                continue
+            for name in {p for t in o.topics for p in model.publishers(t)}:
+                if not o.callerids or name in o.callerids:
+                    watchers.setdefault(name, []).append(o)
+        self._watchers = watchers
         self._observations = {o: v for o, v in self._observations.items() if o in self._observers}
         self._known = {key: o for o in model.observers for key in o.spellings}
         self._grounded = None
@@ -219,18 +233,6 @@ class DiagnosisEngine:
                     topics += [(t, ()) for t in node.sub_topic] if node else []
         return nodes
 
-    def _touches(self, observer: Observer, nodes: set[str], topics: set[str]) -> bool:
-        """Whether an observer watches a stream (or blames a node) of the region."""
-        if observer.type.watches_nodes:
-            return observer.resource[0] in nodes
-        if topics.isdisjoint(observer.topics):
-            return False
-        return any(
-            p in nodes and (not observer.callerids or p in observer.callerids)
-            for t in observer.topics
-            for p in self._model.publishers(t)
-        )
-
     def _region(self, failed: tuple[Observer, ...]) -> _Grounded:
         """The grounded region of the failed observations (kept if it still covers them).
 
@@ -238,29 +240,22 @@ class DiagnosisEngine:
         its streams.
         """
         nodes = self._upstream(failed)
-        topics = {t for n in nodes for t in self._model.node(n).pub_topic}  # type: ignore[union-attr]
+        near = {o for n in nodes for o in self._watchers.get(n, ())}  # observers of the region
         observers = set(failed)
         if self.exonerate:
-            observers.update(
-                o
-                for o, info in self._observations.items()
-                if not info.failed and not o.type.watches_nodes and self._touches(o, nodes, topics)
-            )
+            for o in near:
+                info = self._observations.get(o)
+                if info is not None and not info.failed and not o.type.watches_nodes:
+                    observers.add(o)
         grounded = self._grounded
         if grounded is not None and nodes <= grounded.nodes and observers <= grounded.index.keys():
             return grounded
-        ordered_observers = [o for o in self._model.observers if o in observers]
         # Every observer of the region: a later verdict of one of them re-solves only.
-        ordered_observers += [
-            o
-            for o in self._model.observers
-            if o not in observers
-            and (o in self._observations or self.exonerate)
-            and self._touches(o, nodes, topics)
-        ]
-        index = {o: i for i, o in enumerate(ordered_observers)}
+        observers.update(o for o in near if o in self._observations or self.exonerate)
+        index = {o: i for i, o in enumerate(sorted(observers, key=self._rank.__getitem__))}
         region = SystemDescription(
-            tuple(n for n in self._model.nodes if n.name in nodes), tuple(ordered_observers)
+            tuple(self._model.nodes[i] for i in sorted(self._node_rank[n] for n in nodes)),
+            tuple(index),
         )
         asp = Asp(OPTIONS)
         asp.load(PROGRAM)

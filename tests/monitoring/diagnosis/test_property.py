@@ -73,3 +73,34 @@ def test_the_engine_finds_exactly_the_minimal_diagnoses_of_the_definition(
     else:
         assert result.status is Status.DIAGNOSED
         assert set(result.diagnoses) == expected
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(situations(), st.data())
+def test_a_running_engine_stays_exact_as_observations_change(
+    situation: tuple[SystemDescription, list[ObservationInfo], bool], data: st.DataObject
+) -> None:
+    model, infos, exonerate = situation
+    engine = DiagnosisEngine(model, exonerate=exonerate)
+    for step in range(4):
+        observer = data.draw(st.sampled_from(model.observers))
+        value = data.draw(st.sampled_from([-1, 0]))
+        engine.observe(
+            ObservationInfo(
+                observer.type.value,
+                observer.resource,
+                value,
+                callerids=observer.callerids,
+                stamp=step,
+            )
+        )
+        result = engine.diagnose()
+        expected = {
+            tuple(sorted(d)) for d in reference(model, engine.observations, exonerate=exonerate)
+        }
+        if result.status is Status.OK:
+            assert expected == {()}
+        elif result.status is Status.INCONSISTENT:
+            assert expected == set()
+        else:
+            assert set(result.diagnoses) == expected
