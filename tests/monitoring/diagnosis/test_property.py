@@ -82,7 +82,10 @@ def test_a_running_engine_stays_exact_as_observations_change(
 ) -> None:
     model, infos, exonerate = situation
     engine = DiagnosisEngine(model, exonerate=exonerate)
-    for step in range(4):
+    for info in infos:
+        engine.observe(info)
+    engine.diagnose()
+    for step in range(1, 5):
         observer = data.draw(st.sampled_from(model.observers))
         value = data.draw(st.sampled_from([-1, 0]))
         engine.observe(
