@@ -246,3 +246,13 @@ class DiagnosisInfo:
             elapsed=float(payload.get("elapsed", 0.0)),
             stamp=float(payload.get("stamp", 0.0)),
         )
+
+
+# --- repair requests to the executive (served by the task executor and the high level) ---
+#
+# The rule engine's actions call (each replies {"ok": true, ...} or {"ok": false, "error"}):
+#   executive/api/component/restart  {"name", "reason"}      restart; counts as a fault
+#   executive/api/component/fault    {"name", "reason"}      mark the component faulty
+#   executive/api/parameter/set      {"component", "key", "value"}
+#   executive/api/goal/add           {"expression", "priority", "source": "rule"}
+#   executive/api/<verb>             any payload (the "command" action)
