@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import re
 import threading
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -72,8 +72,7 @@ class Answer:
     """One model: its shown atoms by predicate name, as argument tuples."""
 
     atoms: dict[str, list[tuple[Value, ...]]]
-    cost: tuple[int, ...] = ()
-    optimal: bool = False
+    cost: tuple[int, ...] = ()  # when asked for; the last model of an exhausted search is optimal
 
     def get(self, name: str) -> list[tuple[Value, ...]]:
         return self.atoms.get(name, [])
@@ -164,10 +163,6 @@ class Asp:
         """Set an external atom true, false, or free (``None``)."""
         self._control.assign_external(symbol, value)
 
-    def has_atom(self, symbol: clingo.Symbol) -> bool:
-        """Whether the ground program mentions the atom."""
-        return symbol in self._control.symbolic_atoms
-
     def set(self, option: str, value: str) -> None:
         """Change a solver option between calls, e.g. ``set("solve.models", "0")``."""
         group, _, key = option.rpartition(".")
@@ -183,7 +178,6 @@ class Asp:
         *,
         assumptions: Sequence[tuple[clingo.Symbol, bool]] = (),
         timeout: float | None = None,
-        on_answer: Callable[[Answer], bool | None] | None = None,
         keep: bool = True,
         costs: bool = False,
     ) -> Outcome:
@@ -192,23 +186,17 @@ class Asp:
         Args:
             assumptions: atoms fixed true or false for this call only.
             timeout: seconds until the search is interrupted; ``None`` waits for the end.
-            on_answer: called with each model; return ``False`` to stop the search.
             keep: keep every model in the outcome (else only the last).
-            costs: record each model's cost and optimality (optimisation; slower).
+            costs: record each model's cost (optimisation; slower).
         """
         answers: list[Answer] = []
-        stopped = False
 
         def on_model(model: clingo.Model) -> bool:
-            nonlocal stopped
             answer = _answer(model, costs)
             if keep or not answers:
                 answers.append(answer)
             else:
                 answers[-1] = answer
-            if on_answer is not None and on_answer(answer) is False:
-                stopped = True
-                return False
             return True
 
         core: list[int] = []
@@ -233,7 +221,7 @@ class Asp:
             answers=answers,
             satisfiable=satisfiable,
             exhausted=bool(result.exhausted),
-            interrupted=bool(result.interrupted) and not stopped,
+            interrupted=bool(result.interrupted),
             core=self._core_symbols(core) if result.unsatisfiable else [],
         )
 
@@ -248,4 +236,4 @@ def _answer(model: clingo.Model, costs: bool) -> Answer:
         atoms.setdefault(symbol.name, []).append(tuple(to_python(a) for a in symbol.arguments))
     if not costs:
         return Answer(atoms)
-    return Answer(atoms, tuple(model.cost), bool(model.optimality_proven))
+    return Answer(atoms, tuple(model.cost))
