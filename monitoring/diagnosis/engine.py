@@ -203,8 +203,12 @@ class DiagnosisEngine:
         )
         if outcome.interrupted:
             status = Status.TIMEOUT
-        elif found or (self.max_card is not None and self._consistent(grounded)):
+        elif found:
             status = Status.DIAGNOSED
+        elif self.max_card is not None:  # nothing small enough: is there anything at all?
+            status = {True: Status.DIAGNOSED, False: Status.INCONSISTENT, None: Status.TIMEOUT}[
+                self._consistent(grounded)
+            ]
         else:
             status = Status.INCONSISTENT
         conflicts = self._conflicts(grounded) if status is Status.INCONSISTENT else ()
@@ -296,12 +300,12 @@ class DiagnosisEngine:
         for k in grounded.bounds:
             grounded.asp.assign_external(atom("limit", k), k == max_card)
 
-    def _consistent(self, grounded: _Grounded) -> bool:
-        """Whether some diagnosis exists, of any size."""
+    def _consistent(self, grounded: _Grounded) -> bool | None:
+        """Whether some diagnosis exists, of any size (None: no answer in time)."""
         self._bound(grounded, None)
         grounded.asp.set("solve.models", "1")
         try:
-            return bool(grounded.asp.solve(timeout=self.timeout).answers)
+            return grounded.asp.solve(timeout=self.timeout).satisfiable
         finally:
             grounded.asp.set("solve.models", "0")
             self._bound(grounded, self.max_card)

@@ -37,6 +37,7 @@ from executive.protocol import ObservationInfo
 from knowledge.asp import Asp, atom, facts
 from monitoring.diagnosis.engine import DiagnosisEngine
 from monitoring.diagnosis.model import Node, Observer, SystemDescription
+from monitoring.diagnosis.result import DiagnosisResult, Status
 
 LAYERS = 6
 PROPAGATION = 0.7
@@ -221,6 +222,13 @@ def timed(function: Callable[[], object]) -> tuple[float, object]:
     return time.perf_counter() - start, value
 
 
+def found_sets(result: DiagnosisResult) -> set[frozenset[str]]:
+    """The diagnoses as sets; with nothing failed (OK) the empty set is the one diagnosis."""
+    if result.status is Status.OK:
+        return {frozenset()}
+    return {frozenset(d) for d in result.diagnoses}
+
+
 def clingo_first(instance: Instance) -> tuple[float, float, DiagnosisEngine, set[frozenset[str]]]:
     """Seconds to ground the model and to diagnose all observations; the engine; diagnoses."""
     seconds_ground, engine = timed(lambda: DiagnosisEngine(instance.model))
@@ -229,7 +237,7 @@ def clingo_first(instance: Instance) -> tuple[float, float, DiagnosisEngine, set
     def diagnose() -> set[frozenset[str]]:
         for info in instance.observations:
             engine.observe(info)
-        return {frozenset(d) for d in engine.diagnose().diagnoses}
+        return found_sets(engine.diagnose())
 
     seconds_diagnose, found = timed(diagnose)
     return seconds_ground, seconds_diagnose, engine, found  # type: ignore[return-value]
@@ -253,7 +261,7 @@ def rediagnose(
         for observation, answer in ((flipped, wanted), (back, expected)):
             engine.observe(observation)
             took, result = timed(engine.diagnose)
-            if {frozenset(d) for d in result.diagnoses} != answer:  # type: ignore[attr-defined]
+            if found_sets(result) != answer:  # type: ignore[arg-type]
                 raise SystemExit(f"{instance.name} seed {seed}: re-diagnosis disagrees with Berge")
             seconds.append(took)
     return seconds
