@@ -343,3 +343,75 @@ def observers_api(verb: str) -> str:
     measured values by name, e.g. ``{"frequency": 9.98}``) and ``observer`` (its id).
     """
     return f"monitoring/observers/{verb}"
+
+
+# --- diagnosis (thesis 6.3.3) ----------------------------------------------------------
+
+# Model updates of the diagnosis engine (request/reply). Request:
+#   {"action": "ADD" | "REMOVE" | "UPDATE" | "SET" | "GET",
+#    "nodes": [{"name", "sub_topic": [...], "pub_topic": [...]}],
+#    "observers": [{"type", "resource": [...], "callerids": [...]}]}
+# ADD adds nodes and observers; REMOVE removes the named nodes and the given observers;
+# UPDATE replaces the named nodes (they must exist) and adds the given observers; SET
+# replaces the whole model; GET changes nothing. Reply: {"ok": true, "model": {...}} or
+# {"ok": false, "error": "<reason>"}; a refused update leaves the model as it was.
+DIAGNOSIS_MODEL = "diagnosis/model"
+
+
+@dataclass(frozen=True)
+class DiagnosisInfo:
+    """The payload of ``diagnoses``: the newest diagnosis result.
+
+    ``status`` is OK (the all-clear), DIAGNOSED, INCONSISTENT or TIMEOUT.
+    ``diagnoses`` lists subset-minimal sets of faulty nodes (or behaviors), each
+    sorted, smallest first. ``conflicts`` and ``failed`` are observers as
+    ``{type, resource, callerids}``: the observations that contradict each other
+    (INCONSISTENT) and those that failed.
+    """
+
+    status: str
+    diagnoses: tuple[tuple[str, ...], ...] = ()
+    conflicts: tuple[dict[str, Any], ...] = ()
+    failed: tuple[dict[str, Any], ...] = ()
+    elapsed: float = 0.0
+    stamp: float = 0.0
+
+    @property
+    def possibly_faulty(self) -> frozenset[str]:
+        """Every name that some diagnosis names."""
+        return frozenset(name for diagnosis in self.diagnoses for name in diagnosis)
+
+    def to_payload(self) -> dict[str, Any]:
+        return {
+            "status": self.status,
+            "diagnoses": [list(d) for d in self.diagnoses],
+            "conflicts": list(self.conflicts),
+            "failed": list(self.failed),
+            "elapsed": self.elapsed,
+            "stamp": self.stamp,
+        }
+
+    @classmethod
+    def from_payload(cls, payload: dict[str, Any]) -> DiagnosisInfo:
+        """Read a payload; raises ``KeyError``/``ValueError``/``TypeError`` if malformed."""
+        diagnoses = payload["diagnoses"]
+        if not isinstance(diagnoses, list):
+            raise TypeError("'diagnoses' must be a list")
+        return cls(
+            status=str(payload["status"]),
+            diagnoses=tuple(tuple(str(n) for n in d) for d in diagnoses),
+            conflicts=tuple(dict(c) for c in payload.get("conflicts", ())),
+            failed=tuple(dict(f) for f in payload.get("failed", ())),
+            elapsed=float(payload.get("elapsed", 0.0)),
+            stamp=float(payload.get("stamp", 0.0)),
+        )
+
+
+# --- repair requests to the executive (served by the task executor and the high level) ---
+#
+# The rule engine's actions call (each replies {"ok": true, ...} or {"ok": false, "error"}):
+#   executive/api/component/restart  {"name", "reason"}      restart; counts as a fault
+#   executive/api/component/fault    {"name", "reason"}      mark the component faulty
+#   executive/api/parameter/set      {"component", "key", "value"}
+#   executive/api/goal/add           {"expression", "priority", "source": "rule"}
+#   executive/api/<verb>             any payload (the "command" action)

@@ -8,11 +8,20 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-from executive.cli import component, kb, observe, run, validate, version
+from executive.cli import component, diagnose, kb, observe, rules, run, validate, version
 from knowledge.errors import DuraError
 
 # Each module has register(subparsers); its parsers set `run(args) -> int`.
-COMMANDS: tuple[ModuleType, ...] = (validate, kb, run, component, observe, version)
+COMMANDS: tuple[ModuleType, ...] = (
+    validate,
+    kb,
+    run,
+    component,
+    observe,
+    diagnose,
+    rules,
+    version,
+)
 
 
 class _Parser(argparse.ArgumentParser):
