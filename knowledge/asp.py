@@ -1,0 +1,294 @@
+"""The one adapter between dura and clingo: programs in, Python values out.
+
+Every use of ``clingo.Control`` in dura goes through :class:`Asp`. It loads programs
+from files or text under a source name, adds facts and externals, grounds parts and
+solves (optionally under a time bound and with assumptions). Models come back as
+:class:`Answer` objects holding plain Python values, and every clingo failure (a
+syntax error in a user's ``.lp`` file, an unsafe variable, a grounding error) becomes
+an :class:`~knowledge.errors.AspError` whose message starts with ``file:line:``.
+
+A theory (e.g. clingo-dl's difference constraints) plugs in through ``theory=``: its
+programs are rewritten by the theory as they are read, and it is prepared after each
+grounding.
+"""
+
+from __future__ import annotations
+
+import re
+import threading
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import clingo
+from clingo import ast
+from clingo.theory import Theory
+
+from knowledge.errors import AspError
+
+# Python value of a symbol: numbers, strings (constants and quoted strings alike),
+# tuples for tuples, and (name, args) for functions with arguments.
+Value = int | str | tuple["Value", ...]
+
+_LOCATION = re.compile(
+    r"^(?P<src>.*?):(?P<line>\d+):\d+(?:-\d+(?::\d+)?)?: (?P<kind>\w+): (?P<msg>.*)$"
+)
+
+
+def to_python(symbol: clingo.Symbol) -> Value:
+    """The Python value of a symbol (``f(a,1)`` becomes ``("f", "a", 1)``)."""
+    kind = symbol.type
+    if kind is clingo.SymbolType.Number:
+        return symbol.number
+    if kind is clingo.SymbolType.String:
+        return symbol.string
+    if kind is clingo.SymbolType.Function:
+        args = tuple(to_python(a) for a in symbol.arguments)
+        if not symbol.name:
+            return args
+        return (symbol.name, *args) if args else symbol.name
+    return str(symbol)  # #inf and #sup
+
+
+def to_symbol(value: object) -> clingo.Symbol:
+    """A symbol for a Python value: ints stay numbers, strings become quoted strings."""
+    if isinstance(value, bool):
+        raise TypeError("booleans have no ASP form")
+    if isinstance(value, int):
+        return clingo.Number(value)
+    if isinstance(value, str):
+        return clingo.String(value)
+    if isinstance(value, tuple):
+        return clingo.Tuple_([to_symbol(v) for v in value])
+    raise TypeError(f"no ASP form for {type(value).__name__}")
+
+
+def atom(name: str, *args: object) -> clingo.Symbol:
+    """The symbol ``name(args...)`` with the arguments converted by :func:`to_symbol`."""
+    return clingo.Function(name, [to_symbol(a) for a in args])
+
+
+def facts(atoms: Iterable[clingo.Symbol]) -> str:
+    """Program text with one fact per atom (symbols print as valid, escaped ASP)."""
+    return "".join(f"{a}.\n" for a in atoms)
+
+
+@dataclass(frozen=True)
+class Answer:
+    """One model: its shown atoms by predicate name, as argument tuples.
+
+    ``cost`` holds one sum per optimisation level, most important first; ``priority``
+    names each one's level (the ``@`` of the ``#minimize`` elements).
+    """
+
+    atoms: dict[str, list[tuple[Value, ...]]]
+    cost: tuple[int, ...] = ()
+    optimal: bool = False
+    priority: tuple[int, ...] = ()
+
+    def get(self, name: str) -> list[tuple[Value, ...]]:
+        return self.atoms.get(name, [])
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What one solve call found.
+
+    ``satisfiable`` is ``None`` when the call was cut off before it knew; ``exhausted``
+    says every model was enumerated; ``core`` names the assumptions that together
+    admit no model (an unsatisfiable call with assumptions only).
+    """
+
+    answers: list[Answer] = field(default_factory=list)
+    satisfiable: bool | None = None
+    exhausted: bool = False
+    interrupted: bool = False
+    core: list[clingo.Symbol] = field(default_factory=list)
+
+
+class Asp:
+    """A clingo control with dura's error handling.
+
+    Args:
+        arguments: clingo command-line options, e.g. ``["--heuristic=Domain"]``.
+        theory: a clingo theory (e.g. ``clingodl.ClingoDLTheory()``) the programs use.
+    """
+
+    def __init__(self, arguments: Sequence[str] = (), *, theory: Theory | None = None) -> None:
+        self._messages: list[str] = []
+        self._theory = theory
+        try:
+            self._control = clingo.Control(list(arguments), logger=self._log, message_limit=20)
+        except RuntimeError as e:
+            raise AspError(f"invalid clingo options {list(arguments)}: {e}") from e
+        if theory is not None:
+            theory.register(self._control)
+
+    def _log(self, code: clingo.MessageCode, message: str) -> None:
+        self._messages.append(message)
+
+    def _fail(self, what: str, error: Exception, source: str | None = None) -> AspError:
+        """An AspError naming the first located clingo message, else the error itself."""
+        lines = [line for m in self._messages for line in m.splitlines()]
+        if source is not None:
+            lines = [line.replace("<block>", source).replace("<string>", source) for line in lines]
+        self._messages.clear()
+        for i, line in enumerate(lines):
+            match = _LOCATION.match(line)
+            if match and match["kind"] == "error":
+                message = match["msg"].rstrip(":")
+                detail = " ".join(x.strip() for x in lines[i + 1 : i + 2] if not _LOCATION.match(x))
+                text = f"{message}: {detail}" if detail else message
+                return AspError(f"{match['src']}:{match['line']}: {text}")
+        detail = next((line for line in lines if line.strip()), str(error))
+        return AspError(f"{what}: {detail}")
+
+    # --- programs -------------------------------------------------------------------
+
+    def load(self, path: Path) -> None:
+        """Load a program file; errors name ``path:line``."""
+        if not path.is_file():
+            raise AspError(f"{path}: cannot read: no such file")
+        try:
+            if self._theory is None:
+                self._control.load(str(path))
+            else:
+                with ast.ProgramBuilder(self._control) as builder:
+                    rewrite = self._rewriter(self._theory, builder)
+                    ast.parse_files([str(path)], rewrite, logger=self._log)
+        except RuntimeError as e:
+            raise self._fail(str(path), e) from e
+
+    def add(
+        self,
+        text: str,
+        *,
+        part: str = "base",
+        params: Sequence[str] = (),
+        source: str = "<program>",
+    ) -> None:
+        """Add program text to a part; errors name ``source:line``."""
+        try:
+            if self._theory is None:
+                self._control.add(part, list(params), text)
+            else:
+                # on the first line, so that clingo's line numbers stay those of the text
+                head = f"#program {part}({','.join(params)}). " if params else f"#program {part}. "
+                with ast.ProgramBuilder(self._control) as builder:
+                    rewrite = self._rewriter(self._theory, builder)
+                    ast.parse_string(head + text, rewrite, logger=self._log)
+        except RuntimeError as e:
+            raise self._fail(source, e, source) from e
+
+    def add_facts(self, atoms: Iterable[clingo.Symbol], *, part: str = "base") -> None:
+        """Add facts to a part (fast: facts never need a theory's rewriting)."""
+        try:
+            self._control.add(part, [], facts(atoms))
+        except RuntimeError as e:
+            raise self._fail("facts", e, "<facts>") from e
+
+    @staticmethod
+    def _rewriter(theory: Theory, builder: ast.ProgramBuilder) -> Callable[[ast.AST], None]:
+        return lambda statement: theory.rewrite_ast(statement, builder.add)
+
+    def ground(self, parts: Sequence[tuple[str, Sequence[object]]] = (("base", ()),)) -> None:
+        """Ground program parts with their arguments (Python values)."""
+        try:
+            self._control.ground([(name, [to_symbol(a) for a in args]) for name, args in parts])
+            if self._theory is not None:
+                self._theory.prepare(self._control)
+        except RuntimeError as e:
+            raise self._fail("grounding", e, "<program>") from e
+
+    def assign_external(self, symbol: clingo.Symbol, value: bool | None) -> None:
+        """Set an external atom true, false, or free (``None``)."""
+        self._control.assign_external(symbol, value)
+
+    def has_atom(self, symbol: clingo.Symbol) -> bool:
+        """Whether the ground program mentions the atom."""
+        return symbol in self._control.symbolic_atoms
+
+    def set(self, option: str, value: str) -> None:
+        """Change a solver option between calls, e.g. ``set("solve.models", "0")``."""
+        group, _, key = option.rpartition(".")
+        config = self._control.configuration
+        for name in group.split(".") if group else ():
+            config = getattr(config, name)
+        setattr(config, key, value)
+
+    # --- solving --------------------------------------------------------------------
+
+    def solve(
+        self,
+        *,
+        assumptions: Sequence[tuple[clingo.Symbol, bool]] = (),
+        timeout: float | None = None,
+        on_answer: Callable[[Answer], bool | None] | None = None,
+        keep: bool = True,
+    ) -> Outcome:
+        """Solve; collect the models (all, or the last one when optimising).
+
+        Args:
+            assumptions: atoms fixed true or false for this call only.
+            timeout: seconds until the search is cancelled; ``None`` waits for the end.
+            on_answer: called with each model; return ``False`` to stop the search.
+            keep: keep every model in the outcome (else only the last).
+        """
+        answers: list[Answer] = []
+        stop = threading.Event()
+
+        def on_model(model: clingo.Model) -> bool:
+            answer = _answer(model)
+            if keep or not answers:
+                answers.append(answer)
+            else:
+                answers[-1] = answer
+            if on_answer is not None and on_answer(answer) is False:
+                stop.set()
+                return False
+            return True
+
+        core: list[int] = []
+        try:
+            with self._control.solve(
+                assumptions=list(assumptions), on_model=on_model, async_=True
+            ) as handle:
+                finished = handle.wait(timeout) if timeout is not None else handle.wait()
+                if not finished:
+                    handle.cancel()
+                result = handle.get()
+                if result.unsatisfiable and assumptions:
+                    core = list(handle.core())
+        except RuntimeError as e:
+            raise self._fail("solving", e) from e
+        interrupted = bool(result.interrupted) and not stop.is_set()
+        satisfiable: bool | None = None if result.unknown else bool(result.satisfiable)
+        if answers and satisfiable is None:
+            satisfiable = True
+        return Outcome(
+            answers=answers,
+            satisfiable=satisfiable,
+            exhausted=bool(result.exhausted),
+            interrupted=interrupted,
+            core=self._core_symbols(core, assumptions) if result.unsatisfiable else [],
+        )
+
+    def _core_symbols(
+        self, literals: list[int], assumptions: Sequence[tuple[clingo.Symbol, bool]]
+    ) -> list[clingo.Symbol]:
+        """The assumed atoms among a core's literals (a lookup each, not a scan of all atoms)."""
+        wanted = {abs(literal) for literal in literals}
+        atoms = self._control.symbolic_atoms
+        out: list[clingo.Symbol] = []
+        for symbol, _ in assumptions:
+            found = atoms[symbol]
+            if found is not None and found.literal in wanted:
+                out.append(symbol)
+        return out
+
+
+def _answer(model: clingo.Model) -> Answer:
+    atoms: dict[str, list[tuple[Value, ...]]] = {}
+    for symbol in model.symbols(shown=True):
+        atoms.setdefault(symbol.name, []).append(tuple(to_python(a) for a in symbol.arguments))
+    return Answer(atoms, tuple(model.cost), bool(model.optimality_proven), tuple(model.priority))
