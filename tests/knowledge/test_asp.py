@@ -48,7 +48,7 @@ def test_program_text_for_a_theory_keeps_its_line_numbers() -> None:
 
 def test_facts_are_added_without_the_theory_and_ground_with_the_program() -> None:
     asp = Asp(theory=ClingoDLTheory())  # type: ignore[no-untyped-call]
-    asp.add_facts([atom("duration", "a quoted \"name\"", 3)])
+    asp.add_facts([atom("duration", 'a quoted "name"', 3)])
     asp.add("&diff{ s(X) - 0 } <= D :- duration(X,D).\n#show duration/2.")
     asp.ground()
     assert asp.solve().answers[0].get("duration") == [('a quoted "name"', 3)]

@@ -1,0 +1,353 @@
+"""The scheduler: system configurations for all requests, placed in time, by clingo.
+
+Each call grounds ``schedule.lp`` with the robot's functionalities and the current
+requests and solves it with clingo-dl (difference constraints for start times) under
+a time limit, keeping the best schedule found. The solver chooses the providers and
+the order of the requests that cannot overlap; the start times are then the earliest
+that this order, the release times and the start-together groups allow.
+
+A request that cannot be scheduled is cancelled with a reason: a capability without
+a usable provider, a deadline its own duration cannot meet, a start-together partner
+that cannot run, or the scheduled requests it conflicts with (an unsatisfiable core
+of the assumption that it runs alongside them, from the same ground program).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Collection, Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import clingo
+import networkx as nx
+from clingodl import ClingoDLTheory
+
+from executive.availability import Availability
+from executive.schedule import Assignment, Request, ScheduleResult, ScheduleStatus
+from knowledge.asp import Answer, Asp, atom
+from knowledge.description import Functionality
+
+PROGRAM = Path(__file__).with_name("schedule.lp")
+# Core-guided optimisation proves optimality fast; the domain heuristic (schedule
+# everything, keep current and best-rated providers, first come first served) makes
+# the first model a good one, which matters when the time limit cuts the search.
+OPTIONS = ("--opt-strategy=usc", "--opt-usc-shrink=rgs", "--heuristic=Domain", "--models=0")
+RATING_SCALE = 100  # ratings are floats; the optimisation needs integers
+# the optimisation levels of schedule.lp, most important first
+COSTS = {
+    6: "running_cancelled",  # running tasks that lost their configuration
+    5: "changes",  # providers changed in running configurations
+    4: "cancelled",  # waiting requests not scheduled
+    3: "rating_loss",  # rating given up against the best usable providers (x100)
+    2: "serialised",  # pairs of requests that run one after the other
+    1: "started",  # functionalities to start that do not run yet
+    0: "out_of_order",  # pairs served against first come, first served
+}
+_EPSILON = 1e-9  # seconds that are a whole number of ticks stay that number
+
+
+class Scheduler:
+    """Schedules requests on a robot's functionalities.
+
+    Args:
+        functionalities: the robot's functionalities, with the ratings the knowledge
+            base holds (``dataclasses.replace(f, rating=...)``).
+        time_limit: seconds the solver may search for better schedules; explaining
+            cancelled requests may take another quarter of it.
+        resolution: seconds per tick of the solver's clock.
+    """
+
+    def __init__(
+        self,
+        functionalities: Iterable[Functionality],
+        *,
+        time_limit: float = 1.0,
+        resolution: float = 0.1,
+    ) -> None:
+        self.functionalities = {f.name: f for f in functionalities}
+        self.time_limit = time_limit
+        self.resolution = resolution
+
+    def schedule(
+        self, requests: Sequence[Request], *, faulty: Collection[str] = ()
+    ) -> ScheduleResult:
+        """Schedule every request it can; cancel the others with a reason.
+
+        Args:
+            requests: running tasks and waiting requests, in the order they came.
+            faulty: the permanently faulty components.
+
+        Raises:
+            ValueError: two requests share an id.
+        """
+        began = time.perf_counter()
+        ids = [r.id for r in requests]
+        if len(set(ids)) != len(ids):
+            raise ValueError(f"request ids are not unique: {ids}")
+        availability = Availability.of(self.functionalities.values(), faulty)
+        cancelled = _precheck(requests, availability, faulty)
+        instance = _Instance.of([r for r in requests if r.id not in cancelled], self.resolution)
+        asp = Asp(OPTIONS, theory=ClingoDLTheory())  # type: ignore[no-untyped-call]
+        asp.load(PROGRAM)
+        asp.add_facts(self._facts(instance, availability))
+        asp.ground()
+        outcome = asp.solve(timeout=self.time_limit, keep=False)
+        if not outcome.answers:
+            return ScheduleResult(
+                ScheduleStatus.TIMEOUT, cancelled=cancelled, solve_time=time.perf_counter() - began
+            )
+        answer = outcome.answers[-1]
+        scheduled = {str(t) for (t,) in answer.get("scheduled")}
+        explanation = _Explanation(asp, instance, availability, answer, self.time_limit / 4)
+        for request_id in sorted(instance.requests.keys() - scheduled, key=ids.index):
+            cancelled[request_id] = explanation.why(request_id, scheduled)
+        cost = dict.fromkeys(COSTS.values(), 0)
+        cost.update((COSTS[p], c) for p, c in zip(answer.priority, answer.cost, strict=True))
+        return ScheduleResult(
+            ScheduleStatus.OPTIMAL if outcome.exhausted else ScheduleStatus.FEASIBLE,
+            assignments=_assignments(instance, answer, scheduled),
+            cancelled={i: cancelled[i] for i in ids if i in cancelled},
+            cost=cost,
+            solve_time=time.perf_counter() - began,
+        )
+
+    def _facts(self, instance: _Instance, availability: Availability) -> list[clingo.Symbol]:
+        out: list[clingo.Symbol] = []
+        for f in self.functionalities.values():
+            out += [
+                atom("functionality", f.name),
+                atom("rating", f.name, round(f.rating * RATING_SCALE)),
+            ]
+            out += [atom("provides", f.name, c) for c in f.provides]
+            out += [atom("requires", f.name, c) for c in f.requires]
+            out += [atom("exclusive", f.name)] if not f.shareable else []
+            out += [atom("usable", f.name)] if f.name in availability.usable else []
+        # first come, first served: by release time, then by arrival
+        arrival = list(instance.requests)
+        ranked = sorted(arrival, key=lambda t: (instance.release[t], arrival.index(t)))
+        active: set[str] = set()
+        for rank, t in enumerate(ranked):
+            r = instance.requests[t]
+            out += [
+                atom("request", t),
+                atom("behavior", t, r.behavior),
+                atom("rank", t, rank),
+                atom("duration", t, instance.duration[t]),
+                atom("release", t, instance.release[t]),
+            ]
+            out += [atom("needs", t, c) for c in r.needs]
+            out += [atom("together", t, u) for u in r.together]
+            out += [atom("together", u, t) for u in r.together]
+            if t in instance.deadline:
+                out.append(atom("deadline", t, instance.deadline[t]))
+            if r.running:
+                out.append(atom("running", t))
+                out += [atom("current", t, c, f) for c, f in r.configuration.items()]
+                active.update(r.configuration.values())
+        out += [atom("active", f) for f in sorted(active)]
+        return out
+
+
+@dataclass(frozen=True)
+class _Instance:
+    """The requests the solver sees, their times in ticks."""
+
+    tick: float
+    requests: dict[str, Request]
+    duration: dict[str, int]
+    release: dict[str, int]
+    deadline: dict[str, int]  # waiting requests only: a running task just runs
+
+    @classmethod
+    def of(cls, requests: Sequence[Request], tick: float) -> _Instance:
+        return cls(
+            tick=tick,
+            requests={r.id: r for r in requests},
+            duration={r.id: max(1, math.ceil(r.duration / tick - _EPSILON)) for r in requests},
+            release={
+                r.id: 0 if r.running else math.ceil(r.earliest / tick - _EPSILON) for r in requests
+            },
+            deadline={
+                r.id: math.floor(r.deadline / tick + _EPSILON)
+                for r in requests
+                if r.deadline is not None and not r.running
+            },
+        )
+
+
+def _precheck(
+    requests: Sequence[Request], availability: Availability, faulty: Collection[str]
+) -> dict[str, str]:
+    """Reasons for the requests that cannot run, whatever the others do."""
+    cancelled: dict[str, str] = {}
+    known = {r.id for r in requests}
+    for r in requests:
+        missing = [c for c in r.needs if not availability.available(c)]
+        unknown = [t for t in r.together if t not in known]
+        if r.behavior in faulty:
+            cancelled[r.id] = f"behavior {r.behavior} is permanently faulty"
+        elif missing:
+            cancelled[r.id] = availability.explain(missing[0])
+        elif r.deadline is not None and r.earliest + r.duration > r.deadline:
+            cancelled[r.id] = (
+                f"deadline {r.deadline:g} s cannot be met: earliest start {r.earliest:g} s"
+                f" + expected duration {r.duration:g} s"
+            )
+        elif unknown:
+            cancelled[r.id] = f"must start together with unknown request '{unknown[0]}'"
+    # a partner that cannot run takes its whole start-together group with it
+    changed = True
+    while changed:
+        changed = False
+        for r in requests:
+            partner = next((t for t in r.together if t in cancelled), None)
+            if partner is not None and r.id not in cancelled:
+                cancelled[r.id] = (
+                    f"must start together with '{partner}', which cannot be scheduled:"
+                    f" {cancelled[partner]}"
+                )
+                changed = True
+    return cancelled
+
+
+def _assignments(instance: _Instance, answer: Answer, scheduled: set[str]) -> dict[str, Assignment]:
+    """The earliest starts that respect the chosen order, release times and groups.
+
+    Start-together groups move as one; the order between groups has no cycle (the
+    solver's difference constraints would have failed), so one pass in topological
+    order gives the least solution, which meets every deadline the solver met.
+    """
+    groups: nx.Graph = nx.Graph()
+    groups.add_nodes_from(scheduled)
+    groups.add_edges_from((t, u) for t in scheduled for u in instance.requests[t].together)
+    group_of = {t: i for i, members in enumerate(nx.connected_components(groups)) for t in members}
+    after: dict[str, set[str]] = {t: set() for t in scheduled}
+    order: nx.DiGraph = nx.DiGraph()
+    order.add_nodes_from(set(group_of.values()))
+    for first, then in answer.get("before"):
+        after[str(then)].add(str(first))
+        order.add_edge(group_of[str(first)], group_of[str(then)])
+    start: dict[int, int] = {}
+    for group in nx.topological_sort(order):
+        members = [t for t in scheduled if group_of[t] == group]
+        start[group] = max(
+            [instance.release[t] for t in members]
+            + [start[group_of[p]] + instance.duration[p] for t in members for p in after[t]]
+        )
+    providers: dict[str, dict[str, str]] = {t: {} for t in scheduled}
+    for t, c, f in answer.get("use"):
+        providers[str(t)][str(c)] = str(f)
+    tick = instance.tick
+    arrival = list(instance.requests)
+    out = sorted(
+        (
+            Assignment(
+                request=t,
+                start=start[group_of[t]] * tick,
+                end=start[group_of[t]] * tick + instance.requests[t].duration,
+                providers=dict(sorted(providers[t].items())),
+                after=frozenset(after[t]),
+            )
+            for t in scheduled
+        ),
+        key=lambda a: (a.start, arrival.index(a.request)),
+    )
+    return {a.request: a for a in out}
+
+
+class _Explanation:
+    """Why the solver left requests out, from unsatisfiable cores on the ground program."""
+
+    def __init__(
+        self,
+        asp: Asp,
+        instance: _Instance,
+        availability: Availability,
+        answer: Answer,
+        budget: float,
+    ) -> None:
+        self.asp = asp
+        self.instance = instance
+        self.availability = availability
+        self.answer = answer
+        self.until = time.perf_counter() + budget
+        asp.set("solve.opt_mode", "ignore")  # from now on: is there any model at all?
+
+    def why(self, request_id: str, scheduled: set[str]) -> str:
+        """The scheduled requests it conflicts with, and over what."""
+        core = self._core(request_id, scheduled)
+        if core is None:
+            return "no schedule with it found within the time limit"
+        requests = self.instance.requests
+        request = requests[request_id]
+        wanted = self._could_hold(request)
+        if not core:
+            # it cannot run even alone: its start-together group cannot start at once
+            partners = _names(requests, request.together)
+            shared = set().union(*(self._could_hold(requests[t]) for t in request.together))
+            return f"cannot start at the same time as {partners}" + _over(
+                wanted & shared, len(request.together)
+            )
+        held = {requests[t].behavior for t in core} | {
+            str(f)
+            for t, _, f in self.answer.get("use")
+            if t in core and not self.availability.functionalities[str(f)].shareable
+        }
+        others = f"{_names(requests, core)}{_over(wanted & held, len(core))}"
+        if request.deadline is not None:
+            return f"cannot end by its deadline {request.deadline:g} s next to {others}"
+        return f"cannot run next to {others}"
+
+    def _core(self, request_id: str, scheduled: set[str]) -> list[str] | None:
+        """A minimal set of scheduled requests it cannot run with (None: not found in time).
+
+        Shrinks the solver's core by dropping each member the others do not need.
+        """
+        core = self._unsatisfiable(request_id, sorted(scheduled))
+        if core is None:
+            return None
+        for t in list(core):
+            smaller = self._unsatisfiable(request_id, [u for u in core if u != t])
+            if smaller is not None:
+                core = [u for u in core if u in smaller]
+        arrival = list(self.instance.requests)
+        return sorted(core, key=arrival.index)
+
+    def _unsatisfiable(self, request_id: str, others: list[str]) -> list[str] | None:
+        """The others in a core of "it runs with these", or None if it can (or time is up)."""
+        left = self.until - time.perf_counter()
+        if left <= 0:
+            return None
+        assumptions = [(atom("scheduled", t), True) for t in [*others, request_id]]
+        outcome = self.asp.solve(assumptions=assumptions, timeout=left)
+        if outcome.satisfiable is not False:
+            return None
+        return [s.arguments[0].string for s in outcome.core if s.arguments[0].string != request_id]
+
+    def _could_hold(self, request: Request) -> set[str]:
+        """Its behavior and every non-shareable functionality a configuration of it may have."""
+        out = {request.behavior}
+        todo, seen = list(request.needs), set(request.needs)
+        while todo:
+            for f in self.availability.providers(todo.pop()):
+                if f.name not in self.availability.usable:
+                    continue
+                if not f.shareable:
+                    out.add(f.name)
+                fresh = set(f.requires) - seen
+                seen |= fresh
+                todo += fresh
+        return out
+
+
+def _names(requests: dict[str, Request], ids: Iterable[str]) -> str:
+    return ", ".join(f"'{t}' (running)" if requests[t].running else f"'{t}'" for t in ids)
+
+
+def _over(resources: set[str], others: int) -> str:
+    if not resources:
+        return ""
+    everyone = "both" if others == 1 else "all"
+    return f": {everyone} need {', '.join(sorted(resources))}, which serve one task at a time"
