@@ -6,10 +6,8 @@ a time limit, keeping the best schedule found. The solver chooses the providers 
 the order of the requests that cannot overlap; the start times are then the earliest
 that this order, the release times and the start-together groups allow.
 
-A request that cannot be scheduled is cancelled with a reason: a capability without
-a usable provider, a deadline its own duration cannot meet, a start-together partner
-that cannot run, or the scheduled requests it conflicts with (an unsatisfiable core
-of the assumption that it runs alongside them, from the same ground program).
+A request that cannot be scheduled is cancelled with a reason
+(``executive/cancellation.py``).
 """
 
 from __future__ import annotations
@@ -25,6 +23,7 @@ import networkx as nx
 from clingodl import ClingoDLTheory
 
 from executive.availability import Availability
+from executive.cancellation import explain, precheck
 from executive.schedule import Assignment, Request, ScheduleResult, ScheduleStatus
 from knowledge.asp import Answer, Asp, atom
 from knowledge.description import Functionality
@@ -54,8 +53,8 @@ class Scheduler:
     Args:
         functionalities: the robot's functionalities, with the ratings the knowledge
             base holds (``dataclasses.replace(f, rating=...)``).
-        time_limit: seconds the solver may search for better schedules; explaining
-            cancelled requests may take another quarter of it.
+        time_limit: seconds one schedule may take, grounding included; the search then
+            stops with the best schedule found.
         resolution: seconds per tick of the solver's clock.
     """
 
@@ -87,27 +86,28 @@ class Scheduler:
         if len(set(ids)) != len(ids):
             raise ValueError(f"request ids are not unique: {ids}")
         availability = Availability.of(self.functionalities.values(), faulty)
-        cancelled = _precheck(requests, availability, faulty)
+        cancelled = precheck(requests, availability, faulty)
         instance = _Instance.of([r for r in requests if r.id not in cancelled], self.resolution)
         asp = Asp(OPTIONS, theory=ClingoDLTheory())  # type: ignore[no-untyped-call]
         asp.load(PROGRAM)
         asp.add_facts(self._facts(instance, availability))
         asp.ground()
-        outcome = asp.solve(timeout=self.time_limit, keep=False)
+        left = self.time_limit - (time.perf_counter() - began)
+        outcome = asp.solve(timeout=max(left, 0.0), keep=False)
         if not outcome.answers:
             return ScheduleResult(
                 ScheduleStatus.TIMEOUT, cancelled=cancelled, solve_time=time.perf_counter() - began
             )
         answer = outcome.answers[-1]
         scheduled = {str(t) for (t,) in answer.get("scheduled")}
-        explanation = _Explanation(asp, instance, availability, answer, self.time_limit / 4)
-        for request_id in sorted(instance.requests.keys() - scheduled, key=ids.index):
-            cancelled[request_id] = explanation.why(request_id, scheduled)
+        assignments = _assignments(instance, answer, scheduled)
+        left_out = sorted(instance.requests.keys() - scheduled, key=ids.index)
+        cancelled.update(explain(left_out, instance.requests, assignments, availability))
         cost = dict.fromkeys(COSTS.values(), 0)
         cost.update((COSTS[p], c) for p, c in zip(answer.priority, answer.cost, strict=True))
         return ScheduleResult(
             ScheduleStatus.OPTIMAL if outcome.exhausted else ScheduleStatus.FEASIBLE,
-            assignments=_assignments(instance, answer, scheduled),
+            assignments=assignments,
             cancelled={i: cancelled[i] for i in ids if i in cancelled},
             cost=cost,
             solve_time=time.perf_counter() - began,
@@ -177,41 +177,6 @@ class _Instance:
         )
 
 
-def _precheck(
-    requests: Sequence[Request], availability: Availability, faulty: Collection[str]
-) -> dict[str, str]:
-    """Reasons for the requests that cannot run, whatever the others do."""
-    cancelled: dict[str, str] = {}
-    known = {r.id for r in requests}
-    for r in requests:
-        missing = [c for c in r.needs if not availability.available(c)]
-        unknown = [t for t in r.together if t not in known]
-        if r.behavior in faulty:
-            cancelled[r.id] = f"behavior {r.behavior} is permanently faulty"
-        elif missing:
-            cancelled[r.id] = availability.explain(missing[0])
-        elif r.deadline is not None and r.earliest + r.duration > r.deadline:
-            cancelled[r.id] = (
-                f"deadline {r.deadline:g} s cannot be met: earliest start {r.earliest:g} s"
-                f" + expected duration {r.duration:g} s"
-            )
-        elif unknown:
-            cancelled[r.id] = f"must start together with unknown request '{unknown[0]}'"
-    # a partner that cannot run takes its whole start-together group with it
-    changed = True
-    while changed:
-        changed = False
-        for r in requests:
-            partner = next((t for t in r.together if t in cancelled), None)
-            if partner is not None and r.id not in cancelled:
-                cancelled[r.id] = (
-                    f"must start together with '{partner}', which cannot be scheduled:"
-                    f" {cancelled[partner]}"
-                )
-                changed = True
-    return cancelled
-
-
 def _assignments(instance: _Instance, answer: Answer, scheduled: set[str]) -> dict[str, Assignment]:
     """The earliest starts that respect the chosen order, release times and groups.
 
@@ -255,99 +220,3 @@ def _assignments(instance: _Instance, answer: Answer, scheduled: set[str]) -> di
         key=lambda a: (a.start, arrival.index(a.request)),
     )
     return {a.request: a for a in out}
-
-
-class _Explanation:
-    """Why the solver left requests out, from unsatisfiable cores on the ground program."""
-
-    def __init__(
-        self,
-        asp: Asp,
-        instance: _Instance,
-        availability: Availability,
-        answer: Answer,
-        budget: float,
-    ) -> None:
-        self.asp = asp
-        self.instance = instance
-        self.availability = availability
-        self.answer = answer
-        self.until = time.perf_counter() + budget
-        asp.set("solve.opt_mode", "ignore")  # from now on: is there any model at all?
-
-    def why(self, request_id: str, scheduled: set[str]) -> str:
-        """The scheduled requests it conflicts with, and over what."""
-        core = self._core(request_id, scheduled)
-        if core is None:
-            return "no schedule with it found within the time limit"
-        requests = self.instance.requests
-        request = requests[request_id]
-        wanted = self._could_hold(request)
-        if not core:
-            # it cannot run even alone: its start-together group cannot start at once
-            partners = _names(requests, request.together)
-            shared = set().union(*(self._could_hold(requests[t]) for t in request.together))
-            return f"cannot start at the same time as {partners}" + _over(
-                wanted & shared, len(request.together)
-            )
-        held = {requests[t].behavior for t in core} | {
-            str(f)
-            for t, _, f in self.answer.get("use")
-            if t in core and not self.availability.functionalities[str(f)].shareable
-        }
-        others = f"{_names(requests, core)}{_over(wanted & held, len(core))}"
-        if request.deadline is not None:
-            return f"cannot end by its deadline {request.deadline:g} s next to {others}"
-        return f"cannot run next to {others}"
-
-    def _core(self, request_id: str, scheduled: set[str]) -> list[str] | None:
-        """A minimal set of scheduled requests it cannot run with (None: not found in time).
-
-        Shrinks the solver's core by dropping each member the others do not need.
-        """
-        core = self._unsatisfiable(request_id, sorted(scheduled))
-        if core is None:
-            return None
-        for t in list(core):
-            smaller = self._unsatisfiable(request_id, [u for u in core if u != t])
-            if smaller is not None:
-                core = [u for u in core if u in smaller]
-        arrival = list(self.instance.requests)
-        return sorted(core, key=arrival.index)
-
-    def _unsatisfiable(self, request_id: str, others: list[str]) -> list[str] | None:
-        """The others in a core of "it runs with these", or None if it can (or time is up)."""
-        left = self.until - time.perf_counter()
-        if left <= 0:
-            return None
-        assumptions = [(atom("scheduled", t), True) for t in [*others, request_id]]
-        outcome = self.asp.solve(assumptions=assumptions, timeout=left)
-        if outcome.satisfiable is not False:
-            return None
-        return [s.arguments[0].string for s in outcome.core if s.arguments[0].string != request_id]
-
-    def _could_hold(self, request: Request) -> set[str]:
-        """Its behavior and every non-shareable functionality a configuration of it may have."""
-        out = {request.behavior}
-        todo, seen = list(request.needs), set(request.needs)
-        while todo:
-            for f in self.availability.providers(todo.pop()):
-                if f.name not in self.availability.usable:
-                    continue
-                if not f.shareable:
-                    out.add(f.name)
-                fresh = set(f.requires) - seen
-                seen |= fresh
-                todo += fresh
-        return out
-
-
-def _names(requests: dict[str, Request], ids: Iterable[str]) -> str:
-    return ", ".join(f"'{t}' (running)" if requests[t].running else f"'{t}'" for t in ids)
-
-
-def _over(resources: set[str], others: int) -> str:
-    if not resources:
-        return ""
-    everyone = "both" if others == 1 else "all"
-    return f": {everyone} need {', '.join(sorted(resources))}, which serve one task at a time"

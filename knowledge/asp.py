@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import re
 import threading
+import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -230,10 +231,12 @@ class Asp:
 
         Args:
             assumptions: atoms fixed true or false for this call only.
-            timeout: seconds until the search is cancelled; ``None`` waits for the end.
+            timeout: seconds from this call until the search is cancelled; ``None``
+                waits for the end.
             on_answer: called with each model; return ``False`` to stop the search.
             keep: keep every model in the outcome (else only the last).
         """
+        until = time.monotonic() + (timeout or 0.0)
         answers: list[Answer] = []
         stop = threading.Event()
 
@@ -253,7 +256,10 @@ class Asp:
             with self._control.solve(
                 assumptions=list(assumptions), on_model=on_model, async_=True
             ) as handle:
-                finished = handle.wait(timeout) if timeout is not None else handle.wait()
+                if timeout is None:
+                    finished = handle.wait()
+                else:  # the solver's preprocessing before the handle returns counts too
+                    finished = handle.wait(max(0.0, until - time.monotonic()))
                 if not finished:
                     handle.cancel()
                 result = handle.get()

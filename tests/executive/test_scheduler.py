@@ -34,7 +34,8 @@ def move_to(request_id: str, **constraints: Any) -> Request:
 
 
 def take_picture(request_id: str, **constraints: Any) -> Request:
-    return request(usecase()[1]["take_picture"], request_id, duration=2.0, **constraints)
+    constraints.setdefault("duration", 2.0)
+    return request(usecase()[1]["take_picture"], request_id, **constraints)
 
 
 def assert_valid(
@@ -64,6 +65,12 @@ def assert_valid(
             assert a.end <= r.deadline + 1e-9
         for partner in r.together:
             assert result.assignments[partner].start == a.start
+        # as early as its order allows: at its release, or when a predecessor (of its
+        # start-together group) ends
+        group = [a, *(result.assignments[p] for p in r.together)]
+        bounds = [by_id[g.request].earliest for g in group]
+        bounds += [result.assignments[p].end for g in group for p in g.after]
+        assert a.start == pytest.approx(max(bounds), abs=0.1)
     for a, b in itertools.combinations(result.assignments.values(), 2):
         held_a = {by_id[a.request].behavior} | {
             f for f in a.functionalities if not by_name[f].shareable
@@ -173,8 +180,7 @@ def test_a_deadline_a_running_task_makes_unreachable_cancels_the_request_and_nam
     result = scheduler().schedule(requests)
     assert set(result.assignments) == {"1"}
     assert result.cancelled == {
-        "2": "cannot end by its deadline 15 s next to '1' (running): "
-        "both need move_to, robot_base, which serve one task at a time"
+        "2": "cannot end by its deadline 15 s: '1' (running) holds move_to, robot_base from 0 to 10 s"
     }
 
 
@@ -194,10 +200,36 @@ def test_of_two_requests_that_only_fit_one_at_a_time_before_their_deadlines_one_
     ((dropped, reason),) = result.cancelled.items()
     kept = next(iter(result.assignments))
     assert reason == (
-        f"cannot end by its deadline 15 s next to '{kept}': "
-        "both need move_to, robot_base, which serve one task at a time"
+        f"cannot end by its deadline 15 s: '{kept}' holds move_to, robot_base from 0 to 10 s"
     )
     assert dropped != kept
+
+
+def test_a_cancellation_names_every_request_in_the_way_up_to_four() -> None:
+    requests = [move_to(f"m{i}", deadline=40.0) for i in range(7)]
+    result = scheduler().schedule(requests)
+    assert list(result.assignments) == ["m0", "m1", "m2", "m3"]
+    assert result.cancelled["m4"] == (
+        "cannot end by its deadline 40 s: '"
+        "m0' holds move_to, robot_base from 0 to 10 s; 'm1' holds move_to, robot_base from 10 to"
+        " 20 s; 'm2' holds move_to, robot_base from 20 to 30 s; 'm3' holds move_to, robot_base"
+        " from 30 to 40 s"
+    )
+
+
+def test_a_cancellation_names_only_what_stands_in_the_way_within_the_deadline() -> None:
+    requests = [
+        move_to("1", running=True, configuration=LIDAR, duration=30.0),
+        take_picture("2"),
+        take_picture("3", deadline=1.5),  # shorter than its duration: never
+        move_to("4", deadline=20.0),
+    ]
+    result = scheduler().schedule(requests)
+    assert result.cancelled == {
+        "3": "deadline 1.5 s cannot be met: earliest start 0 s + expected duration 2 s",
+        "4": "cannot end by its deadline 20 s: '1' (running) holds move_to, robot_base"
+        " from 0 to 30 s",
+    }
 
 
 def test_requests_that_start_together_start_at_the_same_time() -> None:
@@ -213,6 +245,20 @@ def test_a_start_together_partner_that_cannot_run_takes_its_partner_with_it() ->
         "1": "must start together with '2', which cannot be scheduled: "
         "no provider for capability 'camera': cam is permanently faulty",
         "2": "no provider for capability 'camera': cam is permanently faulty",
+    }
+
+
+def test_a_start_together_partner_that_misses_its_deadline_takes_its_partner_with_it() -> None:
+    requests = [
+        take_picture("0", running=True, configuration={"camera": "cam"}, duration=30.0),
+        move_to("1", together=("2",)),
+        take_picture("2", together=("1",), deadline=10.0),
+    ]
+    result = scheduler().schedule(requests)
+    blocked = "cannot end by its deadline 10 s: '0' (running) holds take_picture from 0 to 30 s"
+    assert result.cancelled == {
+        "1": f"must start together with '2', which cannot be scheduled: {blocked}",
+        "2": blocked,
     }
 
 
@@ -259,10 +305,7 @@ def test_running_tasks_that_can_no_longer_both_run_lose_one_of_them() -> None:
     assert len(result.assignments) == 1
     ((dropped, reason),) = result.cancelled.items()
     kept = "2" if dropped == "1" else "1"
-    assert reason == (
-        f"cannot run next to '{kept}' (running): "
-        "both need cam_to_lidar, which serve one task at a time"
-    )
+    assert reason == f"cannot keep running: '{kept}' (running) holds cam_to_lidar from 0 to 10 s"
     assert result.cost["running_cancelled"] == 1
 
 
@@ -367,3 +410,25 @@ def test_a_tight_time_limit_still_gives_a_valid_schedule_or_none() -> None:
     )
     if result.status is not ScheduleStatus.TIMEOUT:
         assert_valid(problem.functionalities, problem.requests, problem.faulty, result)
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(size=st.integers(1, 10), seed=st.integers(0, 10**6))
+def test_a_schedule_that_started_keeps_its_configurations_when_nothing_changes(
+    size: int, seed: int
+) -> None:
+    problem = generate(size, seed)
+    sched = Scheduler(problem.functionalities, time_limit=0.3)
+    first = sched.schedule(problem.requests, faulty=problem.faulty)
+    by_id = {r.id: r for r in problem.requests}
+    started = [
+        dataclasses.replace(by_id[a.request], running=True, configuration=a.providers, together=())
+        for a in first.assignments.values()
+        if a.start == 0
+    ]
+    again = sched.schedule(started, faulty=problem.faulty)
+    assert again.cancelled == {}
+    assert again.cost["changes"] == 0
+    assert {a.request: a.providers for a in again.assignments.values()} == {
+        r.id: r.configuration for r in started
+    }
