@@ -125,8 +125,8 @@ class Scheduler:
             out += [atom("exclusive", f.name)] if not f.shareable else []
             out += [atom("usable", f.name)] if f.name in availability.usable else []
         # first come, first served: by release time, then by arrival
-        arrival = list(instance.requests)
-        ranked = sorted(arrival, key=lambda t: (instance.release[t], arrival.index(t)))
+        arrival = {t: i for i, t in enumerate(instance.requests)}
+        ranked = sorted(arrival, key=lambda t: (instance.release[t], arrival[t]))
         active: set[str] = set()
         for rank, t in enumerate(ranked):
             r = instance.requests[t]
@@ -187,36 +187,35 @@ def _assignments(instance: _Instance, answer: Answer, scheduled: set[str]) -> di
     groups: nx.Graph = nx.Graph()
     groups.add_nodes_from(scheduled)
     groups.add_edges_from((t, u) for t in scheduled for u in instance.requests[t].together)
-    group_of = {t: i for i, members in enumerate(nx.connected_components(groups)) for t in members}
+    members = [sorted(group) for group in nx.connected_components(groups)]
+    group_of = {t: i for i, group in enumerate(members) for t in group}
     after: dict[str, set[str]] = {t: set() for t in scheduled}
     order: nx.DiGraph = nx.DiGraph()
-    order.add_nodes_from(set(group_of.values()))
+    order.add_nodes_from(range(len(members)))
     for first, then in answer.get("before"):
         after[str(then)].add(str(first))
         order.add_edge(group_of[str(first)], group_of[str(then)])
     start: dict[int, int] = {}
     for group in nx.topological_sort(order):
-        members = [t for t in scheduled if group_of[t] == group]
         start[group] = max(
-            [instance.release[t] for t in members]
-            + [start[group_of[p]] + instance.duration[p] for t in members for p in after[t]]
+            [instance.release[t] for t in members[group]]
+            + [start[group_of[p]] + instance.duration[p] for t in members[group] for p in after[t]]
         )
     providers: dict[str, dict[str, str]] = {t: {} for t in scheduled}
     for t, c, f in answer.get("use"):
         providers[str(t)][str(c)] = str(f)
-    tick = instance.tick
-    arrival = list(instance.requests)
-    out = sorted(
-        (
+    arrival = {t: i for i, t in enumerate(instance.requests)}
+    out = []
+    for t in scheduled:
+        begin = round(start[group_of[t]] * instance.tick, 9)
+        out.append(
             Assignment(
                 request=t,
-                start=start[group_of[t]] * tick,
-                end=start[group_of[t]] * tick + instance.requests[t].duration,
+                start=begin,
+                end=begin + instance.requests[t].duration,
                 providers=dict(sorted(providers[t].items())),
                 after=frozenset(after[t]),
             )
-            for t in scheduled
-        ),
-        key=lambda a: (a.start, arrival.index(a.request)),
-    )
+        )
+    out.sort(key=lambda a: (a.start, arrival[a.request]))
     return {a.request: a for a in out}
