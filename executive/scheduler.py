@@ -33,6 +33,10 @@ PROGRAM = Path(__file__).with_name("schedule.lp")
 # everything, keep current and best-rated providers, first come first served) makes
 # the first model a good one, which matters when the time limit cuts the search.
 OPTIONS = ("--opt-strategy=usc", "--opt-usc-shrink=rgs", "--heuristic=Domain", "--models=0")
+# With no schedule at the time limit, wait for the first one up to this many limits.
+# (Dropping every request is always a schedule; with hundreds of requests the first
+# one may take longer than the limit.)
+FIRST_SCHEDULE_GRACE = 10
 RATING_SCALE = 100  # ratings are floats; the optimisation needs integers
 # the optimisation levels of schedule.lp, most important first
 COSTS = {
@@ -54,7 +58,8 @@ class Scheduler:
         functionalities: the robot's functionalities, with the ratings the knowledge
             base holds (``dataclasses.replace(f, rating=...)``).
         time_limit: seconds one schedule may take, grounding included; the search then
-            stops with the best schedule found.
+            stops with the best schedule found (or with the first one found later,
+            see ``FIRST_SCHEDULE_GRACE``).
         resolution: seconds per tick of the solver's clock.
     """
 
@@ -93,7 +98,8 @@ class Scheduler:
         asp.add_facts(self._facts(instance, availability))
         asp.ground()
         left = self.time_limit - (time.perf_counter() - began)
-        outcome = asp.solve(timeout=max(left, 0.0), keep=False)
+        grace = self.time_limit * (FIRST_SCHEDULE_GRACE - 1)
+        outcome = asp.solve(timeout=max(left, 0.0), grace=grace, keep=False)
         if not outcome.answers:
             return ScheduleResult(
                 ScheduleStatus.TIMEOUT, cancelled=cancelled, solve_time=time.perf_counter() - began

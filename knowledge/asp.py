@@ -224,6 +224,7 @@ class Asp:
         *,
         assumptions: Sequence[tuple[clingo.Symbol, bool]] = (),
         timeout: float | None = None,
+        grace: float = 0.0,
         on_answer: Callable[[Answer], bool | None] | None = None,
         keep: bool = True,
     ) -> Outcome:
@@ -233,12 +234,15 @@ class Asp:
             assumptions: atoms fixed true or false for this call only.
             timeout: seconds from this call until the search is cancelled; ``None``
                 waits for the end.
+            grace: seconds more to wait for a first model if the timeout passes
+                without one; that model then ends the search.
             on_answer: called with each model; return ``False`` to stop the search.
             keep: keep every model in the outcome (else only the last).
         """
         until = time.monotonic() + (timeout or 0.0)
         answers: list[Answer] = []
         stop = threading.Event()
+        late = threading.Event()
 
         def on_model(model: clingo.Model) -> bool:
             answer = _answer(model)
@@ -249,7 +253,7 @@ class Asp:
             if on_answer is not None and on_answer(answer) is False:
                 stop.set()
                 return False
-            return True
+            return not late.is_set()
 
         core: list[int] = []
         try:
@@ -260,6 +264,9 @@ class Asp:
                     finished = handle.wait()
                 else:  # the solver's preprocessing before the handle returns counts too
                     finished = handle.wait(max(0.0, until - time.monotonic()))
+                if not finished and grace > 0 and not answers:
+                    late.set()  # the next model ends the search
+                    finished = handle.wait(grace)
                 if not finished:
                     handle.cancel()
                 result = handle.get()
@@ -267,7 +274,7 @@ class Asp:
                     core = list(handle.core())
         except RuntimeError as e:
             raise self._fail("solving", e) from e
-        interrupted = bool(result.interrupted) and not stop.is_set()
+        interrupted = (bool(result.interrupted) and not stop.is_set()) or late.is_set()
         satisfiable: bool | None = None if result.unknown else bool(result.satisfiable)
         if answers and satisfiable is None:
             satisfiable = True

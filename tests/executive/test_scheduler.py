@@ -399,36 +399,11 @@ def test_every_generated_schedule_keeps_every_constraint(size: int, seed: int) -
     assert_valid(problem.functionalities, problem.requests, problem.faulty, result)
 
 
-def test_a_tight_time_limit_still_gives_a_valid_schedule_or_none() -> None:
-    problem = generate(120, 7)
-    sched = Scheduler(problem.functionalities, time_limit=0.05)
+def test_a_time_limit_shorter_than_grounding_still_gives_the_first_schedule() -> None:
+    problem = generate(60, 7)
+    sched = Scheduler(problem.functionalities, time_limit=0.001)
     result = sched.schedule(problem.requests, faulty=problem.faulty)
-    assert result.status in (
-        ScheduleStatus.FEASIBLE,
-        ScheduleStatus.TIMEOUT,
-        ScheduleStatus.OPTIMAL,
-    )
-    if result.status is not ScheduleStatus.TIMEOUT:
+    if result.status is ScheduleStatus.TIMEOUT:  # a very slow machine
+        assert result.assignments == {}
+    else:
         assert_valid(problem.functionalities, problem.requests, problem.faulty, result)
-
-
-@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(size=st.integers(1, 10), seed=st.integers(0, 10**6))
-def test_a_schedule_that_started_keeps_its_configurations_when_nothing_changes(
-    size: int, seed: int
-) -> None:
-    problem = generate(size, seed)
-    sched = Scheduler(problem.functionalities, time_limit=0.3)
-    first = sched.schedule(problem.requests, faulty=problem.faulty)
-    by_id = {r.id: r for r in problem.requests}
-    started = [
-        dataclasses.replace(by_id[a.request], running=True, configuration=a.providers, together=())
-        for a in first.assignments.values()
-        if a.start == 0
-    ]
-    again = sched.schedule(started, faulty=problem.faulty)
-    assert again.cancelled == {}
-    assert again.cost["changes"] == 0
-    assert {a.request: a.providers for a in again.assignments.values()} == {
-        r.id: r.configuration for r in started
-    }

@@ -62,3 +62,12 @@ def test_an_unsatisfiable_core_names_the_assumptions_in_it() -> None:
     outcome = asp.solve(assumptions=assumptions)
     assert outcome.satisfiable is False
     assert {atom("p", 1), atom("p", 3)} <= set(outcome.core) <= set(dict(assumptions))
+
+
+def test_a_first_model_ends_the_search_when_the_timeout_passed_without_one() -> None:
+    asp = Asp(["--opt-strategy=bb"])
+    asp.add("{ a(1..40) }. #maximize{ X : a(X) }.")
+    asp.ground()
+    outcome = asp.solve(timeout=0.0, grace=30.0)
+    assert outcome.satisfiable is True
+    assert outcome.answers
