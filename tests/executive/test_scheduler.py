@@ -168,6 +168,12 @@ def test_a_request_starts_no_earlier_than_its_earliest_start() -> None:
     assert result.assignments["1"].start == 12.5
 
 
+def test_durations_between_ticks_round_up_so_that_tasks_never_overlap() -> None:
+    result = scheduler().schedule([move_to("1", duration=2.55), move_to("2", duration=1.0)])
+    assert result.assignments["1"].end == 2.55
+    assert result.assignments["2"].start == 2.6
+
+
 def test_a_deadline_its_own_duration_cannot_meet_cancels_the_request() -> None:
     result = scheduler().schedule([move_to("1", earliest=5.0, deadline=12.0)])
     assert result.cancelled == {

@@ -71,3 +71,11 @@ def test_a_first_model_ends_the_search_when_the_timeout_passed_without_one() -> 
     outcome = asp.solve(timeout=0.0, grace=30.0)
     assert outcome.satisfiable is True
     assert outcome.answers
+
+
+def test_program_text_for_a_theory_goes_to_its_part_with_parameters() -> None:
+    asp = Asp(theory=ClingoDLTheory())  # type: ignore[no-untyped-call]
+    asp.add("step(n). &diff{ s(n) - 0 } <= n.", part="step", params=["n"])
+    asp.ground([("step", [7])])
+    assert asp.has_atom(atom("step", 7))
+    assert asp.solve().satisfiable is True
