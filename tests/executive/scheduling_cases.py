@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from executive.schedule import Request
-from knowledge.description import Behavior, Functionality
+from knowledge.description import Behavior, Functionality, RobotDescription
 from knowledge.robot import load_robot
 from tests.conftest import USECASE
 
@@ -22,15 +22,15 @@ class Problem:
 
 
 @functools.cache
-def _usecase() -> tuple[tuple[Functionality, ...], tuple[Behavior, ...]]:
-    robot = load_robot(USECASE)
-    return tuple(robot.functionalities.values()), tuple(robot.behaviors.values())
+def usecase_robot() -> RobotDescription:
+    """The thesis use-case robot (read once: it is frozen)."""
+    return load_robot(USECASE)
 
 
 def usecase() -> tuple[dict[str, Functionality], dict[str, Behavior]]:
     """The thesis use case's functionalities and behaviors, by name."""
-    functionalities, behaviors = _usecase()
-    return {f.name: f for f in functionalities}, {b.name: b for b in behaviors}
+    robot = usecase_robot()
+    return dict(robot.functionalities), dict(robot.behaviors)
 
 
 def request(

@@ -10,16 +10,15 @@ from executive.faults import Faults, RunningTask, TaskAction
 from knowledge.description import Kind, RobotDescription
 from knowledge.errors import KnowledgeError
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.robot import load_robot
-from tests.conftest import USECASE
+from tests.executive.scheduling_cases import usecase_robot
 
 LIDAR = frozenset({"lidar", "lidar_filter", "robot_base"})
 CAM = frozenset({"cam", "cam_to_lidar", "robot_base"})
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture
 def robot() -> RobotDescription:
-    return load_robot(USECASE)
+    return usecase_robot()
 
 
 @pytest.fixture

@@ -17,13 +17,12 @@ from executive.schedule import Request
 from executive.scheduler import Scheduler
 from knowledge.description import RobotDescription
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.robot import load_robot
-from tests.conftest import USECASE
+from tests.executive.scheduling_cases import usecase_robot
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture
 def usecase() -> RobotDescription:
-    return load_robot(USECASE)
+    return usecase_robot()
 
 
 @pytest.fixture
