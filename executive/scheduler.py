@@ -99,7 +99,7 @@ class Scheduler:
         asp.ground()
         left = self.time_limit - (time.perf_counter() - began)
         grace = self.time_limit * (FIRST_SCHEDULE_GRACE - 1)
-        outcome = asp.solve(timeout=max(left, 0.0), grace=grace, keep=False)
+        outcome = asp.solve(timeout=max(left, 0.0), grace=grace, keep=False, costs=True)
         if not outcome.answers:
             return ScheduleResult(
                 ScheduleStatus.TIMEOUT, cancelled=cancelled, solve_time=time.perf_counter() - began

@@ -78,13 +78,13 @@ def facts(atoms: Iterable[clingo.Symbol]) -> str:
 class Answer:
     """One model: its shown atoms by predicate name, as argument tuples.
 
-    ``cost`` holds one sum per optimisation level, most important first; ``priority``
-    names each one's level (the ``@`` of the ``#minimize`` elements).
+    ``cost`` (when asked for) holds one sum per optimisation level, most important
+    first, and ``priority`` each one's level; the last model of an exhausted search is
+    optimal.
     """
 
     atoms: dict[str, list[tuple[Value, ...]]]
     cost: tuple[int, ...] = ()
-    optimal: bool = False
     priority: tuple[int, ...] = ()
 
     def get(self, name: str) -> list[tuple[Value, ...]]:
@@ -112,7 +112,7 @@ class Asp:
 
     Args:
         arguments: clingo command-line options, e.g. ``["--heuristic=Domain"]``.
-        theory: a clingo theory (e.g. ``clingodl.ClingoDLTheory()``) the programs use.
+        theory: a clingo theory the programs use, e.g. ``clingodl.ClingoDLTheory()``.
     """
 
     def __init__(self, arguments: Sequence[str] = (), *, theory: Theory | None = None) -> None:
@@ -205,10 +205,6 @@ class Asp:
         """Set an external atom true, false, or free (``None``)."""
         self._control.assign_external(symbol, value)
 
-    def has_atom(self, symbol: clingo.Symbol) -> bool:
-        """Whether the ground program mentions the atom."""
-        return symbol in self._control.symbolic_atoms
-
     def set(self, option: str, value: str) -> None:
         """Change a solver option between calls, e.g. ``set("solve.models", "0")``."""
         group, _, key = option.rpartition(".")
@@ -225,56 +221,47 @@ class Asp:
         assumptions: Sequence[tuple[clingo.Symbol, bool]] = (),
         timeout: float | None = None,
         grace: float = 0.0,
-        on_answer: Callable[[Answer], bool | None] | None = None,
         keep: bool = True,
+        costs: bool = False,
     ) -> Outcome:
-        """Solve; collect the models (all, or the last one when optimising).
+        """Solve; collect the models (all, or only the last one).
 
         Args:
             assumptions: atoms fixed true or false for this call only.
-            timeout: seconds from this call until the search is cancelled; ``None``
-                waits for the end.
-            grace: seconds more to wait for a first model if the timeout passes
-                without one; that model then ends the search.
-            on_answer: called with each model; return ``False`` to stop the search.
+            timeout: seconds until the search is interrupted; ``None`` waits for the end.
+            grace: seconds more to wait for a first model if the timeout passes without
+                one; that model then ends the search.
             keep: keep every model in the outcome (else only the last).
+            costs: record each model's cost and priorities (optimisation; slower).
         """
         until = time.monotonic() + (timeout or 0.0)
         answers: list[Answer] = []
-        stop = threading.Event()
-        late = threading.Event()
+        late = threading.Event()  # past the timeout without a model: the next one ends it
 
         def on_model(model: clingo.Model) -> bool:
-            answer = _answer(model)
+            answer = _answer(model, costs)
             if keep or not answers:
                 answers.append(answer)
             else:
                 answers[-1] = answer
-            if on_answer is not None and on_answer(answer) is False:
-                stop.set()
-                return False
             return not late.is_set()
 
-        core: list[int] = []
+        # An asynchronous solve cancelled through its own handle: an interrupt from a
+        # timer that fires just after the search ended would hit the next solve call.
         try:
             with self._control.solve(
                 assumptions=list(assumptions), on_model=on_model, async_=True
             ) as handle:
-                if timeout is None:
-                    finished = handle.wait()
-                else:  # the solver's preprocessing before the handle returns counts too
-                    finished = handle.wait(max(0.0, until - time.monotonic()))
+                finished = timeout is None or handle.wait(max(0.0, until - time.monotonic()))
                 if not finished and grace > 0 and not answers:
-                    late.set()  # the next model ends the search
+                    late.set()
                     finished = handle.wait(grace)
                 if not finished:
                     handle.cancel()
                 result = handle.get()
-                if result.unsatisfiable and assumptions:
-                    core = list(handle.core())
+                core = list(handle.core()) if result.unsatisfiable and assumptions else []
         except RuntimeError as e:
             raise self._fail("solving", e) from e
-        interrupted = (bool(result.interrupted) and not stop.is_set()) or late.is_set()
         satisfiable: bool | None = None if result.unknown else bool(result.satisfiable)
         if answers and satisfiable is None:
             satisfiable = True
@@ -282,7 +269,7 @@ class Asp:
             answers=answers,
             satisfiable=satisfiable,
             exhausted=bool(result.exhausted),
-            interrupted=interrupted,
+            interrupted=bool(result.interrupted) or late.is_set(),
             core=self._core_symbols(core, assumptions) if result.unsatisfiable else [],
         )
 
@@ -300,8 +287,10 @@ class Asp:
         return out
 
 
-def _answer(model: clingo.Model) -> Answer:
+def _answer(model: clingo.Model, costs: bool) -> Answer:
     atoms: dict[str, list[tuple[Value, ...]]] = {}
     for symbol in model.symbols(shown=True):
         atoms.setdefault(symbol.name, []).append(tuple(to_python(a) for a in symbol.arguments))
-    return Answer(atoms, tuple(model.cost), bool(model.optimality_proven), tuple(model.priority))
+    if not costs:
+        return Answer(atoms)
+    return Answer(atoms, tuple(model.cost), tuple(model.priority))

@@ -1,81 +1,79 @@
+"""The clingo facade: errors with file and line, Python values, bounds, cores, costs."""
+
 from __future__ import annotations
 
 from pathlib import Path
 
+import clingo
 import pytest
-from clingodl import ClingoDLTheory
 
-from knowledge.asp import Asp, atom
+from knowledge.asp import Asp, atom, facts, to_python
 from knowledge.errors import AspError
 
-ORDER = """
-task(a;b).
-duration(a,3). duration(b,5).
-1 { first(X) : task(X) } 1.
-&diff{ s(X) - s(Y) } <= -D :- first(X), task(Y), X != Y, duration(X,D).
-&diff{ 0 - s(X) } <= 0 :- task(X).
-#minimize{ 1,X : first(X), X = b }.
-#show first/1.
-"""
+
+def test_a_syntax_error_in_a_file_names_the_file_and_line(tmp_path: Path) -> None:
+    path = tmp_path / "user.lp"
+    path.write_text("a.\nb :- a\nc.\n")
+    with pytest.raises(AspError, match=rf"^{path}:3: syntax error"):
+        Asp().load(path)
 
 
-def test_a_program_with_difference_constraints_is_solved_with_the_clingo_dl_theory(
-    tmp_path: Path,
-) -> None:
-    program = tmp_path / "order.lp"
-    program.write_text(ORDER)
-    asp = Asp(["--models=0"], theory=ClingoDLTheory())  # type: ignore[no-untyped-call]
-    asp.load(program)
-    asp.ground()
-    outcome = asp.solve()
-    assert outcome.exhausted
-    assert outcome.answers[-1].get("first") == [("a",)]
-    assert outcome.answers[-1].priority == (0,)
-
-
-def test_a_syntax_error_in_a_theory_program_names_its_file_and_line(tmp_path: Path) -> None:
-    program = tmp_path / "bad.lp"
-    program.write_text("a.\n&diff{ s(X) - } <= 1 :- a.\n")
-    with pytest.raises(AspError, match=r"bad\.lp:2: syntax error"):
-        Asp(theory=ClingoDLTheory()).load(program)  # type: ignore[no-untyped-call]
-
-
-def test_program_text_for_a_theory_keeps_its_line_numbers() -> None:
-    asp = Asp(theory=ClingoDLTheory())  # type: ignore[no-untyped-call]
-    with pytest.raises(AspError, match=r"^rules:3: syntax error"):
-        asp.add("a.\nb.\nc :- a b.\n", source="rules")
-
-
-def test_facts_are_added_without_the_theory_and_ground_with_the_program() -> None:
-    asp = Asp(theory=ClingoDLTheory())  # type: ignore[no-untyped-call]
-    asp.add_facts([atom("duration", 'a quoted "name"', 3)])
-    asp.add("&diff{ s(X) - 0 } <= D :- duration(X,D).\n#show duration/2.")
-    asp.ground()
-    assert asp.solve().answers[0].get("duration") == [('a quoted "name"', 3)]
-
-
-def test_an_unsatisfiable_core_names_the_assumptions_in_it() -> None:
+def test_an_unsafe_rule_in_text_names_its_source_and_line() -> None:
     asp = Asp()
-    asp.add("{ p(1..4) }. :- p(1), p(3).")
+    asp.add("a.\np(X) :- a.\n", source="<rules>")
+    with pytest.raises(AspError, match=r"^<program>:2: unsafe variables in: p\(X\)"):
+        asp.ground()
+
+
+def test_a_missing_file_and_bad_options_are_asp_errors(tmp_path: Path) -> None:
+    with pytest.raises(AspError, match="cannot read"):
+        Asp().load(tmp_path / "none.lp")
+    with pytest.raises(AspError, match="invalid clingo options"):
+        Asp(["--no-such-option"])
+
+
+def test_symbols_become_python_values_and_back() -> None:
+    asp = Asp()
+    asp.add(
+        facts([atom("p", 'a "quoted" name', 3, ("x", 1))])
+        + "q(f(b), g).\n#show.\n#show p/3.\n#show q/2.\n"
+    )
     asp.ground()
-    assumptions = [(atom("p", i), True) for i in range(1, 5)]
-    outcome = asp.solve(assumptions=assumptions)
+    answer = asp.solve().answers[0]
+    assert answer.get("p") == [('a "quoted" name', 3, ("x", 1))]
+    assert answer.get("q") == [(("f", "b"), "g")]
+    assert to_python(clingo.Infimum) == "#inf"
+
+
+def test_an_optimisation_keeps_the_best_model_with_its_cost() -> None:
+    asp = Asp(["--opt-mode=opt"])
+    asp.add("{ a(1..3) } >= 1. #minimize { X : a(X) }.")
+    asp.ground()
+    outcome = asp.solve(keep=False, costs=True)
+    assert len(outcome.answers) == 1
+    assert outcome.answers[0].get("a") == [(1,)] and outcome.answers[0].cost == (1,)
+    assert outcome.exhausted
+
+
+def test_assumptions_that_admit_no_model_come_back_as_a_core() -> None:
+    asp = Asp(["0"])
+    asp.add("#external e(1..3). { s }. :- e(1), s. :- e(2), not s.")
+    asp.ground()
+    for i in (1, 2, 3):
+        asp.assign_external(atom("e", i), None)
+    outcome = asp.solve(
+        assumptions=[(atom("e", 1), True), (atom("e", 2), True), (atom("e", 3), True)]
+    )
     assert outcome.satisfiable is False
-    assert {atom("p", 1), atom("p", 3)} <= set(outcome.core) <= set(dict(assumptions))
+    assert set(outcome.core) <= {atom("e", 1), atom("e", 2), atom("e", 3)}
+    assert {atom("e", 1), atom("e", 2)} <= set(outcome.core)
 
 
-def test_a_first_model_ends_the_search_when_the_timeout_passed_without_one() -> None:
-    asp = Asp(["--opt-strategy=bb"])
-    asp.add("{ a(1..40) }. #maximize{ X : a(X) }.")
+def test_a_time_bound_interrupts_a_long_search() -> None:
+    asp = Asp(["0"])
+    asp.add("{ p(1..40) }.")
     asp.ground()
-    outcome = asp.solve(timeout=0.0, grace=30.0)
+    asp.set("solve.models", "0")
+    outcome = asp.solve(timeout=0.05, keep=False)
+    assert outcome.interrupted and not outcome.exhausted
     assert outcome.satisfiable is True
-    assert outcome.answers
-
-
-def test_program_text_for_a_theory_goes_to_its_part_with_parameters() -> None:
-    asp = Asp(theory=ClingoDLTheory())  # type: ignore[no-untyped-call]
-    asp.add("step(n). &diff{ s(n) - 0 } <= n.", part="step", params=["n"])
-    asp.ground([("step", [7])])
-    assert asp.has_atom(atom("step", 7))
-    assert asp.solve().satisfiable is True
