@@ -39,7 +39,7 @@ from typing import Any, ClassVar, TypeVar
 
 from executive import protocol
 from executive.bus import Bus, Message
-from executive.faults import Fault, FaultInjector
+from executive.fault_injection import Fault, FaultInjector
 from executive.protocol import Command, GoalResult, GoalStatus, Phase
 from knowledge.description import Kind
 from knowledge.errors import BusError, ComponentError, DuraError

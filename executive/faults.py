@@ -1,152 +1,189 @@
-"""Fault injection: make a component misbehave on purpose, for tests and benchmarks.
+"""Fault bookkeeping: count faults in the knowledge base and decide what each one means.
 
-A fault comes from the component's parameters, active from its start (``params:
-{fault: crash}`` or ``{fault: {mode: wrong_rate, factor: 0.5, after: 2}}``), or from an
-``inject_fault`` command at run time (``{"cmd": "inject_fault", "fault": ...}``). The
-SDK carries out the generic modes itself; what ``out_of_range`` and ``slip`` mean is up
-to each component, which asks :meth:`FaultInjector.active`.
+A fault of a component is its process exiting, a repair command from the rule engine
+(restart, mark faulty) or a user's request to restart it (thesis 7.1.3). Every fault
+counts in the knowledge base, so a restarted executive remembers it.
+
+- A functionality below ``max_faults`` is restarted. At ``max_faults`` (or when marked
+  faulty) it is permanently faulty, and so is every functionality that can only run on
+  top of it: the tasks using them need new configurations.
+- A running task hit by a fault of one of its functionalities pauses its behavior if
+  the behavior is reconfigurable, else stops it and starts it again once the
+  configuration is repaired. Neither counts against the behavior's ``max_restarts``.
+- A failing behavior is restarted (warm, from its achievements) up to ``max_restarts``
+  times within its task; then the task fails.
+
+This module decides; the task executor carries the decisions out.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import enum
-import logging
-import os
-import sys
-import threading
-import time
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, fields
-from typing import Any
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
 
-from knowledge.errors import ComponentError
-
-log = logging.getLogger("dura.faults")
-
-CRASH_DELAY = 0.05  # seconds: a crash on command comes after the command's answer
+from executive.availability import Availability
+from knowledge.description import Component, Functionality, Kind, RobotDescription
+from knowledge.errors import KnowledgeError
+from knowledge.knowledge_base import KnowledgeBase
 
 
-class FaultMode(enum.Enum):
-    CRASH = "crash"  # exit at once with exit_code
-    HANG = "hang"  # stop responding: no commands, no output, SIGTERM ignored
-    STOP_PUBLISHING = "stop_publishing"  # publish nothing
-    WRONG_RATE = "wrong_rate"  # rate loops run at factor x their rate
-    STALE_TIMESTAMPS = "stale_timestamps"  # published stamps lag by age seconds
-    OUT_OF_RANGE = "out_of_range"  # the component publishes impossible values
-    HIGH_CPU = "high_cpu"  # a thread spins on a core
-    GROWING_MEMORY = "growing_memory"  # allocate mb_per_s MiB every second, up to limit_mb
-    SLIP = "slip"  # odometry and IMU disagree (robot_base)
-    NONE = "none"  # clear every fault
+class TaskAction(enum.Enum):
+    PAUSE = "pause"  # reconfigurable: pause now, resume on the repaired configuration
+    RESTART = "restart"  # stop now, start again (warm) on the repaired configuration
+    FAIL = "fail"  # the task fails
 
 
 @dataclass(frozen=True)
-class Fault:
-    """One fault to inject, with the options of its mode."""
+class RunningTask:
+    """What fault handling needs to know of a running task."""
 
-    mode: FaultMode
-    after: float = 0.0  # seconds from injection (or start) until it strikes
-    factor: float = 0.5
-    age: float = 5.0
-    exit_code: int = 1
-    mb_per_s: float = 20.0
-    limit_mb: float = 512.0
-
-    @classmethod
-    def parse(cls, spec: object) -> Fault:
-        """A fault from ``"crash"`` or ``{"mode": "crash", "after": 1.0, ...}``.
-
-        Raises:
-            ComponentError: an unknown mode or option, or an option of the wrong type.
-        """
-        options: dict[str, Any] = {}
-        if isinstance(spec, Mapping):
-            options = dict(spec)
-            spec = options.pop("mode", None)
-        modes = ", ".join(m.value for m in FaultMode)
-        try:
-            mode = FaultMode(spec)
-        except ValueError:
-            raise ComponentError(f"unknown fault mode {spec!r} (choose from {modes})") from None
-        known = {f.name: f for f in fields(cls) if f.name != "mode"}
-        values: dict[str, Any] = {}
-        for key, value in options.items():
-            if key not in known:
-                raise ComponentError(
-                    f"unknown option {key!r} for fault {mode.value!r} (options: {', '.join(known)})"
-                )
-            kind = int if key == "exit_code" else float
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise ComponentError(f"fault option {key!r} must be a number, not {value!r}")
-            values[key] = kind(value)
-        return cls(mode, **values)
+    id: str
+    behavior: str
+    functionalities: frozenset[str] = frozenset()
 
 
-class FaultInjector:
-    """The faults a component currently suffers, and the effects the SDK applies.
+@dataclass(frozen=True)
+class FaultDecision:
+    """What one fault means.
 
     Args:
-        on_hang: called (on any thread) to make the component stop responding.
+        component: the faulty component.
+        kind: whether it is a functionality or a behavior.
+        count: its faults so far.
+        permanent: it is permanently faulty now.
+        unusable: functionalities that this fault made unusable, each with the reason:
+            the component itself and those that can only run on top of it.
+        tasks: the running tasks it hits and what to do with each one's behavior.
     """
 
-    def __init__(self, on_hang: Callable[[], None]) -> None:
-        self._on_hang = on_hang
-        self._active: dict[FaultMode, Fault] = {}
-        self._lock = threading.Lock()
-        self._ballast: list[bytes] = []
-
-    def inject(self, fault: Fault) -> None:
-        """Make a fault strike now, or after ``fault.after`` seconds."""
-        delay = max(fault.after, CRASH_DELAY if fault.mode is FaultMode.CRASH else 0.0)
-        if delay > 0:
-            timer = threading.Timer(delay, self._strike, (fault,))
-            timer.daemon = True
-            timer.start()
-        else:
-            self._strike(fault)
-
-    def _strike(self, fault: Fault) -> None:
-        log.warning("injected fault: %s", fault.mode.value)
-        if fault.mode is FaultMode.NONE:
-            with self._lock:
-                self._active.clear()
-                self._ballast.clear()
-            return
-        if fault.mode is FaultMode.CRASH:
-            sys.stderr.flush()
-            os._exit(fault.exit_code)
-        with self._lock:
-            self._active[fault.mode] = fault
-        if fault.mode is FaultMode.HANG:
-            self._on_hang()
-        elif fault.mode is FaultMode.HIGH_CPU:
-            threading.Thread(target=self._spin, daemon=True, name="fault-cpu").start()
-        elif fault.mode is FaultMode.GROWING_MEMORY:
-            threading.Thread(target=self._grow, args=(fault,), daemon=True).start()
-
-    def active(self, mode: FaultMode) -> bool:
-        return mode in self._active
+    component: str
+    kind: Kind
+    count: int
+    permanent: bool
+    unusable: Mapping[str, str] = field(default_factory=dict)
+    tasks: Mapping[str, TaskAction] = field(default_factory=dict)
 
     @property
-    def silent(self) -> bool:
-        """Whether publications are to be dropped."""
-        return FaultMode.STOP_PUBLISHING in self._active or FaultMode.HANG in self._active
+    def restart(self) -> bool:
+        """Restart the component: a functionality that is not permanently faulty."""
+        return self.kind is Kind.FUNCTIONALITY and not self.permanent
 
-    def rate_factor(self) -> float:
-        fault = self._active.get(FaultMode.WRONG_RATE)
-        return fault.factor if fault is not None and fault.factor > 0 else 1.0
+    @property
+    def reschedule(self) -> bool:
+        """Configurations must change: functionalities became unusable."""
+        return bool(self.unusable)
 
-    def stamp(self, stamp: float) -> float:
-        fault = self._active.get(FaultMode.STALE_TIMESTAMPS)
-        return stamp - fault.age if fault is not None else stamp
 
-    def _spin(self) -> None:
-        while FaultMode.HIGH_CPU in self._active:
-            for _ in range(10_000):
-                pass
+class Faults:
+    """The faults of a robot's components, kept in its knowledge base.
 
-    def _grow(self, fault: Fault) -> None:
-        chunk = int(fault.mb_per_s * (1 << 20) / 10)
-        while FaultMode.GROWING_MEMORY in self._active:
-            if len(self._ballast) * chunk < fault.limit_mb * (1 << 20):
-                self._ballast.append(b"x" * chunk)  # written, so resident
-            time.sleep(0.1)
+    Registers every component in the knowledge base (one that is there already keeps
+    its rating and fault history). Counts behavior restarts per task in memory.
+    """
+
+    def __init__(self, robot: RobotDescription, kb: KnowledgeBase) -> None:
+        self.robot = robot
+        self.kb = kb
+        self._restarts: dict[str, int] = {}
+        with kb.transaction():
+            for f in robot.functionalities.values():
+                kb.register_component(f.name, f.rating)
+            for b in robot.behaviors.values():
+                kb.register_component(b.name, 1.0)
+
+    def faulty(self) -> frozenset[str]:
+        """The permanently faulty components."""
+        return frozenset(c.name for c in self.kb.components() if c.permanent_fault)
+
+    def functionalities(self) -> list[Functionality]:
+        """The robot's functionalities with the ratings the knowledge base holds."""
+        ratings = {c.name: c.rating for c in self.kb.components()}
+        return [
+            dataclasses.replace(f, rating=ratings.get(f.name, f.rating))
+            for f in self.robot.functionalities.values()
+        ]
+
+    def availability(self) -> Availability:
+        return Availability.of(self.robot.functionalities.values(), self.faulty())
+
+    def fault(
+        self,
+        name: str,
+        reason: str,
+        running: Iterable[RunningTask] = (),
+        *,
+        permanent: bool = False,
+    ) -> FaultDecision:
+        """Count a fault of a component and decide what it means.
+
+        Args:
+            name: the component.
+            reason: why it is faulty (kept in the knowledge base).
+            running: the running tasks.
+            permanent: mark it permanently faulty at once (a repair command).
+
+        Raises:
+            KnowledgeError: the robot has no component of that name.
+        """
+        component = self._component(name)
+        before = self.availability()
+        with self.kb.transaction():
+            limit = component.max_faults if isinstance(component, Functionality) else None
+            record = self.kb.record_fault(name, reason, max_faults=limit)
+            if permanent and not record.permanent_fault:
+                record = self.kb.mark_permanent_fault(name, reason)
+        decision = FaultDecision(name, component.kind, record.fault_count, record.permanent_fault)
+        if isinstance(component, Functionality):
+            return self._functionality_fault(decision, before, running)
+        return self._behavior_fault(decision, running)
+
+    def reset(self, name: str) -> list[str]:
+        """Clear a component's faults after maintenance; returns the functionalities usable again."""
+        self._component(name)
+        before = self.availability()
+        self.kb.reset_component(name)
+        return sorted(self.availability().usable - before.usable)
+
+    def finished(self, task_id: str) -> None:
+        """Forget a task's behavior restarts (it ended)."""
+        self._restarts.pop(task_id, None)
+
+    def _component(self, name: str) -> Component:
+        if name not in self.robot.components:
+            raise KnowledgeError(f"robot '{self.robot.name}' has no component '{name}'")
+        return self.robot.components[name]
+
+    def _functionality_fault(
+        self, decision: FaultDecision, before: Availability, running: Iterable[RunningTask]
+    ) -> FaultDecision:
+        """Tasks on the functionality, or on anything it took down, repair their configurations."""
+        after = self.availability()
+        unusable = {f: why for f, why in after.unusable.items() if f in before.usable}
+        hit = {decision.component} | unusable.keys()
+        tasks = {
+            t.id: TaskAction.PAUSE
+            if self.robot.behaviors[t.behavior].reconfigurable
+            else TaskAction.RESTART
+            for t in running
+            if t.functionalities & hit
+        }
+        return dataclasses.replace(decision, unusable=unusable, tasks=tasks)
+
+    def _behavior_fault(
+        self, decision: FaultDecision, running: Iterable[RunningTask]
+    ) -> FaultDecision:
+        """The task running the behavior restarts it, up to ``max_restarts`` times."""
+        behavior = self.robot.behaviors[decision.component]
+        tasks: dict[str, TaskAction] = {}
+        for t in running:
+            if t.behavior != behavior.name:
+                continue
+            restarts = self._restarts.get(t.id, 0)
+            if decision.permanent or restarts >= behavior.max_restarts:
+                tasks[t.id] = TaskAction.FAIL
+            else:
+                self._restarts[t.id] = restarts + 1
+                tasks[t.id] = TaskAction.RESTART
+        return dataclasses.replace(decision, tasks=tasks)

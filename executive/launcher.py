@@ -508,7 +508,7 @@ class Launcher:
         self.command(name, Command.RECONFIGURE, params=dict(params))
 
     def inject_fault(self, name: str, fault: str | Mapping[str, Any]) -> None:
-        """Make a running component misbehave (see :mod:`executive.faults`)."""
+        """Make a running component misbehave (see :mod:`executive.fault_injection`)."""
         self.command(name, Command.INJECT_FAULT, fault=fault)
 
     def send_goal(

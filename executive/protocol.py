@@ -232,7 +232,7 @@ class Command(enum.Enum):
     ``{"params": {}}``; goal ``{"goal_id": str, "goal": {}}`` (behaviors; the reply
     comes at once, the result later on ``component/<name>/result``); cancel
     ``{"goal_id": str}``; inject_fault ``{"fault": "crash" | {"mode": "crash", ...}}``
-    (see :mod:`executive.faults`). start, pause, resume and stop have no fields. The
+    (see :mod:`executive.fault_injection`). start, pause, resume and stop have no fields. The
     reply is ``{"phase": Phase value}``; a refused command is an error reply.
     """
 

@@ -6,17 +6,24 @@ solves (optionally under a time bound and with assumptions). Models come back as
 :class:`Answer` objects holding plain Python values, and every clingo failure (a
 syntax error in a user's ``.lp`` file, an unsafe variable, a grounding error) becomes
 an :class:`~knowledge.errors.AspError` whose message starts with ``file:line:``.
+
+A theory (e.g. clingo-dl's difference constraints) plugs in through ``theory=``: its
+programs are rewritten by the theory as they are read, and it is prepared after each
+grounding.
 """
 
 from __future__ import annotations
 
 import re
 import threading
-from collections.abc import Iterable, Sequence
+import time
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import clingo
+from clingo import ast
+from clingo.theory import Theory
 
 from knowledge.errors import AspError
 
@@ -69,10 +76,16 @@ def facts(atoms: Iterable[clingo.Symbol]) -> str:
 
 @dataclass(frozen=True)
 class Answer:
-    """One model: its shown atoms by predicate name, as argument tuples."""
+    """One model: its shown atoms by predicate name, as argument tuples.
+
+    ``cost`` (when asked for) holds one sum per optimisation level, most important
+    first, and ``priority`` each one's level; the last model of an exhausted search is
+    optimal.
+    """
 
     atoms: dict[str, list[tuple[Value, ...]]]
-    cost: tuple[int, ...] = ()  # when asked for; the last model of an exhausted search is optimal
+    cost: tuple[int, ...] = ()
+    priority: tuple[int, ...] = ()
 
     def get(self, name: str) -> list[tuple[Value, ...]]:
         return self.atoms.get(name, [])
@@ -99,14 +112,18 @@ class Asp:
 
     Args:
         arguments: clingo command-line options, e.g. ``["--heuristic=Domain"]``.
+        theory: a clingo theory the programs use, e.g. ``clingodl.ClingoDLTheory()``.
     """
 
-    def __init__(self, arguments: Sequence[str] = ()) -> None:
+    def __init__(self, arguments: Sequence[str] = (), *, theory: Theory | None = None) -> None:
         self._messages: list[str] = []
+        self._theory = theory
         try:
             self._control = clingo.Control(list(arguments), logger=self._log, message_limit=20)
         except RuntimeError as e:
             raise AspError(f"invalid clingo options {list(arguments)}: {e}") from e
+        if theory is not None:
+            theory.register(self._control)
 
     def _log(self, code: clingo.MessageCode, message: str) -> None:
         self._messages.append(message)
@@ -115,7 +132,7 @@ class Asp:
         """An AspError naming the first located clingo message, else the error itself."""
         lines = [line for m in self._messages for line in m.splitlines()]
         if source is not None:
-            lines = [line.replace("<block>", source) for line in lines]
+            lines = [line.replace("<block>", source).replace("<string>", source) for line in lines]
         self._messages.clear()
         for i, line in enumerate(lines):
             match = _LOCATION.match(line)
@@ -134,7 +151,12 @@ class Asp:
         if not path.is_file():
             raise AspError(f"{path}: cannot read: no such file")
         try:
-            self._control.load(str(path))
+            if self._theory is None:
+                self._control.load(str(path))
+            else:
+                with ast.ProgramBuilder(self._control) as builder:
+                    rewrite = self._rewriter(self._theory, builder)
+                    ast.parse_files([str(path)], rewrite, logger=self._log)
         except RuntimeError as e:
             raise self._fail(str(path), e) from e
 
@@ -148,14 +170,34 @@ class Asp:
     ) -> None:
         """Add program text to a part; errors name ``source:line``."""
         try:
-            self._control.add(part, list(params), text)
+            if self._theory is None:
+                self._control.add(part, list(params), text)
+            else:
+                # on the first line, so that clingo's line numbers stay those of the text
+                head = f"#program {part}({','.join(params)}). " if params else f"#program {part}. "
+                with ast.ProgramBuilder(self._control) as builder:
+                    rewrite = self._rewriter(self._theory, builder)
+                    ast.parse_string(head + text, rewrite, logger=self._log)
         except RuntimeError as e:
             raise self._fail(source, e, source) from e
+
+    def add_facts(self, atoms: Iterable[clingo.Symbol], *, part: str = "base") -> None:
+        """Add facts to a part (fast: facts never need a theory's rewriting)."""
+        try:
+            self._control.add(part, [], facts(atoms))
+        except RuntimeError as e:
+            raise self._fail("facts", e, "<facts>") from e
+
+    @staticmethod
+    def _rewriter(theory: Theory, builder: ast.ProgramBuilder) -> Callable[[ast.AST], None]:
+        return lambda statement: theory.rewrite_ast(statement, builder.add)
 
     def ground(self, parts: Sequence[tuple[str, Sequence[object]]] = (("base", ()),)) -> None:
         """Ground program parts with their arguments (Python values)."""
         try:
             self._control.ground([(name, [to_symbol(a) for a in args]) for name, args in parts])
+            if self._theory is not None:
+                self._theory.prepare(self._control)
         except RuntimeError as e:
             raise self._fail("grounding", e, "<program>") from e
 
@@ -178,6 +220,7 @@ class Asp:
         *,
         assumptions: Sequence[tuple[clingo.Symbol, bool]] = (),
         timeout: float | None = None,
+        grace: float = 0.0,
         keep: bool = True,
         costs: bool = False,
     ) -> Outcome:
@@ -186,10 +229,14 @@ class Asp:
         Args:
             assumptions: atoms fixed true or false for this call only.
             timeout: seconds until the search is interrupted; ``None`` waits for the end.
+            grace: seconds more to wait for a first model if the timeout passes without
+                one; that model then ends the search.
             keep: keep every model in the outcome (else only the last).
-            costs: record each model's cost (optimisation; slower).
+            costs: record each model's cost and priorities (optimisation; slower).
         """
+        until = time.monotonic() + (timeout or 0.0)
         answers: list[Answer] = []
+        late = threading.Event()  # past the timeout without a model: the next one ends it
 
         def on_model(model: clingo.Model) -> bool:
             answer = _answer(model, costs)
@@ -197,23 +244,24 @@ class Asp:
                 answers.append(answer)
             else:
                 answers[-1] = answer
-            return True
+            return not late.is_set()
 
-        core: list[int] = []
-        # A timer interrupts the search: cheaper than an asynchronous solve and a wait.
-        timer = threading.Timer(timeout, self._control.interrupt) if timeout is not None else None
-        if timer is not None:
-            timer.daemon = True
-            timer.start()
+        # An asynchronous solve cancelled through its own handle: an interrupt from a
+        # timer that fires just after the search ended would hit the next solve call.
         try:
-            result = self._control.solve(
-                assumptions=list(assumptions), on_model=on_model, on_core=core.extend
-            )
+            with self._control.solve(
+                assumptions=list(assumptions), on_model=on_model, async_=True
+            ) as handle:
+                finished = timeout is None or handle.wait(max(0.0, until - time.monotonic()))
+                if not finished and grace > 0 and not answers:
+                    late.set()
+                    finished = handle.wait(grace)
+                if not finished:
+                    handle.cancel()
+                result = handle.get()
+                core = list(handle.core()) if result.unsatisfiable and assumptions else []
         except RuntimeError as e:
             raise self._fail("solving", e) from e
-        finally:
-            if timer is not None:
-                timer.cancel()
         satisfiable: bool | None = None if result.unknown else bool(result.satisfiable)
         if answers and satisfiable is None:
             satisfiable = True
@@ -221,13 +269,22 @@ class Asp:
             answers=answers,
             satisfiable=satisfiable,
             exhausted=bool(result.exhausted),
-            interrupted=bool(result.interrupted),
-            core=self._core_symbols(core) if result.unsatisfiable else [],
+            interrupted=bool(result.interrupted) or late.is_set(),
+            core=self._core_symbols(core, assumptions) if result.unsatisfiable else [],
         )
 
-    def _core_symbols(self, literals: list[int]) -> list[clingo.Symbol]:
+    def _core_symbols(
+        self, literals: list[int], assumptions: Sequence[tuple[clingo.Symbol, bool]]
+    ) -> list[clingo.Symbol]:
+        """The assumed atoms among a core's literals (a lookup each, not a scan of all atoms)."""
         wanted = {abs(literal) for literal in literals}
-        return [a.symbol for a in self._control.symbolic_atoms if a.literal in wanted]
+        atoms = self._control.symbolic_atoms
+        out: list[clingo.Symbol] = []
+        for symbol, _ in assumptions:
+            found = atoms[symbol]
+            if found is not None and found.literal in wanted:
+                out.append(symbol)
+        return out
 
 
 def _answer(model: clingo.Model, costs: bool) -> Answer:
@@ -236,4 +293,4 @@ def _answer(model: clingo.Model, costs: bool) -> Answer:
         atoms.setdefault(symbol.name, []).append(tuple(to_python(a) for a in symbol.arguments))
     if not costs:
         return Answer(atoms)
-    return Answer(atoms, tuple(model.cost))
+    return Answer(atoms, tuple(model.cost), tuple(model.priority))

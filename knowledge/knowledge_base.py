@@ -493,12 +493,12 @@ class KnowledgeBase:
     def components(self) -> list[ComponentRecord]:
         return [self._component(r) for r in self._query("SELECT * FROM components ORDER BY name")]
 
-    def record_fault(self, name: str, reason: str, *, max_faults: int) -> ComponentRecord:
-        """Count one fault; at ``max_faults`` the component becomes permanently faulty."""
+    def record_fault(self, name: str, reason: str, *, max_faults: int | None) -> ComponentRecord:
+        """Count one fault; at ``max_faults`` (if any) the component becomes permanently faulty."""
         with self.transaction() as db:
             record = self.component(name)
             count = record.fault_count + 1
-            permanent = record.permanent_fault or count >= max_faults
+            permanent = record.permanent_fault or (max_faults is not None and count >= max_faults)
             db.execute(
                 "UPDATE components SET fault_count = ?, permanent_fault = ?, reason = ?, updated = ?"
                 " WHERE name = ?",

@@ -13,7 +13,7 @@ import pytest
 
 from executive import protocol
 from executive.bus import Bus
-from executive.faults import Fault, FaultMode
+from executive.fault_injection import Fault, FaultMode
 from executive.protocol import Lifecycle, component, topic
 from knowledge.description import Component
 from knowledge.errors import BusError, ComponentError

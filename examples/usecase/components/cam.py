@@ -6,7 +6,7 @@ import math
 from typing import Any
 
 from executive.component import Functionality
-from executive.faults import FaultMode
+from executive.fault_injection import FaultMode
 
 WIDTH, HEIGHT = 64, 48
 

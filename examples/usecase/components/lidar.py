@@ -7,7 +7,7 @@ from typing import Any
 
 from components.scan import BEAMS, OUT_OF_RANGE, scan
 from executive.component import Functionality
-from executive.faults import FaultMode
+from executive.fault_injection import FaultMode
 
 
 class Lidar(Functionality):

@@ -8,7 +8,7 @@ from __future__ import annotations
 from components.scan import BEAMS, OUT_OF_RANGE, clip, scan
 from executive.bus import Message
 from executive.component import Functionality
-from executive.faults import FaultMode
+from executive.fault_injection import FaultMode
 
 
 def median3(values: list[float]) -> list[float]:

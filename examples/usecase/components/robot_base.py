@@ -13,7 +13,7 @@ from typing import Any
 
 from executive.bus import Message
 from executive.component import Functionality
-from executive.faults import FaultMode
+from executive.fault_injection import FaultMode
 
 OUT_OF_RANGE_SPEED = 1000.0  # m/s: no base drives this fast
 

@@ -1,0 +1,103 @@
+"""System configurations: which functionalities serve which tasks, and how to change them.
+
+A functionality runs while at least one task's configuration holds it (reference
+counting), so a shared one (cam for move_to and take_picture, thesis 7.5) starts with
+the first task that needs it and stops with the last. Going from one configuration to
+another stops what no task holds any more, dependents first, and starts what is
+missing, dependencies first: lidar starts before lidar_filter and stops after it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+
+import networkx as nx
+
+from knowledge.description import Functionality
+
+
+@dataclass(frozen=True)
+class Transition:
+    """The steps from one system configuration to another.
+
+    Args:
+        stop: functionalities to stop, in this order (those that require others first).
+        start: functionalities to start, in this order (those that others require first).
+        keep: functionalities that keep running.
+    """
+
+    stop: tuple[str, ...] = ()
+    start: tuple[str, ...] = ()
+    keep: frozenset[str] = frozenset()
+
+    @property
+    def empty(self) -> bool:
+        return not self.stop and not self.start
+
+
+@dataclass(frozen=True)
+class SystemConfiguration:
+    """The configurations of the tasks that hold functionalities.
+
+    ``tasks`` maps a task id to its providers: capability → functionality, closed
+    under ``requires`` (as the scheduler assigns them).
+    """
+
+    tasks: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
+
+    @property
+    def users(self) -> dict[str, frozenset[str]]:
+        """Each running functionality and the tasks holding it (its reference count)."""
+        out: dict[str, set[str]] = {}
+        for task, providers in self.tasks.items():
+            for f in providers.values():
+                out.setdefault(f, set()).add(task)
+        return {f: frozenset(ts) for f, ts in sorted(out.items())}
+
+    @property
+    def functionalities(self) -> frozenset[str]:
+        """The functionalities that run."""
+        return frozenset(f for providers in self.tasks.values() for f in providers.values())
+
+    def with_task(self, task: str, providers: Mapping[str, str]) -> SystemConfiguration:
+        """This configuration with a task's providers added (or replaced)."""
+        return SystemConfiguration({**self.tasks, task: dict(providers)})
+
+    def without_task(self, task: str) -> SystemConfiguration:
+        """This configuration without a task: what only it held can stop."""
+        return SystemConfiguration({t: p for t, p in self.tasks.items() if t != task})
+
+    def transition(
+        self, target: SystemConfiguration, functionalities: Iterable[Functionality]
+    ) -> Transition:
+        """The steps from this configuration to ``target``.
+
+        The order follows the configurations themselves: a functionality depends on
+        the provider a task's configuration chose for each capability it requires.
+        """
+        running, wanted = self.functionalities, target.functionalities
+        stop, start = running - wanted, wanted - running
+        return Transition(
+            stop=tuple(reversed(_order(self, stop, functionalities))),
+            start=_order(target, start, functionalities),
+            keep=running & wanted,
+        )
+
+
+def _order(
+    configuration: SystemConfiguration,
+    names: frozenset[str],
+    functionalities: Iterable[Functionality],
+) -> tuple[str, ...]:
+    """Names in dependency order (providers first, ties by name)."""
+    requires = {f.name: f.requires for f in functionalities}
+    graph: nx.DiGraph = nx.DiGraph()
+    graph.add_nodes_from(names)
+    for providers in configuration.tasks.values():
+        for f in providers.values():
+            for capability in requires.get(f, ()):
+                provider = providers.get(capability)
+                if f in names and provider in names and provider != f:
+                    graph.add_edge(provider, f)
+    return tuple(nx.lexicographical_topological_sort(graph))
