@@ -216,6 +216,18 @@ class Planner:
             return ""
         return next((line for line in reversed(lines) if line.strip()), "")
 
+    def _wait_ready(self, stream: BinaryIO) -> None:
+        """Wait for a new worker's first message (it has loaded unified-planning)."""
+        if self._ready:
+            return
+        try:
+            _receive(stream, time.monotonic() + STARTUP_TIMEOUT)
+        except (TimeoutError, OSError, EOFError, pickle.UnpicklingError) as e:
+            reason = self._worker_log() or str(e) or type(e).__name__
+            self._reap()
+            raise PlanningError(f"the planner worker did not start: {reason}") from e
+        self._ready = True
+
     def _call(self, message: tuple[Any, ...], timeout: float) -> Any:
         """Send a message and wait for the answer; kill the worker when it takes too long.
 
@@ -227,9 +239,7 @@ class Planner:
         if process is None or process.stdin is None or process.stdout is None:
             raise PlanningError("the planner worker is not running")
         try:
-            if not self._ready:
-                _receive(process.stdout, time.monotonic() + STARTUP_TIMEOUT)
-                self._ready = True
+            self._wait_ready(process.stdout)
             _send(process.stdin, message)
             return _receive(process.stdout, time.monotonic() + timeout)
         except TimeoutError:
@@ -245,10 +255,13 @@ class Planner:
     def solve(self, task: PlanningTask, timeout: float | None = None) -> PlanResult:
         """Plan for a task; never raises for what an engine does (see the result's status)."""
         timeout = self.timeout if timeout is None else timeout
-        began = time.monotonic()
         with self._lock:
+            began = time.monotonic()
             try:
                 self._spawn()
+                if self._process is not None and self._process.stdout is not None:
+                    self._wait_ready(self._process.stdout)
+                began = time.monotonic()  # a worker's start-up is not planning time
                 result: PlanResult = self._call(
                     ("solve", self.engine, task, timeout), hard_timeout(timeout)
                 )

@@ -8,11 +8,11 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-from executive.cli import kb, validate, version
+from executive.cli import kb, plan, validate, version
 from knowledge.errors import DuraError
 
 # Each module has register(subparsers); its parsers set `run(args) -> int`.
-COMMANDS: tuple[ModuleType, ...] = (validate, kb, version)
+COMMANDS: tuple[ModuleType, ...] = (validate, kb, plan, version)
 
 
 class _Parser(argparse.ArgumentParser):
