@@ -49,7 +49,8 @@ def plan_goals(planner: Planner, task: PlanningTask, budget: float | None = None
     began = time.monotonic()
     budget = planner.timeout if budget is None else budget
     goals = by_priority(task.goals)
-    first = planner.solve(task, timeout=budget)
+    # an engine may search until its timeout when no plan exists: leave time for subsets
+    first = planner.solve(task, timeout=budget if len(goals) < 2 else budget / 2)
     if first.ok or not goals:
         return GoalPlan(first, tuple(g.id for g in goals))
     if not first.status.no_plan and first.status is not PlanStatus.TIMEOUT:
@@ -59,12 +60,13 @@ def plan_goals(planner: Planner, task: PlanningTask, budget: float | None = None
     best: PlanResult | None = None
     unreachable: dict[int, str] = {}
     calls = 1
-    for goal in goals:
+    for n, goal in enumerate(goals):
         left = budget - (time.monotonic() - began)
         if left <= 0.05:
             unreachable[goal.id] = f"planning ran out of time ({budget:g} s)"
             continue
-        attempt = planner.solve(replace(task, goals=(*kept, goal)), timeout=left)
+        share = left / (len(goals) - n)  # each goal left gets a fair share of the time
+        attempt = planner.solve(replace(task, goals=(*kept, goal)), timeout=share)
         calls += 1
         if attempt.ok:
             kept.append(goal)
@@ -78,7 +80,7 @@ def plan_goals(planner: Planner, task: PlanningTask, budget: float | None = None
 def _reason(goal: GoalSpec, kept: list[GoalSpec], attempt: PlanResult) -> str:
     by = f" by its deadline ({goal.deadline:g} s from now)" if goal.deadline is not None else ""
     if not attempt.status.no_plan:
-        return attempt.reason
+        return attempt.reason + (f" (with goals {', '.join(str(g.id) for g in kept)})" if kept else "")
     if not kept:
         return f"no plan reaches it{by} from the current state ({attempt.reason})"
     others = ", ".join(str(g.id) for g in kept)
