@@ -447,23 +447,23 @@ class PlanExecuter:
                 self._fail(run, f"over-all condition {run.step.over_all} no longer holds")
                 state = self._state()
         self._check_goals(state)
-        if self._paused or self._failed:
+        if self._failed:
             return
-        progress = True
+        progress = not self._paused
         while progress:
             progress = False
             for run in self._runs.values():
-                if run.state is StepState.PENDING and self._ready(run):
-                    if state.holds(run.step.at_start):
-                        self._dispatch(run)
-                        state = self._state()
-                        progress = True
+                ready = run.state is StepState.PENDING and self._ready(run)
+                if ready and state.holds(run.step.at_start):
+                    self._dispatch(run)
+                    state = self._state()
+                    progress = True
             self._check_goals(state)
         if self._failed:
             return
         if all(r.state is StepState.ENDED for r in self._runs.values()):
-            self._finish(state)
-        elif not any(r.state.active for r in self._runs.values()):
+            self._finish()
+        elif not self._paused and not any(r.state.active for r in self._runs.values()):
             waiting = [r for r in self._runs.values() if r.state is StepState.PENDING]
             blocked = next((r for r in waiting if self._ready(r)), waiting[0])
             self._plan_failed(
@@ -563,7 +563,7 @@ class PlanExecuter:
         self._event("REPLAN", reason=reason)
         self.on_replan(reason)
 
-    def _finish(self, state: State) -> None:
+    def _finish(self) -> None:
         open_goals = [g for g in self._goals if not g.done]
         if self._plan_id is not None:
             self.kb.set_plan_state(self._plan_id, PlanState.SUCCEEDED)
