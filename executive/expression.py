@@ -229,12 +229,12 @@ class Signature:
     parents: Mapping[str, str | None] = field(default_factory=dict)
 
     @classmethod
-    def of(cls, domain: DomainInfo, objects: Mapping[str, str] = {}) -> Signature:  # noqa: B006
+    def of(cls, domain: DomainInfo, objects: Mapping[str, str] | None = None) -> Signature:
         """The domain's signature with its constants and the given objects."""
         return cls(
             dict(domain.predicates),
             dict(domain.functions),
-            {**domain.constants, **objects},
+            {**domain.constants, **(objects or {})},
             dict(domain.supertypes),
         )
 
@@ -263,16 +263,16 @@ def _sexp(text: str) -> Sexp:
     """One s-expression from text; raises ValueError with the reason."""
     tokens = [m.group(1) for m in _TOKEN.finditer(text)]
     stack: list[list[Sexp]] = [[]]
-    for token in tokens:
-        if token == "(":
+    for tok in tokens:
+        if tok == "(":
             stack.append([])
-        elif token == ")":
+        elif tok == ")":
             if len(stack) == 1:
                 raise ValueError("unbalanced ')'")
             done = stack.pop()
             stack[-1].append(done)
         else:
-            stack[-1].append(token)
+            stack[-1].append(tok)
     if len(stack) > 1:
         raise ValueError("missing ')'")
     top = stack[0]
@@ -327,7 +327,9 @@ class _Reader:
         if head in self.sig.predicates:
             return Atom(head, self._args(head, self.sig.predicates[head], rest, env))
         if head in self.sig.functions:
-            raise ValueError(f"'{head}' is a function (a number); compare it, e.g. (>= {_show(s)} 1)")
+            raise ValueError(
+                f"'{head}' is a function (a number); compare it, e.g. (>= {_show(s)} 1)"
+            )
         raise ValueError(
             f"unknown predicate '{head}'{did_you_mean(head, sorted(self.sig.predicates))}"
         )
@@ -342,7 +344,9 @@ class _Reader:
         head, rest = s[0], s[1:]
         if head in ("+", "-", "*", "/"):
             if not rest or (head != "-" and len(rest) < 2) or (head == "/" and len(rest) != 2):
-                raise ValueError(f"'{head}' needs {'one or more' if head == '-' else 'two'} operands")
+                raise ValueError(
+                    f"'{head}' needs {'one or more' if head == '-' else 'two'} operands"
+                )
             return Arith(head, tuple(self.number(x, env) for x in rest))
         if head in self.sig.functions:
             return Value(head, self._args(head, self.sig.functions[head], rest, env))

@@ -32,10 +32,6 @@ class GoalSpec:
     priority: int = 0
     deadline: float | None = None
 
-    @property
-    def label(self) -> str:
-        return f"goal {self.id} {self.expression}"
-
 
 def normalized(text: str) -> str:
     """A goal expression on one line, as it is stored and shown."""

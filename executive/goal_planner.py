@@ -16,7 +16,6 @@ import logging
 import threading
 from collections import Counter
 from dataclasses import dataclass, field
-from pathlib import Path
 
 from executive.expression import Signature, State
 from executive.goal import specs
@@ -72,10 +71,6 @@ class GoalPlanner:
         self._stopping = False
         self._thread: threading.Thread | None = None
         self._lock = threading.Lock()
-
-    @property
-    def domain_path(self) -> Path:
-        return self.domain.path
 
     # --- lifecycle ----------------------------------------------------------------------
 
@@ -152,7 +147,9 @@ class GoalPlanner:
                 continue
             self._attempts[g.id] += 1
             if self._attempts[g.id] > self.max_attempts:
-                failed[g.id] = f"no plan for it succeeded in {self.max_attempts} attempts ({reason})"
+                failed[g.id] = (
+                    f"no plan for it succeeded in {self.max_attempts} attempts ({reason})"
+                )
             else:
                 todo.append(g)
         for goal_id in achieved:
@@ -163,7 +160,7 @@ class GoalPlanner:
         plan_id = None
         planned: tuple[int, ...] = ()
         if todo:
-            task = PlanningTask(self.domain_path, World(objects, tuple(facts)), tuple(todo))
+            task = PlanningTask(self.domain.path, World(objects, tuple(facts)), tuple(todo))
             outcome = plan_goals(self.planner, task)
             result = outcome.result
             unreachable.update(outcome.unreachable)

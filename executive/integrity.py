@@ -111,7 +111,9 @@ def _rule(
                 subject = when.text(key, required=True)
                 trigger = key if subject is not None else None
         if len([k for k in written if k in TRIGGERS]) != 1:
-            report.error(when.line, f"'when' of {s.what} needs exactly one of {', '.join(TRIGGERS)}")
+            report.error(
+                when.line, f"'when' of {s.what} needs exactly one of {', '.join(TRIGGERS)}"
+            )
             trigger = None
         when.close()
     if goal is not None:
@@ -170,7 +172,9 @@ class IntegrityGoals:
         if rule.trigger == "diagnosis":
             return bool(self.diagnoses) and all(rule.subject in d for d in self.diagnoses)
         try:
-            condition: Expression = parse(rule.subject, Signature.of(self.domain, self.kb.objects()))
+            condition: Expression = parse(
+                rule.subject, Signature.of(self.domain, self.kb.objects())
+            )
         except DomainError:
             return False  # an object it names is gone
         return state.holds(condition)
@@ -200,7 +204,9 @@ class IntegrityGoals:
             except DomainError as e:
                 self.kb.log_event("INTEGRITY_REFUSED", rule.name, {"reason": str(e)})
                 continue
-            self.kb.log_event("INTEGRITY_GOAL", rule.name, {"goal": goal.id, "trigger": rule.trigger})
+            self.kb.log_event(
+                "INTEGRITY_GOAL", rule.name, {"goal": goal.id, "trigger": rule.trigger}
+            )
             open_goals.add(rule.goal)
             posted.append(goal)
         return posted

@@ -80,7 +80,9 @@ def plan_goals(planner: Planner, task: PlanningTask, budget: float | None = None
 def _reason(goal: GoalSpec, kept: list[GoalSpec], attempt: PlanResult) -> str:
     by = f" by its deadline ({goal.deadline:g} s from now)" if goal.deadline is not None else ""
     if not attempt.status.no_plan:
-        return attempt.reason + (f" (with goals {', '.join(str(g.id) for g in kept)})" if kept else "")
+        return attempt.reason + (
+            f" (with goals {', '.join(str(g.id) for g in kept)})" if kept else ""
+        )
     if not kept:
         return f"no plan reaches it{by} from the current state ({attempt.reason})"
     others = ", ".join(str(g.id) for g in kept)

@@ -9,10 +9,10 @@ its at-start condition holds in the knowledge base's facts.
 from __future__ import annotations
 
 import enum
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from dataclasses import dataclass
 
-from executive.expression import TRUE, Const, Expression, State, atoms
+from executive.expression import TRUE, Const, Expression, State, Value
 from knowledge.records import Fact, PlanStep
 
 
@@ -52,8 +52,6 @@ class Effect:
         if value is None:
             return None
         if self.kind is not EffectKind.ASSIGN:
-            from executive.expression import Value
-
             current = state.number(Value(self.name, self.args))
             if current is None:
                 return None
@@ -120,10 +118,6 @@ class Step:
     def label(self) -> str:
         return f"{self.action}({', '.join(self.args)})"
 
-    def touches(self) -> frozenset[tuple[str, tuple[str, ...]]]:
-        """The atoms and functions this step's effects may change."""
-        return frozenset((e.name, e.args) for e in (*self.start_effects, *self.end_effects))
-
 
 @dataclass(frozen=True)
 class PartialOrderPlan:
@@ -142,9 +136,3 @@ class PartialOrderPlan:
     def roots(self) -> list[Step]:
         """The steps that come after no other step."""
         return [s for s in self.steps if not s.after]
-
-    def mentions(self) -> Mapping[int, frozenset[tuple[str, tuple[str, ...]]]]:
-        """For each step, the atoms its conditions read (for diagnostics and tests)."""
-        return {
-            s.index: atoms(s.at_start) | atoms(s.over_all) | atoms(s.at_end) for s in self.steps
-        }

@@ -26,6 +26,7 @@ no locks; the public methods post to the queue (and some wait for the answer).
 from __future__ import annotations
 
 import enum
+import functools
 import logging
 import queue
 import threading
@@ -310,7 +311,11 @@ class PlanExecuter:
             if run.step.after:
                 continue
             match = next(
-                (o for o in old if (o.step.action, o.step.args) == (run.step.action, run.step.args)),
+                (
+                    o
+                    for o in old
+                    if (o.step.action, o.step.args) == (run.step.action, run.step.args)
+                ),
                 None,
             )
             if match is not None:
@@ -323,7 +328,7 @@ class PlanExecuter:
         for spec in goals:
             goal = _Goal(spec, atoms(spec.expression))
             if spec.deadline is not None:
-                goal.timer = self._timer(spec.deadline, lambda g=goal: self._deadline(g))
+                goal.timer = self._timer(spec.deadline, functools.partial(self._deadline, goal))
             self._goals.append(goal)
             self.kb.set_goal_state(spec.id, GoalState.EXECUTING)
         self._event("PLAN_START", steps=len(plan.steps), goals=[g.id for g in goals])
@@ -352,15 +357,17 @@ class PlanExecuter:
     def _pause(self) -> None:
         self._paused = True
         for run in self._runs.values():
-            if run.state in (StepState.RUNNING, StepState.DISPATCHED) and run.task is not None:
-                if run.task.interruptible:
-                    run.task.pause()
-                    run.was, run.state = run.state, StepState.PAUSED
-                    self._disarm(run)
+            active = run.state in (StepState.RUNNING, StepState.DISPATCHED)
+            if active and run.task is not None and run.task.interruptible:
+                run.task.pause()
+                run.was, run.state = run.state, StepState.PAUSED
+                self._disarm(run)
 
     def _critical(self) -> bool:
         """Whether a step that cannot be paused is still under way."""
-        return any(r.state in (StepState.RUNNING, StepState.DISPATCHED) for r in self._runs.values())
+        return any(
+            r.state in (StepState.RUNNING, StepState.DISPATCHED) for r in self._runs.values()
+        )
 
     def _resume(self) -> None:
         self._paused = False
@@ -521,7 +528,9 @@ class PlanExecuter:
         if run.state is StepState.PAUSED:
             run.was = StepState.RUNNING
         if not self._state().holds(run.step.at_start):
-            self._fail(run, f"at-start condition {run.step.at_start} of {run.step.label} no longer holds")
+            self._fail(
+                run, f"at-start condition {run.step.at_start} of {run.step.label} no longer holds"
+            )
             return
         self._apply(run, run.step.start_effects, remember=True)
         run.started = True
@@ -538,7 +547,10 @@ class PlanExecuter:
         state = self._state()
         for what, condition in (("over-all", run.step.over_all), ("at-end", run.step.at_end)):
             if not state.holds(condition):
-                self._fail(run, f"{what} condition {condition} of {run.step.label} does not hold at its end")
+                self._fail(
+                    run,
+                    f"{what} condition {condition} of {run.step.label} does not hold at its end",
+                )
                 return
         self._disarm(run)
         self._apply(run, run.step.end_effects, remember=False)
@@ -579,9 +591,7 @@ class PlanExecuter:
     def _check_goals(self, state: State) -> None:
         """A goal is achieved when it holds and no unfinished step may change what it
         mentions; a goal with a deadline that holds in time is remembered as in time."""
-        pending = [
-            r for r in self._runs.values() if r.state is StepState.PENDING or r.state.active
-        ]
+        pending = [r for r in self._runs.values() if r.state is StepState.PENDING or r.state.active]
         for goal in self._goals:
             if goal.done or not state.holds(goal.spec.expression):
                 continue
@@ -594,7 +604,11 @@ class PlanExecuter:
 
     @staticmethod
     def _touches(run: _Run, mentions: frozenset[tuple[str, tuple[str, ...]]]) -> bool:
-        effects = run.step.end_effects if run.started else (*run.step.start_effects, *run.step.end_effects)
+        effects = (
+            run.step.end_effects
+            if run.started
+            else (*run.step.start_effects, *run.step.end_effects)
+        )
         return any((e.name, e.args) in mentions for e in effects)
 
     def _deadline(self, goal: _Goal) -> None:

@@ -33,7 +33,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 from importlib import metadata
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import IO, Any
 
 from executive.goal import GoalSpec
 from executive.partial_order import PartialOrderPlan
@@ -216,7 +216,7 @@ class Planner:
             return ""
         return next((line for line in reversed(lines) if line.strip()), "")
 
-    def _wait_ready(self, stream: BinaryIO) -> None:
+    def _wait_ready(self, stream: IO[bytes]) -> None:
         """Wait for a new worker's first message (it has loaded unified-planning)."""
         if self._ready:
             return
@@ -290,13 +290,13 @@ class _suppress_lookup:
 # --- framing --------------------------------------------------------------------------
 
 
-def _send(stream: BinaryIO, message: object) -> None:
+def _send(stream: IO[bytes], message: object) -> None:
     data = pickle.dumps(message, protocol=pickle.HIGHEST_PROTOCOL)
     stream.write(_HEADER.pack(len(data)) + data)
     stream.flush()
 
 
-def _read_exactly(stream: BinaryIO, size: int, deadline: float | None) -> bytes:
+def _read_exactly(stream: IO[bytes], size: int, deadline: float | None) -> bytes:
     chunks: list[bytes] = []
     fd = stream.fileno()
     while size > 0:
@@ -312,7 +312,7 @@ def _read_exactly(stream: BinaryIO, size: int, deadline: float | None) -> bytes:
     return b"".join(chunks)
 
 
-def _receive(stream: BinaryIO, deadline: float | None) -> Any:
+def _receive(stream: IO[bytes], deadline: float | None) -> Any:
     (size,) = _HEADER.unpack(_read_exactly(stream, _HEADER.size, deadline))
     return pickle.loads(_read_exactly(stream, size, deadline))  # noqa: S301 (our own worker)
 
@@ -474,9 +474,7 @@ def _validate(problem: Any, plan: Any) -> tuple[bool, str, str]:
     names = _VALIDATORS.get(type(plan).__name__, ())
     if not names:
         return False, "", f"no validator for a {type(plan).__name__}"
-    chosen = next(
-        (n for n in names if PlanValidator(name=n).supports(problem.kind)), names[0]
-    )
+    chosen = next((n for n in names if PlanValidator(name=n).supports(problem.kind)), names[0])
     with PlanValidator(name=chosen) as validator:
         answer = validator.validate(problem, plan)
     if answer.status == ValidationResultStatus.VALID:
@@ -486,7 +484,7 @@ def _validate(problem: Any, plan: Any) -> tuple[bool, str, str]:
     return False, chosen, f"{chosen}: {reason} {'; '.join(messages)}".strip()
 
 
-def _frames(stream: BinaryIO) -> Iterator[Any]:
+def _frames(stream: IO[bytes]) -> Iterator[Any]:
     while True:
         try:
             yield _receive(stream, None)

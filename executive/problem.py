@@ -15,7 +15,7 @@ The goal must also hold at the end, like every goal.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -134,8 +134,10 @@ def from_fnode(node: FNode, problem: Problem, env: Mapping[str, str] | None = No
             for binding in bindings(n.variables(), problem)
         ]
         return conjunction(parts) if n.is_forall() else Or(tuple(parts))
-    if n.is_equals() and not n.arg(0).type.is_bool_type() and (
-        n.arg(0).type.is_user_type() or n.arg(1).type.is_user_type()
+    if (
+        n.is_equals()
+        and not n.arg(0).type.is_bool_type()
+        and (n.arg(0).type.is_user_type() or n.arg(1).type.is_user_type())
     ):
         return Const(_object_name(n.arg(0), env) == _object_name(n.arg(1), env))
     comparisons = {"is_lt": "<", "is_le": "<=", "is_equals": "="}
@@ -193,8 +195,10 @@ def build(domain: Problem, world: World, goals: Sequence[GoalSpec]) -> Problem:
             raise DomainError(f"fact {fact}: unknown predicate or function '{fact.name}'")
         try:
             atom = to_fnode(Atom(fact.name, fact.args), problem)
-            value = em.Bool(fact.value) if isinstance(fact.value, bool) else em.Real(
-                Fraction(str(fact.value))
+            value = (
+                em.Bool(fact.value)
+                if isinstance(fact.value, bool)
+                else em.Real(Fraction(str(fact.value)))
             )
             problem.set_initial_value(atom, value)
         except Exception as e:  # UP raises its own errors for unknown objects and types
@@ -267,8 +271,3 @@ def seed_world(kb: KnowledgeBase, robot: RobotDescription) -> bool:
         kb.update_facts(add=world.facts)
         kb.log_event("WORLD_SEEDED", str(robot.problem), {"objects": len(world.objects)})
     return True
-
-
-def facts_of(state: Iterable[Fact]) -> tuple[Fact, ...]:
-    """Facts as a planner's world holds them: only true atoms and numbers."""
-    return tuple(f for f in state if f.value is not False)

@@ -15,7 +15,7 @@ bookkeeping actions compiled for deadlines are left out, their orderings kept.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
@@ -102,7 +102,7 @@ def _from_timed(problem: Problem, plan: Any) -> PartialOrderPlan:
 
 def _steps(
     problem: Problem,
-    timed: list[tuple[Fraction, Any, Fraction | None]],
+    timed: Sequence[tuple[Fraction, Any, Fraction | None]],
     waits: Mapping[int, set[Precedence]],
 ) -> PartialOrderPlan:
     """Ground the actions, drop bookkeeping ones (keeping their orderings), renumber."""
@@ -129,7 +129,7 @@ def _steps(
             key=lambda p: (p.step, p.at.value),
         )
         steps.append(
-            _ground(problem, ai, number[old], float(start), _seconds(duration), tuple(after))
+            _ground(problem, ai, number[old], float(start), _seconds(duration), after=tuple(after))
         )
     return PartialOrderPlan(tuple(steps))
 
@@ -144,6 +144,7 @@ def _ground(
     index: int,
     start: float,
     duration: float | None,
+    *,
     after: tuple[Precedence, ...],
 ) -> Step:
     """A step with the action's conditions and effects bound to its arguments."""
@@ -190,7 +191,11 @@ def _ground(
     )
 
 
-_KINDS = {"ASSIGN": EffectKind.ASSIGN, "INCREASE": EffectKind.INCREASE, "DECREASE": EffectKind.DECREASE}
+_KINDS = {
+    "ASSIGN": EffectKind.ASSIGN,
+    "INCREASE": EffectKind.INCREASE,
+    "DECREASE": EffectKind.DECREASE,
+}
 
 
 def _effects(effect: Any, problem: Problem, env: Mapping[str, str]) -> list[Effect]:

@@ -69,7 +69,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _after(step: Step) -> str:
-    return " ".join(f"{p.step}{'' if p.at.value == 'end' else '(start)'}" for p in step.after) or "-"
+    return (
+        " ".join(f"{p.step}{'' if p.at.value == 'end' else '(start)'}" for p in step.after) or "-"
+    )
 
 
 def print_timeline(plan: PartialOrderPlan) -> None:

@@ -61,9 +61,7 @@ def usecase_task(*goals: tuple[str, dict[str, float]] | str) -> PlanningTask:
     specs = []
     for i, g in enumerate(goals, 1):
         text, extra = (g, {}) if isinstance(g, str) else g
-        specs.append(
-            GoalSpec(i, expr(text), int(extra.get("priority", 0)), extra.get("deadline"))
-        )
+        specs.append(GoalSpec(i, expr(text), int(extra.get("priority", 0)), extra.get("deadline")))
     return PlanningTask(USECASE_DOMAIN, world(USECASE_DOMAIN, USECASE_PROBLEM), tuple(specs))
 
 

@@ -23,7 +23,9 @@ def with_goal(tmp_path: Path, problem: Path, goal: str) -> Path:
     return out
 
 
-def test_dura_plan_offline_prints_a_validated_plan_as_a_timeline(dura: Dura, tmp_path: Path) -> None:
+def test_dura_plan_offline_prints_a_validated_plan_as_a_timeline(
+    dura: Dura, tmp_path: Path
+) -> None:
     problem = with_goal(tmp_path, TRANSPORT_PROBLEM, "(and (crate_at parcel lab) (robot_at dock))")
     done = dura("plan", "--offline", str(TRANSPORT_DOMAIN), str(problem))
     assert done.returncode == 0, done.stderr
@@ -33,9 +35,13 @@ def test_dura_plan_offline_prints_a_validated_plan_as_a_timeline(dura: Dura, tmp
     assert any("pick(parcel, store)" in line and "█" in line for line in lines)
 
 
-def test_dura_plan_offline_json_gives_steps_with_their_precedences(dura: Dura, tmp_path: Path) -> None:
+def test_dura_plan_offline_json_gives_steps_with_their_precedences(
+    dura: Dura, tmp_path: Path
+) -> None:
     problem = with_goal(tmp_path, TRANSPORT_PROBLEM, "(robot_at lab)")
-    done = dura("plan", "--offline", str(TRANSPORT_DOMAIN), str(problem), "--json", "--engine", "aries")
+    done = dura(
+        "plan", "--offline", str(TRANSPORT_DOMAIN), str(problem), "--json", "--engine", "aries"
+    )
     assert done.returncode == 0, done.stderr
     data = json.loads(done.stdout)
     assert data["status"] == "solved" and data["engine"] == "aries"
@@ -55,17 +61,18 @@ def test_no_plan_exits_1_with_the_reason_on_one_line(dura: Dura, tmp_path: Path)
 
 def test_a_problem_with_an_error_is_one_line_with_file_and_line(dura: Dura, tmp_path: Path) -> None:
     problem = tmp_path / "bad.pddl"
-    problem.write_text("(define (problem p) (:domain usecase)\n (:objects a - place)\n (:init (robot_at b)))")
+    problem.write_text(
+        "(define (problem p) (:domain usecase)\n (:objects a - place)\n (:init (robot_at b)))"
+    )
     done = dura("plan", "--offline", str(USECASE_DOMAIN), str(problem))
     assert done.returncode == 1
     (line,) = done.stderr.splitlines()
     assert line.startswith(f"dura: {problem}:3: PDDL: ")
     missing = dura("plan", "--offline", str(USECASE_DOMAIN), str(tmp_path / "nope.pddl"))
     assert missing.returncode == 1
-    assert missing.stderr.splitlines() == [f"dura: {tmp_path / 'nope.pddl'}: cannot read: [Errno 2] No such file or directory: '{tmp_path / 'nope.pddl'}'"]
+    assert missing.stderr.splitlines() == [
+        f"dura: {tmp_path / 'nope.pddl'}: cannot read: [Errno 2] No such file or directory: '{tmp_path / 'nope.pddl'}'"
+    ]
     usage = dura("plan", "--offline", str(USECASE_DOMAIN), str(problem), "--engine", "nope")
     assert usage.returncode == 2
     assert len(usage.stderr.splitlines()) == 1
-
-
-

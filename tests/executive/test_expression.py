@@ -45,7 +45,9 @@ def test_a_goal_that_does_not_fit_the_domain_is_refused_with_the_reason(
 def test_an_object_of_the_wrong_type_is_refused() -> None:
     sig = signature()
     typed = type(sig)(sig.predicates, sig.functions, {**sig.objects, "r1": "robot"}, sig.parents)
-    with pytest.raises(DomainError, match="argument 1 of 'robot_at' must be a place, but 'r1' is a robot"):
+    with pytest.raises(
+        DomainError, match="argument 1 of 'robot_at' must be a place, but 'r1' is a robot"
+    ):
         parse("(robot_at r1)", typed)
 
 

@@ -27,10 +27,13 @@ class Executive:
     def __init__(self, kb: KnowledgeBase, planner: Planner, runner: ScriptedRunner) -> None:
         self.kb = kb
         self.runner = runner
-        self.executer = PlanExecuter(kb, runner, TASKS, lambda reason: self.goals.replan(reason))
+        self.executer = PlanExecuter(kb, runner, TASKS, self._replan)
         self.goals = GoalPlanner(kb, usecase_domain(), planner, self.executer)
         self.executer.start()
         self.goals.start()
+
+    def _replan(self, reason: str) -> None:
+        self.goals.replan(reason)
 
     def submit(self, text: str, **options: object) -> Goal:
         goal = submit(self.kb, usecase_domain(), text, **options)  # type: ignore[arg-type]

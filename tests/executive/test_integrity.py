@@ -19,7 +19,9 @@ from tests.executive.planning_cases import (
 )
 
 
-def usecase_rules(kb: KnowledgeBase, text: str | None = None, tmp: Path | None = None) -> IntegrityGoals:
+def usecase_rules(
+    kb: KnowledgeBase, text: str | None = None, tmp: Path | None = None
+) -> IntegrityGoals:
     robot = load_robot(USECASE)
     path = ROOT / "examples" / "usecase" / "integrity.yaml"
     if text is not None and tmp is not None:
@@ -83,14 +85,22 @@ def test_a_component_in_every_diagnosis_posts_a_goal(
 
 
 BAD_RULES = [
-    ("goals:\n  - name: a\n    when: {permanent_fault: lidr}\n    goal: (robot_at dock)\n",
-     ":3: integrity rule 'a' names unknown component 'lidr' (did you mean 'lidar'?)"),
-    ("goals:\n  - name: a\n    when: {permanent_fault: lidar}\n    goal: (robot_at dok)\n",
-     ":4: integrity rule 'a': goal '(robot_at dok)': unknown object 'dok'"),
-    ("goals:\n  - name: a\n    when: {}\n    goal: (robot_at dock)\n",
-     ":3: 'when' of integrity rule 'a' needs exactly one of permanent_fault, diagnosis, condition"),
-    ("goals:\n  - name: a\n    when: {condition: (robot_at dock)}\n    goal: (robot_at dock)\n    priorty: 3\n",
-     ":5: unknown key 'priorty' in integrity rule 'a' (did you mean 'priority'?)"),
+    (
+        "goals:\n  - name: a\n    when: {permanent_fault: lidr}\n    goal: (robot_at dock)\n",
+        ":3: integrity rule 'a' names unknown component 'lidr' (did you mean 'lidar'?)",
+    ),
+    (
+        "goals:\n  - name: a\n    when: {permanent_fault: lidar}\n    goal: (robot_at dok)\n",
+        ":4: integrity rule 'a': goal '(robot_at dok)': unknown object 'dok'",
+    ),
+    (
+        "goals:\n  - name: a\n    when: {}\n    goal: (robot_at dock)\n",
+        ":3: 'when' of integrity rule 'a' needs exactly one of permanent_fault, diagnosis, condition",
+    ),
+    (
+        "goals:\n  - name: a\n    when: {condition: (robot_at dock)}\n    goal: (robot_at dock)\n    priorty: 3\n",
+        ":5: unknown key 'priorty' in integrity rule 'a' (did you mean 'priority'?)",
+    ),
 ]
 
 

@@ -59,7 +59,9 @@ def test_a_search_that_runs_out_of_time_gives_the_goals_left_that_reason(
     )
     assert outcome.ok
     assert outcome.planned == (2,)
-    assert "no plan in time" in outcome.unreachable[1] or "ran out of time" in outcome.unreachable[1]
+    assert (
+        "no plan in time" in outcome.unreachable[1] or "ran out of time" in outcome.unreachable[1]
+    )
 
 
 def test_a_goal_no_plan_reaches_even_alone_says_so(kairos: Planner) -> None:

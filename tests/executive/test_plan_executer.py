@@ -7,10 +7,9 @@ from collections.abc import Callable, Iterator
 
 import pytest
 
-from executive.expression import Atom
+from executive.expression import Atom, Const
 from executive.goal import GoalSpec, submit
 from executive.partial_order import Effect, PartialOrderPlan, Step
-from executive.expression import Const
 from executive.plan_executer import ExecutionLimits, PlanExecuter
 from executive.planner import Planner, PlanningTask
 from executive.problem import World
@@ -22,7 +21,6 @@ from tests.executive.planning_cases import (
     kairos_fixture,  # noqa: F401 (a fixture)
     usecase_domain,
     usecase_kb_fixture,  # noqa: F401 (a fixture)
-
 )
 from tests.executive.scripted_runner import ScriptedRunner
 
@@ -54,11 +52,17 @@ class Run:
         world = World(self.kb.objects(), tuple(self.executer.planning_facts()))
         result = kairos.solve(PlanningTask(USECASE_DOMAIN, world, tuple(specs)))
         assert result.plan is not None, result.log
-        stored = self.kb.store_plan(result.plan.records(), engine="kairos", goal_ids=[g.id for g in specs])
+        stored = self.kb.store_plan(
+            result.plan.records(), engine="kairos", goal_ids=[g.id for g in specs]
+        )
         return result.plan, stored.id, specs
 
     def kinds(self) -> list[tuple[str, str]]:
-        return [(e.kind, e.subject) for e in self.kb.events() if e.kind in ("DISPATCH", "START", "END", "FAIL", "CANCEL", "REPLAN")]
+        return [
+            (e.kind, e.subject)
+            for e in self.kb.events()
+            if e.kind in ("DISPATCH", "START", "END", "FAIL", "CANCEL", "REPLAN")
+        ]
 
 
 @pytest.fixture
@@ -133,7 +137,9 @@ def test_a_step_running_past_its_duration_and_the_margin_times_out(
     plan_id = r.kb.store_plan(PartialOrderPlan((step,)).records()).id
     r.executer.execute(PartialOrderPlan((step,)), plan_id, [])
     eventually(lambda: bool(r.replans))
-    assert r.replans == ["step move_to(dock, lab) timed out: still running after 0.3 s (expected 0.1 s)"]
+    assert r.replans == [
+        "step move_to(dock, lab) timed out: still running after 0.3 s (expected 0.1 s)"
+    ]
     assert runner.wait_for("move_to(dock, lab)").calls == ["cancel"]
 
 
@@ -147,6 +153,9 @@ def test_pausing_pauses_interruptible_tasks_and_waits_for_critical_ones(
     move = runner.wait_for("move_to(dock, lab)")
     assert r.executer.pause(timeout=10)
     assert move.calls == ["pause"]
+    status = r.executer.status()
+    assert (status["plan"], status["paused"]) == (plan_id, True)
+    assert [s["state"] for s in status["steps"]] == ["paused"]
     # the planner sees the robot where the paused step started
     assert Fact("robot_at", ("dock",)) in r.executer.planning_facts()
     assert Fact("robot_at", ("dock",)) not in r.kb.facts()
@@ -209,7 +218,9 @@ def test_an_action_without_a_task_completes_at_once_with_its_effects(
     assert Fact("robot_at", ("lab",)) in r.kb.facts()
 
 
-def test_a_step_that_cannot_start_makes_the_plan_fail(run: Callable[..., Run], kairos: Planner) -> None:
+def test_a_step_that_cannot_start_makes_the_plan_fail(
+    run: Callable[..., Run], kairos: Planner
+) -> None:
     r = run()
     plan, plan_id, goals = r.plan(kairos, "(robot_at lab)")
     r.kb.update_facts(remove=[Fact("robot_at", ("dock",))], add=[Fact("robot_at", ("office",))])

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import time
 from pathlib import Path
 
@@ -28,7 +27,9 @@ from tests.executive.planning_cases import (
 def test_kairos_plans_the_use_case_and_an_independent_validator_accepts_the_plan(
     kairos: Planner,
 ) -> None:
-    result = kairos.solve(usecase_task("(picture_taken lab)", "(picture_taken office)", "(robot_at dock)"))
+    result = kairos.solve(
+        usecase_task("(picture_taken lab)", "(picture_taken office)", "(robot_at dock)")
+    )
     assert result.status is PlanStatus.SOLVED, result.log
     assert result.engine == "kairos"
     assert result.validator in ("up_time_triggered_validator", "kairos-val")
@@ -69,7 +70,9 @@ def test_a_world_that_does_not_fit_the_domain_is_an_error_result(kairos: Planner
 
 
 def test_aries_plans_the_transport_domain_with_concurrent_steps(tmp_path: Path) -> None:
-    goal = GoalSpec(1, expr("(and (crate_at parcel lab) (robot_at dock))", TRANSPORT_DOMAIN, TRANSPORT_PROBLEM))
+    goal = GoalSpec(
+        1, expr("(and (crate_at parcel lab) (robot_at dock))", TRANSPORT_DOMAIN, TRANSPORT_PROBLEM)
+    )
     task = PlanningTask(TRANSPORT_DOMAIN, world(TRANSPORT_DOMAIN, TRANSPORT_PROBLEM), (goal,))
     with Planner("aries", timeout=20) as aries:
         result = aries.solve(task)
@@ -104,7 +107,9 @@ def test_fast_downward_plans_a_classical_domain(tmp_path: Path) -> None:
     assert [s.label for s in result.plan.steps] == ["go(a, b)", "go(b, c)", "go(c, a)"]
     assert all(s.duration is None for s in result.plan.steps)
     assert [[(p.step, p.at.value) for p in s.after] for s in result.plan.steps] == [
-        [], [(0, "end")], [(1, "end")]
+        [],
+        [(0, "end")],
+        [(1, "end")],
     ]
 
 

@@ -77,14 +77,19 @@ def signature_of(kb: KnowledgeBase):  # type: ignore[no-untyped-def]
 
 
 def test_a_problem_holds_the_world_the_goals_and_a_window_for_each_deadline() -> None:
-    goals = [GoalSpec(1, expr("(picture_taken lab)")), GoalSpec(2, expr("(robot_at dock)"), 0, 12.5)]
+    goals = [
+        GoalSpec(1, expr("(picture_taken lab)")),
+        GoalSpec(2, expr("(robot_at dock)"), 0, 12.5),
+    ]
     problem = build(parse(USECASE_DOMAIN), world(USECASE_DOMAIN, USECASE_PROBLEM), goals)
     assert {o.name for o in problem.all_objects} == {"dock", "lab", "office"}
     assert len(problem.explicit_initial_values) >= 15
     assert [str(g) for g in problem.goals] == [
-        "picture_taken(lab)", "robot_at(dock)", "dura_reached_2"
+        "picture_taken(lab)",
+        "robot_at(dock)",
+        "dura_reached_2",
     ]
-    (timing, effects), = problem.timed_effects.items()
+    ((timing, effects),) = problem.timed_effects.items()
     assert float(timing.delay) == 12.5
     assert [str(e) for e in effects] == ["dura_before_deadline_2 := false"]
     assert problem.action("dura_reach_goal_2") is not None
@@ -100,7 +105,9 @@ def test_a_fact_the_domain_does_not_know_is_refused() -> None:
 
 def test_a_problem_file_that_does_not_fit_the_domain_names_file_and_line(tmp_path: Path) -> None:
     problem = tmp_path / "p.pddl"
-    problem.write_text("(define (problem p) (:domain usecase)\n (:objects a - place)\n (:init (robot_at b)))")
+    problem.write_text(
+        "(define (problem p) (:domain usecase)\n (:objects a - place)\n (:init (robot_at b)))"
+    )
     with pytest.raises(DomainError, match=rf"^{problem}:3: PDDL: "):
         read_world(USECASE_DOMAIN, problem)
 

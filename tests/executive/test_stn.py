@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 from executive.expression import Atom, State
 from executive.goal import GoalSpec
 from executive.partial_order import Precedence, Timepoint, apply
@@ -25,7 +27,7 @@ def test_each_step_of_a_sequential_use_case_plan_waits_for_the_end_of_the_one_be
     steps = result.plan.steps
     assert "take_picture(lab)" in [s.label for s in steps]
     assert steps[0].after == ()
-    for before, step in zip(steps, steps[1:], strict=False):
+    for before, step in itertools.pairwise(steps):
         assert Precedence(before.index, Timepoint.END) in step.after
         assert step.start >= before.start + (before.duration or 0) - 1e-6
 
@@ -52,7 +54,10 @@ def test_the_lift_is_called_while_the_robot_drives_and_the_ride_waits_for_both(
     result = kairos.solve(task)
     assert result.ok and result.plan is not None
     by_label = {s.label: s for s in result.plan.steps}
-    assert {s.label for s in result.plan.roots()} == {"call_lift(hall1, hall0)", "drive(dock, hall0)"}
+    assert {s.label for s in result.plan.roots()} == {
+        "call_lift(hall1, hall0)",
+        "drive(dock, hall0)",
+    }
     ride = by_label["ride_lift(hall0, hall1)"]
     waits = {(result.plan.steps[p.step].label, p.at) for p in ride.after}
     assert waits == {
