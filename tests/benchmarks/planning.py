@@ -9,6 +9,7 @@ and conversion to the partial order included), p50/p95 over the repeats.
 from __future__ import annotations
 
 import argparse
+import functools
 import statistics
 import tempfile
 import time
@@ -37,7 +38,10 @@ ROOMS_PROBLEM = """(define (problem tour) (:domain rooms) (:objects a b c d e - 
   (:goal (and (visited e) (visited c) (at a))))"""
 
 CASES = {
-    "usecase: 2 pictures, dock": (USECASE, ["(picture_taken lab)", "(picture_taken office)", "(robot_at dock)"]),
+    "usecase: 2 pictures, dock": (
+        USECASE,
+        ["(picture_taken lab)", "(picture_taken office)", "(robot_at dock)"],
+    ),
     "transport: parcel to lab, dock": (TRANSPORT, ["(crate_at parcel lab)", "(robot_at dock)"]),
 }
 
@@ -52,7 +56,12 @@ def ms(seconds: float) -> str:
     return f"{seconds * 1000:.0f}"
 
 
-def task_for(files: tuple[Path, Path], goals: list[str], deadlines: dict[int, float] | None = None, priorities: dict[int, int] | None = None) -> PlanningTask:
+def task_for(
+    files: tuple[Path, Path],
+    goals: list[str],
+    deadlines: dict[int, float] | None = None,
+    priorities: dict[int, int] | None = None,
+) -> PlanningTask:
     domain, problem = files
     world, _ = read_world(domain, problem)
     sig = Signature.of(read_domain(domain), world.objects)
@@ -85,18 +94,28 @@ def engines_table(repeats: int, tmp: Path) -> None:
     for engine in engine_names():
         try:
             planner = Planner(engine, timeout=30)
-        except Exception as e:  # noqa: BLE001 (an engine missing is a row, not a crash)
+        except Exception as e:
             rows.append([engine, "-", "-", "-", f"n/a: {e}"])
             continue
         with planner:
             for name, task in cases.items():
                 first = planner.solve(task)  # warms the worker and the domain
                 if not first.ok:
-                    rows.append([engine, name, "-", "-", f"{first.status.value}: {first.reason[:60]}"])
+                    rows.append(
+                        [engine, name, "-", "-", f"{first.status.value}: {first.reason[:60]}"]
+                    )
                     continue
-                samples, status = measure(lambda t=task: planner.solve(t), repeats)
+                samples, status = measure(functools.partial(planner.solve, task), repeats)
                 p50, p95 = percentiles(samples)
-                rows.append([engine, name, ms(p50), ms(p95), f"{status}, {len(first.plan.steps) if first.plan else 0} steps"])
+                rows.append(
+                    [
+                        engine,
+                        name,
+                        ms(p50),
+                        ms(p95),
+                        f"{status}, {len(first.plan.steps) if first.plan else 0} steps",
+                    ]
+                )
     section(f"planning time per engine (warm worker, {repeats} repeats)")
     table(["engine", "case", "p50 ms", "p95 ms", "result"], rows)
 
@@ -104,14 +123,19 @@ def engines_table(repeats: int, tmp: Path) -> None:
 def oversubscription_table(repeats: int) -> None:
     """Ours (greedy by priority) against UP's oversubscription meta-engine and Kairos'
     own oversubscription metric, on the use case with one unreachable goal."""
-    import unified_planning.model.metrics as metrics
     import up_kairos
+    from unified_planning.model import metrics
     from unified_planning.shortcuts import OneshotPlanner, get_environment
 
     warnings.simplefilter("ignore")
     get_environment().credits_stream = None
     up_kairos.register()
-    goals = ["(picture_taken lab)", "(picture_taken dock)", "(picture_taken office)", "(robot_at dock)"]
+    goals = [
+        "(picture_taken lab)",
+        "(picture_taken dock)",
+        "(picture_taken office)",
+        "(robot_at dock)",
+    ]
     priorities = {1: 4, 2: 3, 3: 2, 4: 1}
     task = task_for(USECASE, goals, priorities=priorities)
     rows = []
@@ -120,13 +144,23 @@ def oversubscription_table(repeats: int) -> None:
         samples, _ = measure(lambda: plan_goals(planner, task).result, repeats)
         outcome = plan_goals(planner, task)
         p50, p95 = percentiles(samples)
-        rows.append(["dura: greedy by priority (worker)", ms(p50), ms(p95), f"goals {list(outcome.planned)}, {outcome.calls} calls, reasons for {list(outcome.unreachable)}"])
+        rows.append(
+            [
+                "dura: greedy by priority (worker)",
+                ms(p50),
+                ms(p95),
+                f"goals {list(outcome.planned)}, {outcome.calls} calls, reasons for {list(outcome.unreachable)}",
+            ]
+        )
     # the two alternatives, in this process (no worker), for the same problem
     problem = build(parse_domain(USECASE[0]), task.world, ())
     fnodes = {g.id: build(parse_domain(USECASE[0]), task.world, (g,)).goals[0] for g in task.goals}
     gains = {fnodes[i]: 2 ** (len(goals) - i) for i in fnodes}  # lexicographic by priority
     problem.add_quality_metric(metrics.Oversubscription(gains))
-    for name, engine in (("UP oversubscription[kairos] meta-engine", "oversubscription[kairos]"), ("Kairos' own oversubscription metric", "kairos")):
+    for name, engine in (
+        ("UP oversubscription[kairos] meta-engine", "oversubscription[kairos]"),
+        ("Kairos' own oversubscription metric", "kairos"),
+    ):
         with OneshotPlanner(name=engine) as solver:
             samples = []
             answer = None
@@ -135,8 +169,17 @@ def oversubscription_table(repeats: int) -> None:
                 answer = solver.solve(problem, timeout=10)
                 samples.append(time.perf_counter() - began)
         p50, p95 = percentiles(samples)
-        steps = len(answer.plan.timed_actions) if answer is not None and answer.plan is not None else 0
-        rows.append([f"{name} (in process)", ms(p50), ms(p95), f"{answer.status.name.lower() if answer else '-'}, {steps} steps, no reasons"])
+        steps = (
+            len(answer.plan.timed_actions) if answer is not None and answer.plan is not None else 0
+        )
+        rows.append(
+            [
+                f"{name} (in process)",
+                ms(p50),
+                ms(p95),
+                f"{answer.status.name.lower() if answer else '-'}, {steps} steps, no reasons",
+            ]
+        )
     section("oversubscription: 4 goals, 1 unreachable (use case)")
     table(["strategy", "p50 ms", "p95 ms", "outcome"], rows)
 
@@ -144,7 +187,7 @@ def oversubscription_table(repeats: int) -> None:
 def deadline_table(repeats: int) -> None:
     """Deadlines compiled to a timed-literal window (all engines) against UP's native
     timed goals (Aries only), on the transport domain."""
-    import unified_planning.model as model
+    from unified_planning import model
     from unified_planning.shortcuts import OneshotPlanner, get_environment
 
     warnings.simplefilter("ignore")
@@ -156,7 +199,7 @@ def deadline_table(repeats: int) -> None:
         with Planner(engine, timeout=30) as planner:
             for label, task in (("no deadline", plain), ("deadline 30 s, compiled window", timed)):
                 planner.solve(task)
-                samples, status = measure(lambda t=task: planner.solve(t), repeats)
+                samples, status = measure(functools.partial(planner.solve, task), repeats)
                 p50, p95 = percentiles(samples)
                 rows.append([engine, label, ms(p50), ms(p95), status])
     problem = build(parse_domain(TRANSPORT[0]), plain.world, plain.goals)
@@ -180,8 +223,18 @@ def latency_table() -> None:
     table(
         ["latency", "target p50", "p50 ms", "p95 ms"],
         [
-            ["goal submitted -> first task dispatched", "250 ms", "n/a (needs runtime)", "n/a (needs runtime)"],
-            ["task failed -> replanned task dispatched", "150 ms", "n/a (needs runtime)", "n/a (needs runtime)"],
+            [
+                "goal submitted -> first task dispatched",
+                "250 ms",
+                "n/a (needs runtime)",
+                "n/a (needs runtime)",
+            ],
+            [
+                "task failed -> replanned task dispatched",
+                "150 ms",
+                "n/a (needs runtime)",
+                "n/a (needs runtime)",
+            ],
         ],
     )
 
@@ -190,10 +243,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--repeats", type=int, default=10)
     args = parser.parse_args()
-    with tempfile.TemporaryDirectory() as tmp:
-        engines_table(args.repeats, Path(tmp))
-    oversubscription_table(args.repeats)
-    deadline_table(args.repeats)
+    with tempfile.TemporaryDirectory(prefix="dura-bench-") as tmp:
+        tempfile.tempdir = tmp  # Aries, run in this process below, leaves its logs here
+        try:
+            engines_table(args.repeats, Path(tmp))
+            oversubscription_table(args.repeats)
+            deadline_table(args.repeats)
+        finally:
+            tempfile.tempdir = None
     latency_table()
 
 
