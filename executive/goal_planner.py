@@ -7,7 +7,7 @@ plans for all goals (or the best subset by priority, see
 :mod:`executive.oversubscription`), validates and stores the plan, marks the goals
 planned or unreachable with the reason, and hands the plan to the executer. A goal
 that already holds is achieved without planning; one whose deadline passed fails.
-A goal whose plans keep failing fails after ``max_attempts`` rounds.
+A goal fails once ``max_attempts`` plans for it have failed.
 """
 
 from __future__ import annotations
@@ -63,7 +63,7 @@ class GoalPlanner:
         self.executer = executer
         self.max_attempts = max_attempts
         self.pause_timeout = pause_timeout
-        self._attempts: Counter[int] = Counter()
+        self._failures: Counter[int] = Counter()  # failed plans per goal
         self._planned: frozenset[int] | None = None
         self._replan = True
         self._reasons: list[str] = []
@@ -96,7 +96,10 @@ class GoalPlanner:
         self._wake.set()
 
     def replan(self, reason: str) -> None:
-        """The executer's ``on_replan`` callback."""
+        """The executer's ``on_replan`` callback: the current plan failed."""
+        with self._lock:
+            for goal_id in self._planned or ():
+                self._failures[goal_id] += 1
         self.wake(reason, replan=True)
 
     def cancel(self, goal_id: int) -> None:
@@ -145,11 +148,8 @@ class GoalPlanner:
         for g in usable:
             if g.id in achieved:
                 continue
-            self._attempts[g.id] += 1
-            if self._attempts[g.id] > self.max_attempts:
-                failed[g.id] = (
-                    f"no plan for it succeeded in {self.max_attempts} attempts ({reason})"
-                )
+            if self._failures[g.id] >= self.max_attempts:
+                failed[g.id] = f"{self.max_attempts} plans for it failed, the last because {reason}"
             else:
                 todo.append(g)
         for goal_id in achieved:

@@ -8,7 +8,8 @@ import pytest
 
 from executive.goal import submit
 from executive.goal_planner import GoalPlanner
-from executive.plan_executer import PlanExecuter
+from executive.partial_order import Step
+from executive.plan_executer import PlanExecuter, RunningTask, StepReport
 from executive.planner import Planner
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Goal, GoalState
@@ -24,11 +25,15 @@ from tests.executive.test_plan_executer import TASKS, eventually
 class Executive:
     """The high level of an executive: goal planner and plan executer on one KB."""
 
-    def __init__(self, kb: KnowledgeBase, planner: Planner, runner: ScriptedRunner) -> None:
+    def __init__(
+        self, kb: KnowledgeBase, planner: Planner, runner: ScriptedRunner, attempts: int = 5
+    ) -> None:
         self.kb = kb
         self.runner = runner
         self.executer = PlanExecuter(kb, runner, TASKS, self._replan)
-        self.goals = GoalPlanner(kb, usecase_domain(), planner, self.executer)
+        self.goals = GoalPlanner(
+            kb, usecase_domain(), planner, self.executer, max_attempts=attempts
+        )
         self.executer.start()
         self.goals.start()
 
@@ -55,8 +60,8 @@ class Executive:
 def executive(usecase_kb: KnowledgeBase, kairos: Planner) -> Iterator[Callable[..., Executive]]:
     made: list[Executive] = []
 
-    def make(runner: ScriptedRunner | None = None) -> Executive:
-        e = Executive(usecase_kb, kairos, runner or ScriptedRunner())
+    def make(runner: ScriptedRunner | None = None, attempts: int = 5) -> Executive:
+        e = Executive(usecase_kb, kairos, runner or ScriptedRunner(), attempts)
         made.append(e)
         return e
 
@@ -158,3 +163,24 @@ def test_a_cancelled_goal_is_no_longer_pursued(executive: Callable[..., Executiv
     eventually(lambda: "cancel" in move.calls)
     assert ex.state(goal) is GoalState.CANCELLED
     assert ("robot_at", ("dock",)) in {(f.name, f.args) for f in ex.kb.facts()}
+
+
+class AlwaysFailing(ScriptedRunner):
+    """Every take_picture fails (the camera is broken for good)."""
+
+    def run(self, step: Step, plan_id: int, report: StepReport) -> RunningTask:
+        if step.action == "take_picture":
+            self.fail_once[step.label] = "the camera is broken"
+        return super().run(step, plan_id, report)
+
+
+def test_a_goal_fails_once_its_plans_failed_too_often(
+    executive: Callable[..., Executive],
+) -> None:
+    ex = executive(AlwaysFailing(), attempts=2)
+    picture = ex.submit("(picture_taken lab)")
+    eventually(ex.settled)
+    record = ex.kb.goal(picture.id)
+    assert record.state is GoalState.FAILED
+    assert record.reason.startswith("2 plans for it failed, the last because step take_picture")
+    assert len(ex.kb.plans()) == 2
