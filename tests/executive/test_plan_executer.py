@@ -57,6 +57,12 @@ class Run:
         )
         return result.plan, stored.id, specs
 
+    def execute(self, kairos: Planner, *goals: str) -> tuple[PartialOrderPlan, int, list[GoalSpec]]:
+        """Plan for goals and run the plan."""
+        plan, plan_id, specs = self.plan(kairos, *goals)
+        self.executer.execute(plan, plan_id, specs)
+        return plan, plan_id, specs
+
     def kinds(self) -> list[tuple[str, str]]:
         return [
             (e.kind, e.subject)
@@ -83,8 +89,7 @@ def test_steps_run_in_order_their_effects_change_the_facts_and_the_goals_are_ach
     run: Callable[..., Run], kairos: Planner
 ) -> None:
     r = run()
-    plan, plan_id, goals = r.plan(kairos, "(picture_taken lab)", "(robot_at office)")
-    r.executer.execute(plan, plan_id, goals)
+    plan, plan_id, _goals = r.execute(kairos, "(picture_taken lab)", "(robot_at office)")
     eventually(lambda: r.kb.plan(plan_id).state is PlanState.SUCCEEDED)
     assert [g.state for g in r.kb.goals()] == [GoalState.ACHIEVED, GoalState.ACHIEVED]
     facts = r.kb.facts()
@@ -102,8 +107,7 @@ def test_a_failed_step_asks_for_a_new_plan_with_the_reason(
     run: Callable[..., Run], kairos: Planner
 ) -> None:
     r = run(ScriptedRunner(fail={"take_picture(lab)": "the camera is faulty"}))
-    plan, plan_id, goals = r.plan(kairos, "(picture_taken lab)")
-    r.executer.execute(plan, plan_id, goals)
+    _plan, plan_id, goals = r.execute(kairos, "(picture_taken lab)")
     eventually(lambda: bool(r.replans))
     assert r.replans == ["step take_picture(lab) failed: the camera is faulty"]
     plan_record = r.kb.plan(plan_id)
@@ -117,8 +121,7 @@ def test_a_running_step_whose_over_all_condition_breaks_fails(
 ) -> None:
     runner = ScriptedRunner(held={"move_to"})
     r = run(runner)
-    plan, plan_id, goals = r.plan(kairos, "(robot_at lab)")
-    r.executer.execute(plan, plan_id, goals)
+    _plan, _plan_id, _goals = r.execute(kairos, "(robot_at lab)")
     task = runner.wait_for("move_to(dock, lab)")
     r.kb.unset_fact(Fact("connected", ("dock", "lab")))
     r.executer.facts_changed()
@@ -148,8 +151,7 @@ def test_pausing_pauses_interruptible_tasks_and_waits_for_critical_ones(
 ) -> None:
     runner = ScriptedRunner(held={"move_to", "take_picture"}, critical={"take_picture"})
     r = run(runner)
-    plan, plan_id, goals = r.plan(kairos, "(robot_at lab)")
-    r.executer.execute(plan, plan_id, goals)
+    plan, plan_id, goals = r.execute(kairos, "(robot_at lab)")
     move = runner.wait_for("move_to(dock, lab)")
     assert r.executer.pause(timeout=10)
     assert move.calls == ["pause"]
@@ -164,8 +166,7 @@ def test_pausing_pauses_interruptible_tasks_and_waits_for_critical_ones(
     move.end(None)
     eventually(lambda: r.kb.plan(plan_id).state is PlanState.SUCCEEDED)
 
-    plan, plan_id, goals = r.plan(kairos, "(picture_taken lab)")
-    r.executer.execute(plan, plan_id, goals)
+    _plan, plan_id, _goals = r.execute(kairos, "(picture_taken lab)")
     picture = runner.wait_for("take_picture(lab)")
     assert not r.executer.pause(timeout=0.3)  # a critical task is not interrupted
     assert picture.calls == []
@@ -179,21 +180,18 @@ def test_a_new_plan_continues_a_paused_task_that_is_its_first_step_and_cancels_t
 ) -> None:
     runner = ScriptedRunner(held={"move_to"})
     r = run(runner)
-    plan, plan_id, goals = r.plan(kairos, "(robot_at lab)")
-    r.executer.execute(plan, plan_id, goals)
+    _plan, _plan_id, _goals = r.execute(kairos, "(robot_at lab)")
     move = runner.wait_for("move_to(dock, lab)")
     assert r.executer.pause(timeout=10)
     # replanned for the same goal: the same first step continues
-    plan2, plan2_id, goals2 = r.plan(kairos, "(robot_at lab)")
-    r.executer.execute(plan2, plan2_id, goals2)
+    _plan2, plan2_id, _goals2 = r.execute(kairos, "(robot_at lab)")
     assert move.calls == ["pause", "resume"]
     move.end(None)
     eventually(lambda: r.kb.plan(plan2_id).state is PlanState.SUCCEEDED)
     assert len(runner.tasks) == 1
 
     # now a plan that starts elsewhere: the paused step is cancelled and undone
-    plan3, plan3_id, goals3 = r.plan(kairos, "(robot_at office)")
-    r.executer.execute(plan3, plan3_id, goals3)
+    plan3, _plan3_id, _goals3 = r.execute(kairos, "(robot_at office)")
     first = runner.wait_for(plan3.steps[0].label)
     assert r.executer.pause(timeout=10)
     plan4 = PartialOrderPlan(())
