@@ -151,7 +151,7 @@ def test_pausing_pauses_interruptible_tasks_and_waits_for_critical_ones(
 ) -> None:
     runner = ScriptedRunner(held={"move_to", "take_picture"}, critical={"take_picture"})
     r = run(runner)
-    plan, plan_id, goals = r.execute(kairos, "(robot_at lab)")
+    _, plan_id, _ = r.execute(kairos, "(robot_at lab)")
     move = runner.wait_for("move_to(dock, lab)")
     assert r.executer.pause(timeout=10)
     assert move.calls == ["pause"]
