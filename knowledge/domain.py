@@ -48,6 +48,7 @@ class DomainInfo:
     functions: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     types: tuple[str, ...] = ()
     constants: Mapping[str, str] = field(default_factory=dict)
+    supertypes: Mapping[str, str | None] = field(default_factory=dict)  # type -> parent
 
 
 def _read(path: Path) -> str:
@@ -128,4 +129,5 @@ def read_domain(path: Path) -> DomainInfo:
         (predicates if fluent.type.is_bool_type() else functions)[fluent.name] = signature
     constants = {o.name: str(o.type) for o in problem.all_objects}
     types = tuple(str(t) for t in problem.user_types)
-    return DomainInfo(problem.name, path, actions, predicates, functions, types, constants)
+    parents = {str(t): str(t.father) if t.father else None for t in problem.user_types}
+    return DomainInfo(problem.name, path, actions, predicates, functions, types, constants, parents)

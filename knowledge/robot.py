@@ -7,6 +7,7 @@ PDDL domain, are in :mod:`knowledge.validation`.
 
 from __future__ import annotations
 
+from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Any
 
@@ -143,10 +144,11 @@ def _planner(s: Section | None, report: Report) -> PlannerSpec:
     if s is None or not s.valid:
         return PlannerSpec()
     engine = s.text("engine", "kairos") or "kairos"
-    if engine not in ENGINES:
+    plugins = sorted(ep.name for ep in entry_points(group="dura.planners"))
+    if engine not in ENGINES and engine not in plugins:
         report.error(
             s.key_line("engine"),
-            f"unknown planner engine '{engine}' (choose from {', '.join(ENGINES)})",
+            f"unknown planner engine '{engine}' (choose from {', '.join((*ENGINES, *plugins))})",
         )
     timeout = s.number("timeout", 30.0, minimum=0.1)
     s.close()

@@ -8,7 +8,7 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-from executive.cli import component, diagnose, kb, observe, rules, run, validate, version
+from executive.cli import component, diagnose, kb, observe, plan, rules, run, validate, version
 from knowledge.errors import DuraError
 
 # Each module has register(subparsers); its parsers set `run(args) -> int`.
@@ -17,6 +17,7 @@ COMMANDS: tuple[ModuleType, ...] = (
     kb,
     run,
     component,
+    plan,
     observe,
     diagnose,
     rules,

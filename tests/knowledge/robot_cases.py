@@ -30,6 +30,9 @@ class BrokenRobot:
         robot = USECASE_YAML.replace("../../domains/usecase/domain.pddl", "domain.pddl")
         robot = robot.replace(
             "problem: problem.pddl", f"problem: {ROOT / 'examples/usecase/problem.pddl'}"
+        ).replace(
+            "integrity: [integrity.yaml]",
+            f"integrity: [{ROOT / 'examples/usecase/integrity.yaml'}]",
         )
         if self.in_domain:
             assert self.old in domain, self.name
