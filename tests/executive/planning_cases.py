@@ -65,9 +65,9 @@ def usecase_task(*goals: tuple[str, dict[str, float]] | str) -> PlanningTask:
     return PlanningTask(USECASE_DOMAIN, world(USECASE_DOMAIN, USECASE_PROBLEM), tuple(specs))
 
 
-@pytest.fixture(scope="session", name="kairos")
+@pytest.fixture(scope="module", name="kairos")
 def kairos_fixture() -> Iterator[Planner]:
-    """One warm Kairos worker for the session (small timeout: the cases are small)."""
+    """One warm Kairos worker per test module (small timeout: the cases are small)."""
     with Planner("kairos", timeout=10.0) as planner:
         planner.start(USECASE_DOMAIN)
         yield planner
