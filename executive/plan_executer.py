@@ -9,8 +9,9 @@ is checked whenever facts change, and when it ends its at-end condition is check
 its at-end effects applied. A step running past its duration by more than the margin
 times out. Actions without a task complete at once with their effects.
 
-A failed, timed-out or violated step stops dispatching and asks for replanning; the
-steps still running go on until the goal planner has a new plan. The goal planner
+A failed, timed-out or violated step stops dispatching and asks for replanning; its
+at-start effects are taken back (the world is as it was before the step, as far as the
+executive knows); the steps still running go on until the goal planner has a new plan. The goal planner
 pauses the executer before it plans: interruptible tasks pause, the others finish
 first (thesis Figures 5.7, 5.8). A new plan adopts a paused or running step that is
 one of its first steps (same action and objects); the others are cancelled and their
@@ -424,11 +425,8 @@ class PlanExecuter:
             run.task.cancel()
         self._disarm(run)
         run.token = -1
-        if undo and run.started and run.undo:
-            self.kb.update_facts(
-                add=[Fact(n, a, v) for (n, a), v in run.undo.items() if v is not None],
-                remove=[Fact(n, a) for (n, a), v in run.undo.items() if v is None],
-            )
+        if undo:
+            self._undo(run)
         run.state = StepState.CANCELLED
         self._event("CANCEL", run, reason=reason)
 
@@ -557,11 +555,21 @@ class PlanExecuter:
         run.state = StepState.ENDED
         self._event("END", run, **({"result": result} if result is not None else {}))
 
+    def _undo(self, run: _Run) -> None:
+        """Take back a started step's at-start effects: as far as the executive knows,
+        the world is as it was before the step (components that know better write facts)."""
+        if run.started and run.undo:
+            self.kb.update_facts(
+                add=[Fact(n, a, v) for (n, a), v in run.undo.items() if v is not None],
+                remove=[Fact(n, a) for (n, a), v in run.undo.items() if v is None],
+            )
+
     def _fail(self, run: _Run, reason: str) -> None:
         if run.task is not None and run.state.active:
             run.task.cancel()
         self._disarm(run)
         run.token = -1
+        self._undo(run)
         run.state = StepState.FAILED
         self._event("FAIL", run, reason=reason)
         self._plan_failed(reason)

@@ -9,10 +9,11 @@ nothing that was committed: SQLite's WAL survives the process.
 from __future__ import annotations
 
 import json
+import logging
 import sqlite3
 import threading
 import time
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -32,6 +33,8 @@ from knowledge.records import (
     to_plain,
 )
 from knowledge.schema import MIGRATIONS, VERSION
+
+log = logging.getLogger("dura.knowledge")
 
 
 def _dump(value: Any) -> str:
@@ -60,6 +63,8 @@ class KnowledgeBase:
         self.readonly = readonly
         self._lock = threading.RLock()
         self._depth = 0
+        self._listeners: list[Callable[[Event], None]] = []
+        self._logged: list[Event] = []  # events of the open transaction
         try:
             if readonly:
                 if not self.path.is_file():
@@ -111,7 +116,11 @@ class KnowledgeBase:
 
     @contextmanager
     def transaction(self) -> Iterator[sqlite3.Connection]:
-        """Group changes into one transaction (nested blocks join the outer one)."""
+        """Group changes into one transaction (nested blocks join the outer one).
+
+        Event listeners hear of the events it logged after it commits.
+        """
+        committed: list[Event] = []
         with self._lock:
             if self.readonly:
                 raise KnowledgeError(f"{self.path}: opened read-only")
@@ -125,10 +134,13 @@ class KnowledgeBase:
                 self._depth -= 1
                 if outer:
                     self._db.execute("ROLLBACK")
+                    self._logged.clear()
                 raise
             self._depth -= 1
             if outer:
                 self._db.execute("COMMIT")
+                committed, self._logged = self._logged, []
+        self._announce(committed)
 
     def _query(self, sql: str, params: Iterable[Any] = ()) -> list[sqlite3.Row]:
         with self._lock:
@@ -145,14 +157,36 @@ class KnowledgeBase:
 
     # --- events -----------------------------------------------------------------------
 
+    def add_listener(self, listener: Callable[[Event], None]) -> None:
+        """Call ``listener`` with every event once the transaction that logged it commits.
+
+        Listeners run on the committing thread, in order; one that raises is logged and
+        does not stop the others (or the commit, which has happened).
+        """
+        with self._lock:
+            self._listeners.append(listener)
+
+    def _announce(self, events: list[Event]) -> None:
+        for event in events:
+            for listener in self._listeners:
+                try:
+                    listener(event)
+                except Exception:
+                    log.exception("event listener failed on %s", event.kind)
+
     def log_event(self, kind: str, subject: str = "", data: Mapping[str, Any] | None = None) -> int:
         """Append an event to the execution trace; returns its id."""
+        stamp = time.time()
+        payload = dict(data or {})
         with self.transaction() as db:
             cursor = db.execute(
                 "INSERT INTO events(stamp, kind, subject, data) VALUES (?, ?, ?, ?)",
-                (time.time(), kind, subject, _dump(dict(data or {}))),
+                (stamp, kind, subject, _dump(payload)),
             )
-            return int(cursor.lastrowid or 0)
+            event_id = int(cursor.lastrowid or 0)
+            if self._listeners:
+                self._logged.append(Event(event_id, stamp, kind, subject, payload))
+            return event_id
 
     def events(
         self, *, after: int = 0, kind: str | None = None, limit: int | None = None

@@ -8,19 +8,35 @@ import sys
 from collections.abc import Sequence
 from types import ModuleType
 
-from executive.cli import component, diagnose, kb, observe, plan, rules, run, validate, version
+from executive.cli import (
+    component,
+    diagnose,
+    goal,
+    kb,
+    observe,
+    plan,
+    rules,
+    run,
+    status,
+    validate,
+    version,
+    world,
+)
 from knowledge.errors import DuraError
 
 # Each module has register(subparsers); its parsers set `run(args) -> int`.
 COMMANDS: tuple[ModuleType, ...] = (
     validate,
-    kb,
     run,
-    component,
+    goal,
     plan,
+    world,
+    status,
+    component,
     observe,
     diagnose,
     rules,
+    kb,
     version,
 )
 

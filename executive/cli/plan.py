@@ -1,4 +1,5 @@
-"""``dura plan --offline DOMAIN PROBLEM``: plan without a robot, for domain authors."""
+"""``dura plan --offline DOMAIN PROBLEM``: plan without a robot, for domain authors;
+``dura plan show``: the running robot's current plan as a timeline."""
 
 from __future__ import annotations
 
@@ -7,11 +8,13 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json, shown, table
 from executive.goal import GoalSpec
 from executive.partial_order import PartialOrderPlan, Step
 from executive.planner import Planner, PlanningTask, PlanResult, engine_names
 from executive.problem import read_world
+from executive.protocol import api
 from knowledge.description import DEFAULT_ENGINE
 from knowledge.errors import DuraError
 
@@ -21,16 +24,18 @@ BAR = 40  # characters of the timeline
 def register(sub: Any) -> None:
     p = sub.add_parser(
         "plan",
-        help="plan for a PDDL problem without a robot (--offline)",
-        description="Plan for the goal of a PDDL problem with one of dura's engines, validate "
-        "the plan, and print it as a timeline. Exit 0 with a plan, 1 without one.",
+        help="show the running robot's plan (show), or plan without a robot (--offline)",
+        description="'dura plan show' prints the running robot's current plan as a timeline, "
+        "with the state of each step. 'dura plan --offline DOMAIN PROBLEM' plans for the goal "
+        "of a PDDL problem with one of dura's engines, validates the plan, and prints it as a "
+        "timeline: exit 0 with a plan, 1 without one.",
     )
+    p.add_argument("show", nargs="?", choices=["show"], help="the running robot's current plan")
     p.add_argument(
         "--offline",
         nargs=2,
         metavar=("DOMAIN", "PROBLEM"),
         type=Path,
-        required=True,
         help="the domain and problem PDDL files",
     )
     p.add_argument(
@@ -42,11 +47,16 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--timeout", type=float, default=30.0, metavar="S", help="seconds to search (30)"
     )
+    add_client_options(p)
     add_json_flag(p)
-    p.set_defaults(run=run)
+    p.set_defaults(run=run, parser=p)
 
 
 def run(args: argparse.Namespace) -> int:
+    if (args.show is None) == (args.offline is None):
+        args.parser.error("say either 'show' or '--offline DOMAIN PROBLEM'")
+    if args.show:
+        return run_show(args)
     domain, problem = args.offline
     if not args.timeout > 0:
         raise DuraError(f"--timeout must be a positive number of seconds, not {args.timeout:g}")
@@ -68,6 +78,43 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_show(args: argparse.Namespace) -> int:
+    with connect(args) as bus:
+        reply = bus.request(api("plan/show"), {}, timeout=30.0)
+    if args.json:
+        print_json(reply)
+        return 0
+    plan = reply["plan"]
+    if plan is None:
+        print("no plan yet")
+        return 0
+    states = {s["index"]: s["state"] for s in reply["execution"].get("steps", [])}
+    steps = plan["steps"]
+    span = max((s["start"] + (s["duration"] or 0.0) for s in steps), default=0.0)
+    goals = ", ".join(str(g) for g in plan["goal_ids"]) or "-"
+    print(f"plan {plan['id']}: {plan['state']}, by {plan['engine']}, for goals {goals}")
+    rows = [
+        [s["index"], f"{s['start']:.3f}", _duration(s["duration"]),
+         f"{s['action']}({', '.join(s['args'])})", states.get(s["index"], "-"),
+         bar(s["start"], s["duration"], span)]
+        for s in steps
+    ]  # fmt: skip
+    table(["#", "start", "duration", "step", "state", "timeline"], rows)
+    return 0
+
+
+def _duration(duration: float | None) -> str:
+    return "-" if duration is None else f"{duration:g}"
+
+
+def bar(start: float, duration: float | None, span: float) -> str:
+    """A step's place in a timeline of ``BAR`` characters scaled to ``span`` seconds."""
+    span = span or 1.0
+    first = min(BAR - 1, int(start / span * BAR))
+    width = max(1, round((duration or 0.0) / span * BAR))
+    return "|" + (" " * first + "█" * min(width, BAR - first)).ljust(BAR) + "|"
+
+
 def _after(step: Step) -> str:
     return (
         " ".join(f"{p.step}{'' if p.at.value == 'end' else '(start)'}" for p in step.after) or "-"
@@ -76,14 +123,11 @@ def _after(step: Step) -> str:
 
 def print_timeline(plan: PartialOrderPlan) -> None:
     """The steps as a table with a bar for each, scaled to the makespan."""
-    span = plan.makespan or 1.0
-    rows = []
-    for s in plan.steps:
-        first = int(s.start / span * BAR)
-        width = max(1, round((s.duration or 0.0) / span * BAR))
-        bar = " " * first + "█" * min(width, BAR - first)
-        dur = "-" if s.duration is None else f"{s.duration:g}"
-        rows.append([s.index, f"{s.start:.3f}", dur, s.label, _after(s), f"|{bar.ljust(BAR)}|"])
+    rows = [
+        [s.index, f"{s.start:.3f}", _duration(s.duration), s.label, _after(s),
+         bar(s.start, s.duration, plan.makespan)]
+        for s in plan.steps
+    ]  # fmt: skip
     table(["#", "start", "duration", "step", "after", "timeline"], rows)
 
 

@@ -66,6 +66,34 @@ def test_a_failed_transaction_leaves_nothing_behind(kb: KnowledgeBase) -> None:
     assert kb.goals() == [] and kb.facts() == [] and kb.events() == []
 
 
+def test_listeners_hear_committed_events_only_once_their_transaction_commits(
+    kb: KnowledgeBase,
+) -> None:
+    heard: list[str] = []
+    kb.add_listener(lambda e: heard.append(f"{e.kind} {e.subject}"))
+    with kb.transaction():
+        kb.add_goal("(a)")
+        assert heard == []  # not yet committed
+    with pytest.raises(KnowledgeError), kb.transaction():
+        kb.log_event("LOST")
+        kb.set_goal_state(999, GoalState.FAILED)
+    kb.log_event("KEPT", "x", {"n": 1})
+    assert heard == ["GOAL_ADDED goal 1", "KEPT x"]
+    assert [e.id for e in kb.events()] == [1, 2]
+
+
+def test_a_failing_listener_does_not_stop_the_others(kb: KnowledgeBase) -> None:
+    heard: list[str] = []
+
+    def broken(_: object) -> None:
+        raise RuntimeError("listener bug")
+
+    kb.add_listener(broken)
+    kb.add_listener(lambda e: heard.append(e.kind))
+    kb.log_event("ONE")
+    assert heard == ["ONE"]
+
+
 def test_a_new_plan_supersedes_the_open_one(kb: KnowledgeBase) -> None:
     first = kb.store_plan([PlanStep(0, "move_to", ("dock", "lab"), 0.0, 4.0)], engine="kairos")
     kb.set_plan_state(first.id, PlanState.EXECUTING)

@@ -1,0 +1,144 @@
+"""``dura goal add|list|show|cancel``: the goal submission interface of a running robot."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from typing import Any
+
+from executive.cli.client import add_client_options, connect
+from executive.cli.output import add_json_flag, print_json, table
+from executive.protocol import api
+from knowledge.errors import DuraError
+from knowledge.records import GoalState
+
+TIMEOUT = 30.0  # seconds to wait for the executive's answer
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser("goal", help="submit, list, show and cancel goals")
+    gsub = p.add_subparsers(dest="goal_command", metavar="GOAL_COMMAND")
+    gsub.required = True
+
+    add = gsub.add_parser(
+        "add",
+        help="submit a goal: a PDDL goal expression",
+        description="Submit a PDDL goal expression, e.g. '(picture_taken lab)' or "
+        "'(and (robot_at dock) (picture_taken office))'. A goal naming unknown predicates "
+        "or objects is refused with the reason.",
+    )
+    add.add_argument("expression", metavar="EXPR", help="the goal expression")
+    add.add_argument(
+        "--deadline", type=float, metavar="S", help="seconds from now by which it must hold"
+    )
+    add.add_argument(
+        "--priority", type=int, default=0, metavar="P", help="higher goals win (default 0)"
+    )
+    add.set_defaults(run=run_add)
+
+    listing = gsub.add_parser("list", help="every goal with its state")
+    listing.add_argument(
+        "--open", action="store_true", help="only goals not yet achieved, failed or cancelled"
+    )
+    listing.set_defaults(run=run_list)
+
+    show = gsub.add_parser("show", help="one goal and its history")
+    show.add_argument("id", type=int, metavar="ID", help="the goal's id")
+    show.set_defaults(run=run_show)
+
+    cancel = gsub.add_parser("cancel", help="cancel an open goal (the others are replanned)")
+    cancel.add_argument("id", type=int, metavar="ID", help="the goal's id")
+    cancel.set_defaults(run=run_cancel)
+
+    for cmd in (add, listing, show, cancel):
+        add_client_options(cmd)
+        add_json_flag(cmd)
+
+
+def _ask(args: argparse.Namespace, verb: str, payload: dict[str, Any]) -> dict[str, Any]:
+    with connect(args) as bus:
+        return bus.request(api(verb), payload, timeout=TIMEOUT)
+
+
+def clock(stamp: float) -> str:
+    return time.strftime("%H:%M:%S", time.localtime(stamp)) if stamp else "-"
+
+
+def goal_rows(goals: list[dict[str, Any]]) -> list[list[Any]]:
+    return [
+        [
+            g["id"],
+            g["state"],
+            g["priority"],
+            "-" if g["deadline"] is None else f"{g['deadline']:g} s",
+            g["source"],
+            g["expression"],
+            g["reason"],
+        ]
+        for g in goals
+    ]
+
+
+GOAL_HEADERS = ["id", "state", "priority", "deadline", "source", "goal", "reason"]
+
+
+def run_add(args: argparse.Namespace) -> int:
+    payload: dict[str, Any] = {"expression": args.expression, "priority": args.priority}
+    if args.deadline is not None:
+        if not args.deadline > 0:
+            raise DuraError(
+                f"--deadline must be a positive number of seconds, not {args.deadline:g}"
+            )
+        payload["deadline"] = args.deadline
+    goal = _ask(args, "goal/add", payload)["goal"]
+    if args.json:
+        print_json(goal)
+    else:
+        print(f"goal {goal['id']}: {goal['expression']} ({goal['state']})")
+    return 0
+
+
+def run_list(args: argparse.Namespace) -> int:
+    states = [s.value for s in GoalState if s.is_open] if args.open else None
+    goals = _ask(args, "goal/list", {"states": states})["goals"]
+    if args.json:
+        print_json({"goals": goals})
+    else:
+        table(GOAL_HEADERS, goal_rows(goals))
+    return 0
+
+
+def run_show(args: argparse.Namespace) -> int:
+    reply = _ask(args, "goal/show", {"id": args.id})
+    if args.json:
+        print_json(reply)
+        return 0
+    g = reply["goal"]
+    print(f"goal {g['id']}: {g['expression']}")
+    print(f"  state {g['state']}{': ' + g['reason'] if g['reason'] else ''}")
+    deadline = "none" if g["deadline"] is None else f"{g['deadline']:g} s after submission"
+    print(f"  priority {g['priority']}, deadline {deadline}, from {g['source']}")
+    print(f"  submitted {clock(g['created'])}, last change {clock(g['updated'])}")
+    if reply["events"]:
+        print()
+        table(
+            ["time", "event", "details"],
+            [[clock(e["stamp"]), e["kind"], details(e["data"])] for e in reply["events"]],
+        )
+    return 0
+
+
+def run_cancel(args: argparse.Namespace) -> int:
+    goal = _ask(args, "goal/cancel", {"id": args.id})["goal"]
+    if args.json:
+        print_json(goal)
+    else:
+        print(f"goal {goal['id']}: {goal['state']}")
+    return 0
+
+
+def details(data: Any) -> str:
+    """An event's data on one line: ``key value, key value``."""
+    if not isinstance(data, dict):
+        return str(data)
+    return ", ".join(f"{k} {v}" for k, v in data.items())

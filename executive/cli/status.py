@@ -1,0 +1,150 @@
+"""``dura events [--follow]`` and ``dura status``: what a running robot does, at a glance."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import queue
+import sys
+import time
+from typing import Any
+
+from executive.bus import Message
+from executive.cli.client import add_client_options, connect
+from executive.cli.goal import GOAL_HEADERS, details, goal_rows
+from executive.cli.output import add_json_flag, print_json, section, table
+from executive.protocol import EVENTS, api
+
+TIMEOUT = 30.0
+
+
+def register(sub: Any) -> None:
+    events = sub.add_parser(
+        "events",
+        help="the execution trace: goals, plans, dispatches, faults, repairs",
+        description="Print the newest events of the knowledge base's log; with --follow, "
+        "keep printing them as they happen until Ctrl-C.",
+    )
+    events.add_argument(
+        "-n", "--lines", type=int, default=30, metavar="N", help="how many past events (30)"
+    )
+    events.add_argument("--kind", metavar="KIND", help="only events of this kind (e.g. FAIL)")
+    events.add_argument("--follow", action="store_true", help="keep printing new events")
+    events.set_defaults(run=run_events, parser=events)
+    status = sub.add_parser(
+        "status", help="goals, plan, tasks, components and diagnoses at a glance"
+    )
+    status.set_defaults(run=run_status)
+    for cmd in (events, status):
+        add_client_options(cmd)
+        add_json_flag(cmd)
+
+
+def event_line(event: dict[str, Any]) -> str:
+    """One event as a line of a timeline."""
+    stamp = float(event.get("stamp", 0.0))
+    clock = time.strftime("%H:%M:%S", time.localtime(stamp)) + f".{int(stamp % 1 * 1000):03d}"
+    text = f"{clock}  {event.get('kind', '?'):<18} {event.get('subject', '')}"
+    more = details(event.get("data") or {})
+    return f"{text}  {more}" if more else text
+
+
+def run_events(args: argparse.Namespace) -> int:
+    if args.lines < 0:
+        args.parser.error(f"-n must not be negative, not {args.lines}")
+    arrived: queue.Queue[dict[str, Any]] = queue.Queue()
+    with connect(args) as bus:
+        if args.follow:
+            bus.subscribe(EVENTS, lambda m: arrived.put(m.payload) if _is_event(m) else None)
+        request: dict[str, Any] = {"limit": args.lines}
+        if args.kind:
+            request["kind"] = args.kind
+        past = bus.request(api("events"), request, timeout=TIMEOUT)["events"]
+        last = max((int(e["id"]) for e in past), default=0)
+        if args.json and not args.follow:
+            print_json({"events": past})
+            return 0
+        for event in past:
+            _show(event, args.json)
+        while args.follow:
+            try:
+                event = arrived.get(timeout=0.5)
+            except queue.Empty:
+                continue
+            if int(event["id"]) <= last or (args.kind and event.get("kind") != args.kind):
+                continue
+            last = int(event["id"])
+            _show(event, args.json)
+    return 0
+
+
+def _is_event(message: Message) -> bool:
+    return isinstance(message.payload.get("id"), int)
+
+
+def _show(event: dict[str, Any], as_json: bool) -> None:
+    print(json.dumps(event, sort_keys=True) if as_json else event_line(event), flush=True)
+
+
+def run_status(args: argparse.Namespace) -> int:
+    with connect(args) as bus:
+        status = bus.request(api("status"), {}, timeout=TIMEOUT)
+    if args.json:
+        print_json(status)
+        return 0
+    print_status(status)
+    return 0
+
+
+def print_status(status: dict[str, Any], out: Any = None) -> None:
+    out = out or sys.stdout
+    section(f"robot {status['robot']}: goals", out)
+    table(GOAL_HEADERS, goal_rows(status["goals"]), out)
+    plan, execution = status.get("plan"), status.get("execution") or {}
+    if plan is not None:
+        section(f"plan {plan['id']} ({plan['state']}, by {plan['engine']})", out)
+        states = {s["index"]: s["state"] for s in execution.get("steps", [])}
+        table(
+            ["#", "start", "duration", "step", "state"],
+            [
+                [
+                    s["index"],
+                    f"{s['start']:.2f}",
+                    "-" if s["duration"] is None else f"{s['duration']:g}",
+                    f"{s['action']}({', '.join(s['args'])})",
+                    states.get(s["index"], "-"),
+                ]
+                for s in plan["steps"]
+            ],
+            out,
+        )
+    if "tasks" in status:
+        section("tasks", out)
+        table(
+            ["id", "task", "state", "uses"],
+            [
+                [t.get("id"), t.get("name", t.get("behavior")), t.get("state"),
+                 ", ".join(sorted(t.get("functionalities", [])))]
+                for t in status["tasks"]
+            ],
+            out,
+        )  # fmt: skip
+    if "components" in status:
+        section("components", out)
+        table(
+            ["name", "kind", "state", "pid"],
+            [[c["component"], c["kind"], c["state"], c["pid"]] for c in status["components"]],
+            out,
+        )
+    faults = status.get("faults") or []
+    if faults:
+        section("faults", out)
+        table(
+            ["component", "faults", "permanent", "reason"],
+            [[f["name"], f["fault_count"], f["permanent_fault"], f["reason"]] for f in faults],
+            out,
+        )
+    diagnoses = status.get("diagnoses") or {}
+    if diagnoses:
+        found = ["{" + ", ".join(d) + "}" for d in diagnoses.get("diagnoses", [])]
+        section(f"diagnosis: {diagnoses.get('status')} {' or '.join(found)}", out)

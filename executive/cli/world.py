@@ -1,0 +1,86 @@
+"""``dura state get|set|unset`` and ``dura object add``: the facts and objects the
+planner plans from, in a running robot's knowledge base."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from executive.cli.client import add_client_options, connect
+from executive.cli.output import add_json_flag, print_json, table
+from executive.protocol import api
+
+TIMEOUT = 30.0
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser("state", help="read and change the facts the planner plans from")
+    ssub = p.add_subparsers(dest="state_command", metavar="STATE_COMMAND")
+    ssub.required = True
+    get = ssub.add_parser(
+        "get",
+        help="the facts, all or those matching a pattern",
+        description="Print the facts. PATTERN is a predicate or function name with leading "
+        "arguments, '*' for any: 'robot_at', '(robot_at *)', '(travel_time dock *)'.",
+    )
+    get.add_argument("pattern", nargs="?", default="", metavar="PATTERN")
+    get.set_defaults(run=run_get)
+    for verb, text in (
+        ("set", "make a fact true: '(robot_at lab)', or set a value: '(= (battery) 80)'"),
+        ("unset", "make a fact false: '(robot_at lab)'"),
+    ):
+        cmd = ssub.add_parser(verb, help=text)
+        cmd.add_argument("fact", metavar="FACT")
+        cmd.set_defaults(run=run_change, verb=verb)
+    cmds = [get, *ssub.choices.values()]
+
+    o = sub.add_parser("object", help="add PDDL objects to a running robot's world")
+    osub = o.add_subparsers(dest="object_command", metavar="OBJECT_COMMAND")
+    osub.required = True
+    add = osub.add_parser("add", help="add an object of a domain type")
+    add.add_argument("name", metavar="NAME")
+    add.add_argument("type", metavar="TYPE")
+    add.set_defaults(run=run_object_add)
+    for cmd in {*cmds, add}:
+        add_client_options(cmd)
+        add_json_flag(cmd)
+
+
+def _ask(args: argparse.Namespace, verb: str, payload: dict[str, Any]) -> dict[str, Any]:
+    with connect(args) as bus:
+        return bus.request(api(verb), payload, timeout=TIMEOUT)
+
+
+def _value(fact: dict[str, Any]) -> str:
+    value = fact["value"]
+    return "true" if value is True else f"{value:g}"
+
+
+def run_get(args: argparse.Namespace) -> int:
+    reply = _ask(args, "state/get", {"pattern": args.pattern})
+    if args.json:
+        print_json(reply)
+        return 0
+    table(
+        ["fact", "value"],
+        [[f"({' '.join([f['name'], *f['args']])})", _value(f)] for f in reply["facts"]],
+    )
+    return 0
+
+
+def run_change(args: argparse.Namespace) -> int:
+    fact = _ask(args, f"state/{args.verb}", {"fact": args.fact})["fact"]
+    if args.json:
+        print_json(fact)
+    else:
+        print(f"{fact['text']} {'unset' if args.verb == 'unset' else 'set'}")
+    return 0
+
+
+def run_object_add(args: argparse.Namespace) -> int:
+    added = _ask(args, "object/add", {"name": args.name, "type": args.type})
+    if args.json:
+        print_json(added)
+    else:
+        print(f"object {added['name']} - {added['type']} added")
+    return 0
