@@ -10,6 +10,7 @@ from types import ModuleType
 
 from executive.cli import (
     component,
+    demo,
     diagnose,
     goal,
     kb,
@@ -26,6 +27,7 @@ from knowledge.errors import DuraError
 
 # Each module has register(subparsers); its parsers set `run(args) -> int`.
 COMMANDS: tuple[ModuleType, ...] = (
+    demo,
     validate,
     run,
     goal,

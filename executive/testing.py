@@ -1,0 +1,41 @@
+"""The pytest plugin for testing a robot with its planner in the loop (entry point
+``pytest11``; active wherever dura is installed).
+
+The ``dura_robot`` fixture starts the executive of a robot description in a temporary
+folder and returns an :class:`executive.harness.RobotProcess`: submit goals, wait for
+them, inject faults, read events and facts. Every robot it started is stopped at the
+end of the test, with all its components::
+
+    def test_pictures(dura_robot):
+        robot = dura_robot("robot.yaml")
+        goal = robot.submit_goal("(picture_taken lab)")
+        robot.wait_for(goal, "achieved", timeout=60)
+        assert "(picture_taken lab)" in robot.facts("picture_taken")
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+
+from executive.harness import GoalEnded, RobotProcess
+
+__all__ = ["GoalEnded", "RobotProcess", "dura_robot"]
+
+
+@pytest.fixture
+def dura_robot(tmp_path: Path) -> Iterator[Callable[..., RobotProcess]]:
+    """Start robots: ``dura_robot(description, name="robot")`` → a running RobotProcess."""
+    started: list[RobotProcess] = []
+
+    def start(description: str | Path, name: str = "robot") -> RobotProcess:
+        robot = RobotProcess(Path(description), tmp_path / name)
+        started.append(robot)
+        robot.start()
+        return robot
+
+    yield start
+    for robot in reversed(started):
+        robot.stop()
