@@ -25,7 +25,7 @@ def main() -> None:
 
         def chatter(request: dict[str, Any]) -> dict[str, Any]:
             for i in range(int(request["count"])):
-                bus.publish("topic/chatter", {"i": i})
+                bus.publish("topic/chatter", {"i": i, "run": request.get("run", "")})
             return {"sent": request["count"]}
 
         def stop(request: dict[str, Any]) -> dict[str, Any]:

@@ -32,6 +32,8 @@ def peer(executive_bus: Bus) -> Iterator[subprocess.Popen[str]]:
     )
     assert process.stdout is not None
     assert process.stdout.readline().strip() == "ready"
+    # Its queryables reach the router a moment after it says so: wait until they answer.
+    assert wait_for(lambda: _answers(executive_bus), 10.0)
     yield process
     try:
         executive_bus.request("test/stop", timeout=2)
@@ -39,6 +41,14 @@ def peer(executive_bus: Bus) -> Iterator[subprocess.Popen[str]]:
         process.kill()
     process.wait(10)
     process.stdout.close()
+
+
+def _answers(bus: Bus) -> bool:
+    try:
+        bus.request("test/echo", timeout=0.5)
+    except BusError:
+        return False
+    return True
 
 
 def test_a_request_to_another_process_gets_its_reply(executive_bus: Bus, peer: object) -> None:
@@ -58,10 +68,13 @@ def test_messages_from_another_process_carry_its_caller_id_and_stamps(
 ) -> None:
     got: list[Message] = []
     executive_bus.subscribe("topic/chatter", got.append)
-    assert executive_bus.request("test/chatter", {"count": 50}) == {"sent": 50}
-    assert wait_for(lambda: len(got) == 50)
-    assert [m.payload["i"] for m in got] == list(range(50))
-    first = got[0]
+    # A new subscription reaches the publisher a moment later: wait until one arrives.
+    assert wait_for(lambda: executive_bus.request("test/chatter", {"count": 1}) and got, 10.0)
+    assert executive_bus.request("test/chatter", {"count": 50, "run": "main"}) == {"sent": 50}
+    assert wait_for(lambda: len([m for m in got if m.payload["run"] == "main"]) == 50)
+    main = [m for m in got if m.payload["run"] == "main"]
+    assert [m.payload["i"] for m in main] == list(range(50))
+    first = main[0]
     assert first.caller_id == "peer" and first.key == "topic/chatter"
     assert first.stamp is not None and first.sent is not None
     assert abs(first.sent - first.stamp) < 1.0 and first.received >= first.stamp
