@@ -23,6 +23,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import yaml
+
 from executive.bus import Bus
 from executive.protocol import Command, api, component
 from knowledge.errors import BusError, DuraError
@@ -37,6 +39,39 @@ def free_endpoint() -> str:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return f"tcp/127.0.0.1:{s.getsockname()[1]}"
+
+
+def robot_variant(description: Path, folder: Path, changes: Mapping[str, Any]) -> Path:
+    """Write a copy of a robot description into ``folder`` with ``changes`` merged in.
+
+    ``changes`` is nested like the YAML, e.g. ``{"behaviors": {"move_to": {"max_restarts":
+    0}}}``; a ``None`` value removes a key. The files beside the original (components,
+    problem, integrity rules) are linked into ``folder`` and the domain path is made
+    absolute, so the copy runs like the original. Returns the copy's path.
+    """
+    description = Path(description).resolve()
+    folder = Path(folder).resolve()
+    folder.mkdir(parents=True, exist_ok=True)
+    data = yaml.safe_load(description.read_text(encoding="utf-8"))
+    data["domain"] = str((description.parent / data["domain"]).resolve())
+    _merge(data, changes)
+    for entry in description.parent.iterdir():
+        target = folder / entry.name
+        if entry != description and not target.exists() and not entry.name.startswith("."):
+            target.symlink_to(entry)
+    copy = folder / description.name
+    copy.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+    return copy
+
+
+def _merge(into: dict[str, Any], changes: Mapping[str, Any]) -> None:
+    for key, value in changes.items():
+        if value is None:
+            into.pop(key, None)
+        elif isinstance(value, Mapping) and isinstance(into.get(key), dict):
+            _merge(into[key], value)
+        else:
+            into[key] = value
 
 
 class GoalEnded(AssertionError):

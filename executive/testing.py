@@ -15,23 +15,31 @@ end of the test, with all its components::
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
+from typing import Any
 
 import pytest
 
-from executive.harness import GoalEnded, RobotProcess
+from executive.harness import GoalEnded, RobotProcess, robot_variant
 
 __all__ = ["GoalEnded", "RobotProcess", "dura_robot"]
 
 
 @pytest.fixture
 def dura_robot(tmp_path: Path) -> Iterator[Callable[..., RobotProcess]]:
-    """Start robots: ``dura_robot(description, name="robot")`` → a running RobotProcess."""
+    """Start robots: ``dura_robot(description, name="robot", changes=None)`` → a running
+    RobotProcess. ``changes`` modify a copy of the description, nested like its YAML
+    (``{"behaviors": {"move_to": {"max_restarts": 0}}}``)."""
     started: list[RobotProcess] = []
 
-    def start(description: str | Path, name: str = "robot") -> RobotProcess:
-        robot = RobotProcess(Path(description), tmp_path / name)
+    def start(
+        description: str | Path, name: str = "robot", changes: Mapping[str, Any] | None = None
+    ) -> RobotProcess:
+        folder = tmp_path / name
+        if changes:
+            description = robot_variant(Path(description), folder / "description", changes)
+        robot = RobotProcess(Path(description), folder)
         started.append(robot)
         robot.start()
         return robot
