@@ -15,13 +15,13 @@ import tempfile
 import time
 import warnings
 from collections.abc import Callable
-from typing import Any
 from pathlib import Path
+from typing import Any
 
 from executive.cli.output import section, table
-from executive.harness import RobotProcess, robot_variant
 from executive.expression import Signature, parse
 from executive.goal import GoalSpec
+from executive.harness import RobotProcess, robot_variant
 from executive.oversubscription import plan_goals
 from executive.planner import Planner, PlanningTask, PlanResult, engine_names
 from executive.problem import build, read_world
