@@ -1,0 +1,110 @@
+"""The thesis use case end to end: a real ``dura run`` with its components, planner,
+scheduler, observers, diagnosis and repair, driven through the ``dura_robot`` fixture
+(the pytest plugin users test their own robots with).
+
+Each test reads what happened from the executive's event log, not from timing.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+import psutil
+import pytest
+
+from executive.harness import RobotProcess
+from tests.conftest import USECASE, wait_for
+
+pytestmark = pytest.mark.slow
+
+Start = Callable[..., RobotProcess]
+
+
+def kinds(robot: RobotProcess, subject: str = "") -> list[str]:
+    return [e["kind"] for e in robot.events() if subject in e["subject"]]
+
+
+def gone(pid: int) -> bool:
+    """The process ended (a zombie waiting for init to reap it counts as ended)."""
+    try:
+        return psutil.Process(pid).status() == psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
+        return True
+
+
+def first(events: list[dict[str, Any]], kind: str, subject: str = "") -> int:
+    """The index of the first event of ``kind`` whose subject contains ``subject``."""
+    return next(i for i, e in enumerate(events) if e["kind"] == kind and subject in e["subject"])
+
+
+def test_goals_are_planned_executed_and_achieved(dura_robot: Start) -> None:
+    robot = dura_robot(USECASE)
+    pictures = robot.submit_goal("(and (picture_taken lab) (picture_taken office))")
+    home = robot.submit_goal("(robot_at dock)")  # holds now, and must hold again at the end
+    robot.wait_for(pictures, "achieved", timeout=90)
+    robot.wait_for(home, "achieved", timeout=90)
+    assert set(robot.facts("picture_taken")) == {"(picture_taken lab)", "(picture_taken office)"}
+    dispatched = [e["subject"] for e in robot.events("DISPATCH")]
+    assert "take_picture(lab)" in dispatched and "take_picture(office)" in dispatched
+
+
+def test_a_failed_task_is_replanned_and_the_goal_achieved(dura_robot: Start) -> None:
+    robot = dura_robot(USECASE, changes={"behaviors": {"move_to": {"max_restarts": 0}}})
+    goal = robot.submit_goal("(robot_at lab)")
+    assert wait_for(lambda: "START" in kinds(robot, "move_to"), 60)
+    robot.inject_fault("move_to", "crash")
+    robot.wait_for(goal, "achieved", timeout=90)
+    events = robot.events()
+    failed = first(events, "FAIL", "move_to")
+    replanned = first(events[failed:], "REPLAN") + failed
+    assert first(events[replanned:], "DISPATCH", "move_to(dock, lab)") >= 0
+    assert robot.facts("robot_at") == ["(robot_at lab)"]
+
+
+def test_an_unreachable_goal_is_reported_while_the_others_are_achieved(
+    dura_robot: Start,
+) -> None:
+    robot = dura_robot(USECASE)
+    reachable = robot.submit_goal("(picture_taken lab)")
+    unreachable = robot.submit_goal("(picture_taken dock)", priority=5)
+    robot.wait_for(reachable, "achieved", timeout=90)
+    goal = robot.wait_for(unreachable, "unreachable", timeout=10)
+    assert goal["reason"]
+    assert "(picture_taken dock)" not in robot.facts("picture_taken")
+
+
+def test_a_critical_task_is_not_interrupted_by_replanning(dura_robot: Start) -> None:
+    robot = dura_robot(
+        USECASE, changes={"behaviors": {"take_picture": {"params": {"duration": 3.0}}}}
+    )
+    first_goal = robot.submit_goal("(picture_taken lab)")
+    assert wait_for(lambda: "START" in kinds(robot, "take_picture(lab)"), 60)
+    second_goal = robot.submit_goal("(picture_taken office)")
+    robot.wait_for(first_goal, "achieved", timeout=60)
+    robot.wait_for(second_goal, "achieved", timeout=90)
+    events = robot.events()
+    started = first(events, "START", "take_picture(lab)")
+    ended = first(events, "END", "take_picture(lab)")
+    added = first(events, "GOAL_ADDED", "goal 2")
+    assert started < added < ended
+    between = [e["kind"] for e in events[added:ended] if "take_picture(lab)" in e["subject"]]
+    assert "CANCEL" not in between and "FAIL" not in between
+    replanned = [i for i, e in enumerate(events) if e["kind"] == "PLAN_START" and i > added]
+    assert replanned and replanned[0] > ended  # the planner waited for the critical task
+
+
+def test_a_killed_executive_restarts_and_continues_its_open_goals(dura_robot: Start) -> None:
+    robot = dura_robot(USECASE)
+    goal = robot.submit_goal("(and (picture_taken office) (robot_at dock))")
+    assert wait_for(lambda: "START" in kinds(robot, "move_to"), 60)
+    pids = [c["pid"] for c in robot.request("component/list")["components"] if c["pid"]]
+    assert pids
+    robot.kill()
+    assert wait_for(lambda: all(gone(p) for p in pids), 5.0)
+    time.sleep(0.2)
+    robot.start()
+    robot.wait_for(goal, "achieved", timeout=120)
+    assert kinds(robot).count("EXECUTIVE_STARTED") == 2
+    assert "(picture_taken office)" in robot.facts("picture_taken")
