@@ -55,14 +55,22 @@ class IntegrityRule:
 
 
 def read_rules(
-    path: Path, robot: RobotDescription, domain: DomainInfo, objects: Mapping[str, str]
+    path: Path,
+    robot: RobotDescription,
+    domain: DomainInfo,
+    objects: Mapping[str, str],
+    report: Report | None = None,
 ) -> list[IntegrityRule]:
     """Read one rules file, checked against the robot, its domain and the objects.
 
+    Every problem goes to ``report`` if one is given.
+
     Raises:
-        ConfigError: every problem, one per line, as ``file:line: message``.
+        ConfigError: every problem, one per line, as ``file:line: message`` (only when
+            no report is given).
     """
-    report = Report(str(path))
+    own = report is None
+    report = report or Report(str(path))
     rules: list[IntegrityRule] = []
     node = compose(path, report)
     signature = Signature.of(domain, objects)
@@ -81,7 +89,7 @@ def read_rules(
             top.close()
     elif not report.findings:
         report.error(None, "is empty")
-    if report.errors:
+    if own and report.errors:
         raise ConfigError("\n".join(str(f) for f in report.errors))
     return rules
 

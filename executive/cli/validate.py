@@ -8,9 +8,14 @@ from pathlib import Path
 from typing import Any
 
 from executive.cli.output import add_json_flag, print_json, shown
-from knowledge.finding import Finding
+from executive.integrity import read_rules as read_integrity_rules
+from executive.problem import read_world
+from knowledge.description import RobotDescription
+from knowledge.domain import DomainInfo
+from knowledge.finding import Finding, Report
 from knowledge.validation import validate
 from monitoring.observer_config import check_observer_file, check_observers
+from monitoring.repair.rule import read_rules as read_repair_rules
 
 
 def register(sub: Any) -> None:
@@ -35,6 +40,21 @@ def _line(f: Finding) -> str:
     return str(Finding(shown(f.path), f.line, f.message, f.severity))
 
 
+def check_rule_files(robot: RobotDescription, domain: DomainInfo) -> list[Finding]:
+    """The findings of the robot's integrity rules and repair rules files."""
+    objects = read_world(robot.domain, robot.problem)[0].objects if robot.problem else {}
+    findings: list[Finding] = []
+    for path in robot.integrity:
+        report = Report(str(path))
+        read_integrity_rules(path, robot, domain, objects, report)
+        findings += report.findings
+    for path in robot.rules:
+        report = Report(str(path))
+        read_repair_rules(path, report)
+        findings += report.findings
+    return findings
+
+
 def run(args: argparse.Namespace) -> int:
     observers = check_observer_file(args.robot)
     if observers is not None:
@@ -45,7 +65,10 @@ def run(args: argparse.Namespace) -> int:
     robot = result.robot
     findings = list(result.findings)
     if robot is not None:
-        findings = sorted(findings + check_observers(robot), key=_order)
+        findings += check_observers(robot)
+        if result.domain is not None and not any(f.is_error for f in findings):
+            findings += check_rule_files(robot, result.domain)
+        findings = sorted(findings, key=_order)
     summary = ""
     if robot is not None:
         summary = (

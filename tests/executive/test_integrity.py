@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import subprocess
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
+from executive.harness import robot_variant
 from executive.integrity import IntegrityGoals, read_rules
 from knowledge.errors import ConfigError
 from knowledge.knowledge_base import KnowledgeBase
@@ -123,3 +126,23 @@ def test_the_example_robots_integrity_rules_are_valid(tmp_path: Path) -> None:
             seed_world(kb, robot)
             for file in robot.integrity:
                 assert read_rules(file, robot, read_domain(robot.domain), kb.objects())
+
+
+def test_dura_validate_checks_the_robots_integrity_and_repair_rules(
+    tmp_path: Path, dura: Callable[..., subprocess.CompletedProcess[str]]
+) -> None:
+    robot = robot_variant(USECASE, tmp_path, {"rules": ["repair.yaml"]})
+    (tmp_path / "integrity.yaml").unlink()  # a link to the example's file
+    (tmp_path / "integrity.yaml").write_text(
+        "goals:\n  - name: broken\n    when: {permanent_fault: lidar}\n"
+        '    goal: "(robot_at nowhere)"\n'
+    )
+    (tmp_path / "repair.yaml").write_text("rules:\n  - name: r\n    action: {type: teleport}\n")
+    done = dura("validate", str(robot))
+    assert done.returncode == 1
+    lines = done.stderr.splitlines()
+    assert any(
+        line.startswith(f"{tmp_path / 'integrity.yaml'}:4: ") and "nowhere" in line
+        for line in lines
+    ), lines
+    assert any(line.startswith(f"{tmp_path / 'repair.yaml'}:") for line in lines), lines
