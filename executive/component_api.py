@@ -24,7 +24,8 @@ def _name(request: dict[str, Any]) -> str:
 
 
 class ComponentApi(Service):
-    """Serves list, start, stop, restart and logs of the robot's components."""
+    """Serves list, start, stop and logs of the robot's components (the task executor
+    serves restart, fault and reset: they count as faults)."""
 
     name = "component-api"
 
@@ -46,11 +47,6 @@ class ComponentApi(Service):
             bus.serve(
                 api("component/stop"),
                 lambda r: launcher.stop(_name(r)).to_payload(),
-                threaded=True,
-            ),
-            bus.serve(
-                api("component/restart"),
-                lambda r: launcher.restart(_name(r)).to_payload(),
                 threaded=True,
             ),
         ]

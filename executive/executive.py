@@ -1,4 +1,5 @@
-"""The executive process: its bus (listening), knowledge base, launcher and services.
+"""The executive process: its bus (listening), knowledge base, launcher and services
+(monitoring, diagnosis, repair rules, task executor, high level).
 
 Services start in order and stop in reverse; the launcher stops every component when
 the executive closes. While it runs, the executive holds the liveliness token
@@ -10,14 +11,21 @@ from __future__ import annotations
 import contextlib
 import os
 from pathlib import Path
+from typing import Any
 
 from executive.bus import Bus
 from executive.component_api import ComponentApi
+from executive.high_level import HighLevel
 from executive.launcher import Launcher
+from executive.plan_tasks import PlanTasks
 from executive.protocol import EXECUTIVE_ALIVE
 from executive.service import Context, Service
+from executive.task_executor import TaskExecutor
 from knowledge.description import RobotDescription
 from knowledge.knowledge_base import KnowledgeBase
+from monitoring.diagnosis.service import DiagnosisService
+from monitoring.observer_manager import ObserverManager
+from monitoring.repair.service import RuleService
 from monitoring.resource_monitor import ResourceMonitor
 
 
@@ -74,10 +82,28 @@ class Executive:
         return self
 
     def services(self, context: Context) -> list[Service]:
-        """The services of the executive, in the order they start."""
+        """The services of the executive, in the order they start (and stop reversed):
+        monitoring first, so that it watches every component the executive starts."""
+        self.tasks = TaskExecutor(context, self.launcher)
+        self.high_level = HighLevel(
+            context,
+            PlanTasks(self.tasks, self.robot),
+            status={"tasks": self.tasks.tasks, "components": self._components},
+        )
         return [
             ComponentApi(context, self.launcher),
             ResourceMonitor(context, rate=self.resource_rate),
+            ObserverManager(context),
+            DiagnosisService(context, learn=True),
+            RuleService(context),
+            self.tasks,
+            self.high_level,
+        ]
+
+    def _components(self) -> list[dict[str, Any]]:
+        return [
+            {"kind": self.launcher.kind(s.component).value, **s.to_payload()}
+            for s in self.launcher.states()
         ]
 
     def __exit__(self, *exc: object) -> None:

@@ -14,7 +14,9 @@ from knowledge.errors import DuraError
 
 
 def register(sub: Any) -> None:
-    p = sub.add_parser("component", help="list, start, stop and restart components; show logs")
+    p = sub.add_parser(
+        "component", help="list, start, stop, restart, fault and reset components; show logs"
+    )
     csub = p.add_subparsers(dest="component_command", metavar="COMPONENT_COMMAND")
     csub.required = True
 
@@ -26,7 +28,9 @@ def register(sub: Any) -> None:
     for verb, text in (
         ("start", "start a component and wait until it is ready"),
         ("stop", "stop a component and wait until its process is gone"),
-        ("restart", "stop a component (if it runs) and start it again"),
+        ("restart", "restart a component; counts as a fault (at max_faults: permanently faulty)"),
+        ("fault", "mark a component permanently faulty; its tasks move to alternatives"),
+        ("reset", "clear a component's faults after maintenance"),
     ):
         cmd = csub.add_parser(verb, help=text)
         cmd.add_argument("name", metavar="NAME", help="the component")
@@ -88,6 +92,13 @@ def run_lifecycle(args: argparse.Namespace) -> int:
         reply = bus.request(
             api(f"component/{args.verb}"), {"name": args.name}, timeout=args.timeout
         )
+    if args.verb == "reset":
+        if args.json:
+            print_json(reply)
+        else:
+            usable = ", ".join(reply["usable"]) or "nothing new"
+            print(f"{args.name}: faults cleared; usable again: {usable}")
+        return 0
     state = ComponentState.from_payload(reply)
     failed = state.state is Lifecycle.FAILED
     if args.json:
@@ -95,7 +106,12 @@ def run_lifecycle(args: argparse.Namespace) -> int:
         return 1 if failed else 0
     if failed:
         raise DuraError(f"'{state.component}' failed to start: {state.reason}")
-    print(_summary(state))
+    faults = ""
+    if "faults" in reply:
+        faults = f", {reply['faults']} faults" + (
+            ", permanently faulty" if reply["permanent"] else ""
+        )
+    print(_summary(state) + faults)
     return 0
 
 

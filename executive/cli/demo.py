@@ -2,8 +2,9 @@
 
 It starts the executive of ``examples/usecase/robot.yaml`` in a temporary folder,
 submits goals (pictures of the lab and the office, then back to the dock), shows the
-plan, crashes lidar until it is permanently faulty while the robot drives, shows the
-diagnoses and the switch to cam + cam_to_lidar, and ends with a summary when every goal
+plan, makes lidar stop publishing while the robot drives — the observers see it, the
+diagnosis names lidar, a repair rule restarts it — until lidar is permanently faulty,
+and shows the switch to cam + cam_to_lidar, and ends with a summary when every goal
 is achieved: exit 0, or 1 with the reason if the robot did not get there.
 """
 
@@ -40,6 +41,7 @@ SHOWN = {
     "PLAN_START", "DISPATCH", "START", "END", "FAIL", "REPLAN", "CANCEL",
     "COMPONENT_READY", "COMPONENT_EXITED", "COMPONENT_FAILED", "FAULT", "PERMANENT_FAULT",
     "INTEGRITY_GOAL", "CONFIGURATION", "TASK_FAILED", "TASK_PAUSED", "TASK_RESUMED",
+    "REPAIR", "TASK_RESTARTED", "RULE_FIRED", "RULE_FAILED",
 }  # fmt: skip
 
 
@@ -135,8 +137,8 @@ def _demo(args: argparse.Namespace, folder: Path) -> int:
         for fault in range(1, FAULTS + 1):
             timeline.wait("START", "move_to")
             time.sleep(1.0)  # let it drive a little
-            say(f"{'INJECT':<17} lidar crashes (fault {fault} of {FAULTS})")
-            robot.inject_fault("lidar", "crash")
+            say(f"{'INJECT':<17} lidar stops publishing its scan ({fault} of {FAULTS})")
+            robot.inject_fault("lidar", "stop_publishing")
             if fault < FAULTS:
                 timeline.wait("COMPONENT_READY", "lidar")
         deadline = time.monotonic() + TIMEOUT
@@ -198,6 +200,14 @@ def _summary(
             ["component", "faults", "permanently faulty", "reason"],
             [[f["name"], f["fault_count"], f["permanent_fault"], f["reason"]] for f in faults],
         )
+    switches: list[str] = []
+    for e in timeline.events:
+        if e.get("kind") == "TASK_STARTED" and e.get("data", {}).get("behavior") == "move_to":
+            uses = " + ".join(sorted(set(e["data"].get("providers", {}).values())))
+            if not switches or switches[-1] != uses:
+                switches.append(uses)
+    if switches:
+        section("move_to drove on: " + "  ->  ".join(switches))
     kinds = [e.get("kind") for e in timeline.events]
     section(
         f"{len(timeline.events)} events, {kinds.count('PLAN_START')} plans, "

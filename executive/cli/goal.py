@@ -141,4 +141,5 @@ def details(data: Any) -> str:
     """An event's data on one line: ``key value, key value``."""
     if not isinstance(data, dict):
         return str(data)
-    return ", ".join(f"{k} {v}" for k, v in data.items())
+    shown = {k: v for k, v in data.items() if v not in (None, "", [], {}) and k != "stamp"}
+    return ", ".join(f"{k} {v}" for k, v in shown.items())

@@ -21,7 +21,7 @@ from executive.protocol import DIAGNOSES, DIAGNOSIS_MODEL, OBSERVATIONS, Observa
 from executive.service import Context, Service
 from knowledge.errors import BusError, ConfigError, DuraError
 from monitoring.diagnosis.engine import DiagnosisEngine
-from monitoring.diagnosis.model import ModelUpdate
+from monitoring.diagnosis.model import ModelUpdate, Observer, SystemDescription, UpdateAction
 from monitoring.diagnosis.result import DiagnosisResult, Status
 
 log = logging.getLogger("dura.diagnosis")
@@ -37,6 +37,12 @@ class DiagnosisService(Service):
         timeout: seconds one diagnosis may take (then TIMEOUT with what was found).
         settle: seconds to wait for more changes before diagnosing.
         period: seconds between repetitions of a faulty result.
+        learn: (the executive's mode) an observation of an observer the model lacks
+            adds that observer, if
+            its resources are in the model (the model's nodes come from the task
+            executor, as components start and stop); a REMOVE of nodes removes the
+            observers that watched only them. Off: such observations are ignored and
+            such a REMOVE is refused, as the thesis' engine does.
     """
 
     name = "diagnosis"
@@ -50,8 +56,10 @@ class DiagnosisService(Service):
         timeout: float = 2.0,
         settle: float = 0.02,
         period: float = 1.0,
+        learn: bool = False,
     ) -> None:
         super().__init__(context)
+        self.learn = learn
         self.engine = DiagnosisEngine(exonerate=exonerate, max_card=max_card, timeout=timeout)
         self.settle = settle
         self.period = period
@@ -102,11 +110,36 @@ class DiagnosisService(Service):
             try:
                 changed = self.engine.observe(info)
             except ConfigError as e:
-                self._report_ignored(str(e))
-                return
+                if not (self.learn and self._learn(info)):
+                    self._report_ignored(str(e))
+                    return
+                changed = self.engine.observe(info)
             if changed:
                 self._dirty = True
                 self._changed.notify()
+
+    def _learn(self, info: ObservationInfo) -> bool:
+        """Add the observer that made an observation to the model, if it fits the model's
+        nodes (observers describe themselves by their observations); whether it did."""
+        try:
+            observer = Observer.make(info.type, info.resource, info.callerids)
+        except ConfigError:
+            return False
+        if self.engine.model.problem(observer) is not None:
+            return False
+        self.engine.update(ModelUpdate(UpdateAction.ADD, observers=(observer,)))
+        log.info("learned observer %s from its observation", observer)
+        return True
+
+    def _without_orphans(self, update: ModelUpdate) -> ModelUpdate:
+        """A REMOVE of nodes also removes the observers that watch only what they had."""
+        if not self.learn or update.action is not UpdateAction.REMOVE or not update.nodes:
+            return update
+        gone = {n.name for n in update.nodes}
+        model = self.engine.model
+        rest = SystemDescription(tuple(n for n in model.nodes if n.name not in gone), ())
+        orphans = tuple(o for o in model.observers if o not in update.observers and rest.problem(o))
+        return ModelUpdate(update.action, update.nodes, update.observers + orphans)
 
     def _report_ignored(self, reason: str) -> None:
         """Say once why observations of one kind are ignored."""
@@ -122,7 +155,7 @@ class DiagnosisService(Service):
         try:
             update = ModelUpdate.from_payload(request)
             with self._changed:
-                model = self.engine.update(update)
+                model = self.engine.update(self._without_orphans(update))
                 self._dirty = True
                 self._changed.notify()
         except DuraError as e:

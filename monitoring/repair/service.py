@@ -93,7 +93,7 @@ class RuleService(Service):
         for item in fired:
             log.info("rule '%s' fired: %s", item.rule.name, item.rule.action.describe())
             self.context.kb.log_event(
-                "rule_fired",
+                "RULE_FIRED",
                 item.rule.name,
                 {"action": item.rule.action.describe(), "faulty": list(item.firing.faulty)},
             )
@@ -105,7 +105,7 @@ class RuleService(Service):
             item.rule.action.run(self._actions, item.firing)
         except (DuraError, OSError) as e:
             log.warning("action of rule '%s' failed: %s", item.rule.name, e)
-            self.context.kb.log_event("repair_failed", item.rule.name, {"error": str(e)})
+            self.context.kb.log_event("RULE_FAILED", item.rule.name, {"error": str(e)})
         except Exception as e:  # an action (or plugin) fails in its own way; the engine goes on
             log.exception("action of rule '%s' failed", item.rule.name)
-            self.context.kb.log_event("repair_failed", item.rule.name, {"error": repr(e)})
+            self.context.kb.log_event("RULE_FAILED", item.rule.name, {"error": repr(e)})

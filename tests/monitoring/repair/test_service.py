@@ -82,12 +82,12 @@ def test_rules_fire_on_bus_messages_and_a_failing_action_stops_nothing(
     lines = wait_for_lines(tmp_path / "repair.log", 2)
     assert lines[1].endswith("scan_slow: frequency[scan]")
     deadline = time.monotonic() + 10
-    while not kb.events(kind="repair_failed"):
+    while not kb.events(kind="RULE_FAILED"):
         assert time.monotonic() < deadline
         time.sleep(0.05)
-    failure = kb.events(kind="repair_failed")[0]
+    failure = kb.events(kind="RULE_FAILED")[0]
     assert failure.subject == "broken"
-    assert {e.subject for e in kb.events(kind="rule_fired")} == {
+    assert {e.subject for e in kb.events(kind="RULE_FIRED")} == {
         "broken",
         "lidar_down",
         "scan_slow",
