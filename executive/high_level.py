@@ -23,7 +23,7 @@ from executive.expression import Signature, parse_fact
 from executive.goal import submit
 from executive.goal_planner import GoalPlanner
 from executive.integrity import IntegrityGoals, IntegrityRule, read_rules
-from executive.plan_executer import ExecutionLimits, PlanExecuter, TaskRunner
+from executive.plan_executer import ExecutionLimits, PlanExecuter, TaskRunner, recover
 from executive.planner import Planner
 from executive.problem import seed_world
 from executive.protocol import DIAGNOSES, EVENTS, api
@@ -97,6 +97,7 @@ class HighLevel(Service):
         robot, kb, bus = self.context.robot, self.context.kb, self.context.bus
         self.domain = read_domain(robot.domain)
         seed_world(kb, robot)
+        recover(kb)
         rules: list[IntegrityRule] = []
         for path in robot.integrity:
             rules.extend(read_rules(path, robot, self.domain, kb.objects()))

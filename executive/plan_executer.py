@@ -49,6 +49,37 @@ log = logging.getLogger("dura.plan_executer")
 T = TypeVar("T")
 
 
+def recover(kb: KnowledgeBase) -> list[str]:
+    """After the executive died: take back the at-start effects of the steps it had
+    started and not ended (recorded with their START events); returns their labels.
+
+    Call before planning again, when the current run's EXECUTIVE_STARTED is logged.
+    """
+    runs = [e.id for e in kb.events(kind="EXECUTIVE_STARTED")]
+    if len(runs) < 2:
+        return []
+    unfinished: dict[tuple[Any, Any], Any] = {}
+    for e in kb.events(after=runs[-2] - 1):
+        if e.id >= runs[-1]:
+            break
+        key = (e.data.get("plan"), e.data.get("step"))
+        if e.kind == "START":
+            unfinished[key] = e
+        elif e.kind in ("END", "FAIL", "CANCEL"):
+            unfinished.pop(key, None)
+    labels = []
+    for e in unfinished.values():
+        undo = e.data.get("undo") or []
+        with kb.transaction():
+            kb.update_facts(
+                add=[Fact(n, tuple(a), v) for n, a, v in undo if v is not None],
+                remove=[Fact(n, tuple(a)) for n, a, v in undo if v is None],
+            )
+            kb.log_event("CANCEL", e.subject, {**e.data, "reason": "the executive died"})
+        labels.append(e.subject)
+    return labels
+
+
 # --- the task runner interface -------------------------------------------------------
 
 
@@ -411,7 +442,7 @@ class PlanExecuter:
     def _cancel_all(self) -> None:
         for run in self._runs.values():
             if run.state.active:
-                self._cancel(run, "the executer stops", undo=False)
+                self._cancel(run, "the executer stops", undo=True)
         for g in self._goals:
             _cancel_timer(g.timer)
 
@@ -530,12 +561,14 @@ class PlanExecuter:
                 run, f"at-start condition {run.step.at_start} of {run.step.label} no longer holds"
             )
             return
-        self._apply(run, run.step.start_effects, remember=True)
+        with self.kb.transaction():  # a crash leaves both or neither: see recover()
+            self._apply(run, run.step.start_effects, remember=True)
+            undo = [[name, list(args), before] for (name, args), before in run.undo.items()]
+            self._event("START", run, undo=undo)
         run.started = True
         if run.state is not StepState.PAUSED:
             run.state = StepState.RUNNING
             self._arm(run)
-        self._event("START", run)
 
     def _end(self, run: _Run, result: Any) -> None:
         if not run.started:

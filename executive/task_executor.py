@@ -194,6 +194,11 @@ class TaskExecutor(Service):
 
     def start(self) -> None:
         self.faults = Faults(self.robot, self.kb)
+        with self.kb.transaction():  # tasks of an executive that died
+            for task in self.kb.tasks():
+                if not task.state.is_final:
+                    reason = "the executive stopped before it ended"
+                    self.kb.set_task_state(task.id, TaskState.FAILED, reason=reason)
         self.launcher.add_listener(self._on_component_state)
         self._thread = threading.Thread(target=self._loop, name="task-executor", daemon=True)
         self._thread.start()
@@ -255,7 +260,8 @@ class TaskExecutor(Service):
             self._timer.cancel()
         for task in list(self._tasks.values()):
             if not task.phase.final:
-                self._end(task, Phase.CANCELLED, "the executive stops")
+                self._end(task, Phase.CANCELLED, "the executive stops", reschedule=False)
+        self._apply_configuration("the executive stops")
 
     # --- the API -------------------------------------------------------------------------
 
@@ -350,6 +356,7 @@ class TaskExecutor(Service):
         now = time.time()
         live = [t for t in self._tasks.values() if t.phase.holds or t.phase is Phase.WAITING]
         if not live:
+            self._apply_configuration(why)
             return
         requests = []
         for t in live:
@@ -372,7 +379,7 @@ class TaskExecutor(Service):
         result = scheduler.schedule(requests, faulty=self.faults.faulty())
         for task_id, reason in result.cancelled.items():
             task = self._tasks[task_id]
-            self._end(task, Phase.FAILED, f"cancelled by the scheduler: {reason}")
+            self._end(task, Phase.FAILED, f"cancelled by the scheduler: {reason}", reschedule=False)
         later: list[float] = []
         for task_id, assignment in result.assignments.items():
             task = self._tasks[task_id]
@@ -381,6 +388,8 @@ class TaskExecutor(Service):
                 if providers != task.providers:
                     self._event("TASK_RECONFIGURED", task, before=task.providers, after=providers)
                     task.providers = providers
+            elif any(self._tasks[a].phase.holds for a in assignment.after if a in self._tasks):
+                task.start_at = None  # it waits for a running task (that may overrun)
             elif assignment.start <= NOW:
                 task.providers = providers
                 task.start_at = None
@@ -446,6 +455,8 @@ class TaskExecutor(Service):
 
     def _launch_behavior(self, task: _Task) -> None:
         """Start the task's behavior on its (ready) configuration and send it the goal."""
+        if task.phase is not Phase.STARTING:
+            return  # started meanwhile (a nested schedule), or ended
         if not all(
             self.launcher.state(f).state is Lifecycle.READY for f in task.providers.values()
         ):
@@ -502,7 +513,9 @@ class TaskExecutor(Service):
         task.handle = None
         self._stop_component(task.behavior, reason)
 
-    def _end(self, task: _Task, phase: Phase, reason: str) -> None:
+    def _end(self, task: _Task, phase: Phase, reason: str, *, reschedule: bool = True) -> None:
+        """End a task; then (unless the caller goes on scheduling) schedule the others
+        before the configuration changes, so that what they share keeps running."""
         if task.phase.final:
             return
         held = task.phase.holds
@@ -513,10 +526,8 @@ class TaskExecutor(Service):
         self.faults.finished(task.id)
         self._event(f"TASK_{phase.name}", task, **({"reason": reason} if reason else {}))
         task.done.set()
-        if held:
-            self._apply_configuration(f"task {task.id} {phase.value}")
-        if not self._stopping():
-            self._post(lambda: self._reschedule(f"task {task.id} {phase.value}"))
+        if reschedule and not self._stopping():
+            self._reschedule(f"task {task.id} {phase.value}")
 
     def _stopping(self) -> bool:
         return self._thread is None
@@ -704,8 +715,11 @@ class TaskExecutor(Service):
             duration = request.get("duration")
             if duration is not None and (not isinstance(duration, int | float) or duration <= 0):
                 raise DuraError(f"'duration' must be a positive number, not {duration!r}")
-            handle = self.start_task(text(request, "behavior"), goal, duration=duration)
-            return {"id": handle.id}
+            name = text(request, "task")
+            spec = self.robot.tasks.get(name)
+            behavior = spec.behavior if spec is not None else name
+            handle = self.start_task(behavior, goal, name=name, duration=duration)
+            return {"id": handle.id, "behavior": behavior}
 
         def task_verb(verb: str) -> Callable[[dict[str, Any]], dict[str, Any]]:
             def run(request: dict[str, Any]) -> dict[str, Any]:

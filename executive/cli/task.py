@@ -1,0 +1,132 @@
+"""``dura task start|list|stop|pause|resume`` and ``dura schedule show``: the task
+executor of a running robot, by hand (the thesis' text interface)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from executive.cli.client import add_client_options, connect
+from executive.cli.output import add_json_flag, print_json, section, table
+from executive.cli.plan import bar
+from executive.protocol import api
+from knowledge.errors import DuraError
+
+TIMEOUT = 30.0
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser("task", help="start, list, stop, pause and resume tasks by hand")
+    tsub = p.add_subparsers(dest="task_command", metavar="TASK_COMMAND")
+    tsub.required = True
+    start = tsub.add_parser(
+        "start",
+        help="start a task: a task (or behavior) of the robot with its goal fields",
+        description="Ask the task executor for a task: TASK is a task of the robot "
+        "description (e.g. move_to) or a behavior; --arg sets a field of the behavior's "
+        "goal (e.g. --arg start=dock --arg target=lab). It runs once its configuration "
+        "is scheduled and ready.",
+    )
+    start.add_argument("task", metavar="TASK")
+    start.add_argument(
+        "--arg", action="append", default=[], metavar="K=V", help="a goal field (repeatable)"
+    )
+    start.add_argument("--duration", type=float, metavar="S", help="the expected duration")
+    start.set_defaults(run=run_start)
+    listing = tsub.add_parser("list", help="every task with its state and configuration")
+    listing.set_defaults(run=run_list)
+    commands = [start, listing]
+    for verb, text in (
+        ("stop", "stop a task (cancelled)"),
+        ("pause", "pause a running task"),
+        ("resume", "resume a paused task"),
+    ):
+        cmd = tsub.add_parser(verb, help=text)
+        cmd.add_argument("id", metavar="ID")
+        cmd.set_defaults(run=run_verb, verb=verb)
+        commands.append(cmd)
+    s = sub.add_parser("schedule", help="the schedule: tasks in time and what they use")
+    ssub = s.add_subparsers(dest="schedule_command", metavar="SCHEDULE_COMMAND")
+    ssub.required = True
+    show = ssub.add_parser("show", help="a timeline of the tasks and their functionalities")
+    show.set_defaults(run=run_schedule)
+    commands.append(show)
+    for cmd in commands:
+        add_client_options(cmd)
+        add_json_flag(cmd)
+
+
+def _ask(args: argparse.Namespace, verb: str, payload: dict[str, Any]) -> dict[str, Any]:
+    with connect(args) as bus:
+        return bus.request(api(verb), payload, timeout=TIMEOUT)
+
+
+def _goal(pairs: list[str]) -> dict[str, Any]:
+    goal: dict[str, Any] = {}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        if not sep or not key:
+            raise DuraError(f"--arg must be KEY=VALUE, not '{pair}'")
+        goal[key] = value
+    return goal
+
+
+def run_start(args: argparse.Namespace) -> int:
+    payload: dict[str, Any] = {"task": args.task, "goal": _goal(args.arg)}
+    if args.duration is not None:
+        payload["duration"] = args.duration
+    reply = _ask(args, "task/start", payload)
+    if args.json:
+        print_json(reply)
+    else:
+        print(f"task {reply['id']}: {args.task} requested")
+    return 0
+
+
+def _rows(tasks: list[dict[str, Any]]) -> list[list[Any]]:
+    return [
+        [t["id"], t["name"], t["state"], ", ".join(t["functionalities"]) or "-", t["reason"]]
+        for t in tasks
+    ]
+
+
+def run_list(args: argparse.Namespace) -> int:
+    tasks = _ask(args, "task/list", {})["tasks"]
+    if args.json:
+        print_json({"tasks": tasks})
+    else:
+        table(["id", "task", "state", "uses", "reason"], _rows(tasks))
+    return 0
+
+
+def run_verb(args: argparse.Namespace) -> int:
+    task = _ask(args, f"task/{args.verb}", {"id": args.id})["task"]
+    if args.json:
+        print_json(task)
+    else:
+        print(f"task {task['id']}: {task['state']}")
+    return 0
+
+
+def run_schedule(args: argparse.Namespace) -> int:
+    schedule = _ask(args, "schedule/show", {})
+    if args.json:
+        print_json(schedule)
+        return 0
+    tasks = schedule["tasks"]
+    span = max((t["end"] for t in tasks), default=0.0)
+    first = min((t["start"] for t in tasks), default=0.0)
+    table(
+        ["id", "task", "state", "start", "end", "uses", "timeline"],
+        [
+            [t["id"], t["name"], t["state"], f"{t['start']:+.1f}", f"{t['end']:+.1f}",
+             ", ".join(t["functionalities"]) or "-",
+             bar(t["start"] - first, t["end"] - t["start"], span - first)]
+            for t in tasks
+        ],
+    )  # fmt: skip
+    section(
+        f"running: {', '.join(schedule['running']) or 'nothing'}; "
+        f"permanently faulty: {', '.join(schedule['faulty']) or 'none'}"
+    )
+    return 0
