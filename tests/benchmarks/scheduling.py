@@ -16,11 +16,19 @@ third fault until cam_to_lidar publishes scan_filtered), which needs the runtime
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 import statistics
+import tempfile
 import time
+from collections.abc import Callable
+from pathlib import Path
 
+from executive.harness import RobotProcess, robot_variant
+from executive.protocol import topic
 from executive.schedule import ScheduleStatus
 from executive.scheduler import Scheduler
+from tests.conftest import USECASE
 from tests.executive.scheduling_cases import generate
 
 SIZES = (5, 20, 50, 200)
@@ -62,11 +70,68 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=20, help="generated problems per size")
     parser.add_argument("--time-limit", type=float, default=1.0, help="solver time limit (s)")
     parser.add_argument("--sizes", type=int, nargs="*", default=list(SIZES))
+    parser.add_argument(
+        "--failovers", type=int, default=10, help="runs of the scenario 2 failover (0: none)"
+    )
     args = parser.parse_args()
     schedule_times(args.sizes, args.runs, args.time_limit)
-    # TODO(phase 2, needs the runtime of issue 3): scenario 2 end to end, SIGKILL of lidar
-    # at its third fault until cam_to_lidar publishes scan_filtered, p50/p95.
-    print("\nfault-to-reconfigured (scenario 2): n/a (needs runtime)")
+    if args.failovers:
+        failover(args.failovers)
+
+
+def _wait(check: Callable[[], bool], timeout: float = 30.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not check():
+        if time.monotonic() > deadline:
+            raise TimeoutError("the robot did not get there in time")
+        time.sleep(0.01)
+
+
+def _failover_once(folder: Path) -> float:
+    """Scenario 2 with a real executive: move_to runs on lidar + lidar_filter; lidar is
+    restarted twice (faults 1 and 2), then SIGKILLed (fault 3, permanent). Returns the
+    seconds from the kill until cam_to_lidar's first scan_filtered."""
+    description = robot_variant(
+        USECASE, folder / "robot", {"behaviors": {"move_to": {"params": {"duration": 60.0}}}}
+    )
+    with RobotProcess(description, folder / "run") as robot:
+        task = robot.request("task/start", {"task": "move_to", "goal": {"target": "lab"}})["id"]
+
+        def starts() -> int:
+            return sum(
+                e["subject"].startswith(f"task {task} ") for e in robot.events("TASK_STARTED")
+            )
+
+        for fault in (1, 2):
+            _wait(lambda: starts() >= fault)  # noqa: B023
+            robot.request("component/restart", {"name": "lidar", "reason": "benchmark"})
+        _wait(lambda: starts() >= 3)
+        arrived: list[float] = []
+        robot.bus.subscribe(
+            topic("scan_filtered"),
+            lambda m: arrived.append(time.time()) if m.caller_id == "cam_to_lidar" else None,
+        )
+        listed = robot.request("component/list")["components"]
+        pid = next(c["pid"] for c in listed if c["component"] == "lidar")
+        killed = time.time()
+        os.kill(pid, signal.SIGKILL)
+        _wait(lambda: bool(arrived))
+        return arrived[0] - killed
+
+
+def failover(runs: int) -> None:
+    samples = []
+    with tempfile.TemporaryDirectory(prefix="dura-failover-") as tmp:
+        for run in range(runs):
+            samples.append(_failover_once(Path(tmp) / str(run)) * 1000)
+            print(f"  failover run {run + 1}/{runs}: {samples[-1]:.0f} ms", flush=True)
+    p50, p95 = percentiles(samples) if len(samples) > 1 else (samples[0], samples[0])
+    print(
+        "\nfault-to-reconfigured, scenario 2 (SIGKILL of lidar at its third fault until "
+        "cam_to_lidar publishes scan_filtered)"
+    )
+    print(f"{'runs':>8} {'p50 ms':>8} {'p95 ms':>8} {'min ms':>8} {'max ms':>8}")
+    print(f"{runs:>8} {p50:>8.0f} {p95:>8.0f} {min(samples):>8.0f} {max(samples):>8.0f}")
 
 
 if __name__ == "__main__":

@@ -28,12 +28,15 @@ class BrokenRobot:
         """Write the broken robot (and its domain) to a folder; returns the robot file."""
         domain = USECASE_DOMAIN
         robot = USECASE_YAML.replace("../../domains/usecase/domain.pddl", "domain.pddl")
-        robot = robot.replace(
-            "problem: problem.pddl", f"problem: {ROOT / 'examples/usecase/problem.pddl'}"
-        ).replace(
-            "integrity: [integrity.yaml]",
-            f"integrity: [{ROOT / 'examples/usecase/integrity.yaml'}]",
-        )
+        for key, name in (
+            ("problem", "problem.pddl"),
+            ("integrity", "[integrity.yaml]"),
+            ("rules", "[rules.yaml]"),
+        ):
+            absolute = name.replace(
+                name.strip("[]"), str(ROOT / "examples/usecase" / name.strip("[]"))
+            )
+            robot = robot.replace(f"{key}: {name}", f"{key}: {absolute}")
         if self.in_domain:
             assert self.old in domain, self.name
             domain = domain.replace(self.old, self.new, 1)
