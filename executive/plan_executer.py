@@ -29,7 +29,6 @@ from __future__ import annotations
 import enum
 import functools
 import logging
-import queue
 import threading
 import time
 from abc import ABC, abstractmethod
@@ -40,7 +39,7 @@ from typing import Any, TypeVar
 from executive.expression import State, atoms
 from executive.goal import GoalSpec
 from executive.partial_order import Effect, PartialOrderPlan, Step, Timepoint, apply
-from knowledge.errors import DuraError
+from executive.worker import Worker
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Fact, GoalState, PlanState
 
@@ -185,9 +184,6 @@ class _Goal:
     timer: threading.Timer | None = None
 
 
-_STOP = object()
-
-
 class PlanExecuter:
     """Runs one plan at a time (see the module docstring).
 
@@ -212,8 +208,7 @@ class PlanExecuter:
         self.tasks = frozenset(tasks)
         self.on_replan = on_replan
         self.limits = limits or ExecutionLimits()
-        self._queue: queue.Queue[Any] = queue.Queue()
-        self._thread: threading.Thread | None = None
+        self._worker = Worker("plan executer", after_each=self._after_each)
         self._plan: PartialOrderPlan | None = None
         self._plan_id: int | None = None
         self._runs: dict[int, _Run] = {}
@@ -226,53 +221,21 @@ class PlanExecuter:
     # --- lifecycle ----------------------------------------------------------------------
 
     def start(self) -> None:
-        if self._thread is None:
-            self._thread = threading.Thread(target=self._loop, name="plan-executer", daemon=True)
-            self._thread.start()
+        self._worker.start()
 
     def stop(self) -> None:
         """Cancel every running task and stop the thread; idempotent."""
-        if self._thread is None:
-            return
-        self._call(self._cancel_all)
-        self._queue.put(_STOP)
-        self._thread.join()
-        self._thread = None
+        if self._worker.running:
+            self._call(self._cancel_all)
+            self._worker.stop()
 
-    def _loop(self) -> None:
-        while True:
-            item = self._queue.get()
-            if item is _STOP:
-                return
-            try:
-                item()
-            except Exception:  # one bad event must not stop execution
-                log.exception("plan executer event failed")
-            if self._paused and not self._critical():
-                self._idle.set()
+    def _after_each(self) -> None:
+        if self._paused and not self._critical():
+            self._idle.set()
 
     def _call(self, fn: Callable[[], T], timeout: float | None = None) -> T:
         """Run ``fn`` on the executer's thread and return its result."""
-        if threading.current_thread() is self._thread:
-            return fn()
-        done = threading.Event()
-        box: list[Any] = []
-
-        def job() -> None:
-            try:
-                box.append((True, fn()))
-            except BaseException as e:
-                box.append((False, e))
-            finally:
-                done.set()
-
-        self._queue.put(job)
-        if not done.wait(timeout):
-            raise DuraError("the plan executer did not answer in time")
-        ok, value = box[0]
-        if not ok:
-            raise value
-        return value  # type: ignore[no-any-return]
+        return self._worker.call(fn, timeout)
 
     # --- commands -----------------------------------------------------------------------
 
@@ -297,7 +260,7 @@ class PlanExecuter:
 
     def facts_changed(self) -> None:
         """Facts changed outside the executer (``dura state set``): check conditions."""
-        self._queue.put(self._react)
+        self._worker.post(self._react)
 
     def planning_facts(self) -> list[Fact]:
         """The KB facts with the at-start effects of paused steps undone: the state the
@@ -517,7 +480,7 @@ class PlanExecuter:
         run.state = StepState.DISPATCHED
         run.token = self._next_token()
         run.report = StepReport(
-            lambda report, kind, value: self._queue.put(lambda: self._report(report, kind, value))
+            lambda report, kind, value: self._worker.post(lambda: self._report(report, kind, value))
         )
         run.report.route = (self._plan_id, step.index, run.token)
         run.task = self.runner.run(step, self._plan_id or 0, run.report)
@@ -666,7 +629,7 @@ class PlanExecuter:
     # --- timeouts -------------------------------------------------------------------------
 
     def _timer(self, seconds: float, fn: Callable[[], None]) -> threading.Timer:
-        timer = threading.Timer(max(0.0, seconds), lambda: self._queue.put(fn))
+        timer = threading.Timer(max(0.0, seconds), lambda: self._worker.post(fn))
         timer.daemon = True
         timer.start()
         return timer

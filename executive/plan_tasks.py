@@ -9,12 +9,14 @@ replans.
 
 from __future__ import annotations
 
+import contextlib
 from typing import Any
 
 from executive.partial_order import Step
 from executive.plan_executer import RunningTask, StepReport, TaskRunner
 from executive.task_executor import Phase, TaskExecutor, TaskHandle
 from knowledge.description import RobotDescription
+from knowledge.errors import DuraError
 
 
 def behavior_goal(robot: RobotDescription, step: Step) -> dict[str, Any]:
@@ -29,10 +31,12 @@ class _StepTask(RunningTask):
         self.interruptible = interruptible
 
     def pause(self) -> None:
-        self.handle.pause()
+        with contextlib.suppress(DuraError):  # it ended meanwhile: its report follows
+            self.handle.pause()
 
     def resume(self) -> None:
-        self.handle.resume()
+        with contextlib.suppress(DuraError):
+            self.handle.resume()
 
     def cancel(self) -> None:
         self.handle.cancel("the plan no longer needs it")

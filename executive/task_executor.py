@@ -27,7 +27,6 @@ import contextlib
 import enum
 import itertools
 import logging
-import queue
 import threading
 import time
 from collections.abc import Callable, Mapping
@@ -48,6 +47,7 @@ from executive.protocol import (
 from executive.schedule import Request
 from executive.scheduler import Scheduler
 from executive.service import Context, Service
+from executive.worker import Worker
 from knowledge.description import Kind
 from knowledge.errors import BusError, ComponentError, DuraError, KnowledgeError
 from knowledge.records import TaskState
@@ -180,8 +180,7 @@ class TaskExecutor(Service):
         self.time_limit = time_limit
         self.robot = context.robot
         self.kb = context.kb
-        self._queue: queue.Queue[Callable[[], None] | None] = queue.Queue()
-        self._thread: threading.Thread | None = None
+        self._worker = Worker("task executor")
         self._tasks: dict[str, _Task] = {}
         self._configuration = SystemConfiguration()
         self._expected: set[str] = set()  # components we started and keep running
@@ -200,14 +199,13 @@ class TaskExecutor(Service):
                     reason = "the executive stopped before it ended"
                     self.kb.set_task_state(task.id, TaskState.FAILED, reason=reason)
         self.launcher.add_listener(self._on_component_state)
-        self._thread = threading.Thread(target=self._loop, name="task-executor", daemon=True)
-        self._thread.start()
+        self._worker.start()
         bus = self.context.bus
         for verb, handler in self._api().items():
             self._declared.append(bus.serve(api(verb), handler, threaded=True))
 
     def stop(self) -> None:
-        if self._thread is None:
+        if not self._worker.running:
             return
         for entity in self._declared:
             with contextlib.suppress(Exception):
@@ -215,45 +213,14 @@ class TaskExecutor(Service):
         self._declared = []
         self.launcher.remove_listener(self._on_component_state)
         self._call(self._shutdown, timeout=60.0)
-        self._queue.put(None)
-        self._thread.join()
-        self._thread = None
-
-    def _loop(self) -> None:
-        while True:
-            job = self._queue.get()
-            if job is None:
-                return
-            try:
-                job()
-            except Exception:  # one failed step must not end the executor
-                log.exception("task executor step failed")
+        self._worker.stop()
 
     def _post(self, job: Callable[[], None]) -> None:
-        self._queue.put(job)
+        self._worker.post(job)
 
     def _call(self, fn: Callable[[], T], timeout: float | None = 30.0) -> T:
         """Run ``fn`` on the executor's thread and return its result (or raise)."""
-        if threading.current_thread() is self._thread:
-            return fn()
-        done = threading.Event()
-        box: list[Any] = []
-
-        def job() -> None:
-            try:
-                box.append((True, fn()))
-            except BaseException as e:  # handed to the caller
-                box.append((False, e))
-            finally:
-                done.set()
-
-        self._queue.put(job)
-        if not done.wait(timeout):
-            raise DuraError("the task executor did not answer in time")
-        ok, value = box[0]
-        if not ok:
-            raise value
-        return value  # type: ignore[no-any-return]
+        return self._worker.call(fn, timeout)
 
     def _shutdown(self) -> None:
         if self._timer is not None:
@@ -530,9 +497,13 @@ class TaskExecutor(Service):
             self._reschedule(f"task {task.id} {phase.value}")
 
     def _stopping(self) -> bool:
-        return self._thread is None
+        return not self._worker.running
 
     def _pause(self, task: _Task) -> None:
+        if task.phase.final:
+            raise DuraError(f"task {task.id} has ended ({task.phase.value})")
+        if not self.robot.behaviors[task.behavior].interruptible:
+            raise DuraError(f"task {task.id} ({task.behavior}) is not interruptible")
         task.paused_by_user = True
         if task.phase is Phase.RUNNING:
             self.launcher.pause(task.behavior)
@@ -540,6 +511,8 @@ class TaskExecutor(Service):
             self._event("TASK_PAUSED", task)
 
     def _resume(self, task: _Task) -> None:
+        if task.phase.final:
+            raise DuraError(f"task {task.id} has ended ({task.phase.value})")
         task.paused_by_user = False
         if task.phase is Phase.PAUSED:
             self.launcher.resume(task.behavior)
@@ -712,13 +685,23 @@ class TaskExecutor(Service):
             goal = request.get("goal") or {}
             if not isinstance(goal, dict):
                 raise DuraError(f"'goal' must be an object, not {goal!r}")
-            duration = request.get("duration")
-            if duration is not None and (not isinstance(duration, int | float) or duration <= 0):
-                raise DuraError(f"'duration' must be a positive number, not {duration!r}")
+            times: dict[str, float | None] = {}
+            for key in ("duration", "earliest", "deadline"):
+                value = request.get(key)
+                if value is not None and (not isinstance(value, int | float) or value < 0):
+                    raise DuraError(f"'{key}' must be a number of seconds, not {value!r}")
+                times[key] = None if value is None else float(value)
+            together = request.get("together") or []
+            if not isinstance(together, list) or not all(isinstance(t, str) for t in together):
+                raise DuraError(f"'together' must be a list of task ids, not {together!r}")
             name = text(request, "task")
             spec = self.robot.tasks.get(name)
             behavior = spec.behavior if spec is not None else name
-            handle = self.start_task(behavior, goal, name=name, duration=duration)
+            handle = self.start_task(
+                behavior, goal, name=name, duration=times["duration"],
+                earliest=times["earliest"] or 0.0, deadline=times["deadline"],
+                together=tuple(together),
+            )  # fmt: skip
             return {"id": handle.id, "behavior": behavior}
 
         def task_verb(verb: str) -> Callable[[dict[str, Any]], dict[str, Any]]:

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import queue
 import sys
-import threading
 import time
 from typing import Any
 
-from executive.bus import Bus, Message
+from executive.bus import Bus
 from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json, table
 from executive.protocol import OBSERVATIONS, observers_api
@@ -74,30 +75,29 @@ def _latest(bus: Bus) -> list[dict[str, Any]]:
 
 def _follow(bus: Bus, as_json: bool) -> int:
     latest = {_key(o): o for o in _latest(bus)}
-    lock = threading.Lock()
     if as_json:
         for payload in latest.values():
             sys.stdout.write(json.dumps(payload) + "\n")
-
-    def on_observation(message: Message) -> None:
-        payload = message.payload
-        with lock:
-            latest[_key(payload)] = payload
-        if as_json:
-            sys.stdout.write(json.dumps(payload) + "\n")
-            sys.stdout.flush()
-
-    bus.subscribe(OBSERVATIONS, on_observation)
+    # the bus's thread only queues; this one prints (a blocked stdout never blocks the bus)
+    arrived: queue.Queue[dict[str, Any]] = queue.Queue()
+    bus.subscribe(OBSERVATIONS, lambda message: arrived.put(message.payload))
+    redraw = 0.0
     try:
         while True:
-            if not as_json:
+            with contextlib.suppress(queue.Empty):
+                payload = arrived.get(timeout=REDRAW)
+                latest[_key(payload)] = payload
+                if as_json:
+                    sys.stdout.write(json.dumps(payload) + "\n")
+            if as_json:
+                sys.stdout.flush()
+            elif time.monotonic() >= redraw:
                 if sys.stdout.isatty():
                     sys.stdout.write("\x1b[H\x1b[2J")
-                with lock:
-                    _table(list(latest.values()))
+                _table(list(latest.values()))
                 sys.stdout.write("\n")
                 sys.stdout.flush()
-            time.sleep(REDRAW)
+                redraw = time.monotonic() + REDRAW
     except KeyboardInterrupt:
         return 0
 

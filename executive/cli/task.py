@@ -32,6 +32,16 @@ def register(sub: Any) -> None:
         "--arg", action="append", default=[], metavar="K=V", help="a goal field (repeatable)"
     )
     start.add_argument("--duration", type=float, metavar="S", help="the expected duration")
+    start.add_argument(
+        "--earliest", type=float, metavar="S", help="start no sooner than S seconds from now"
+    )
+    start.add_argument(
+        "--deadline", type=float, metavar="S", help="end within S seconds from now, or never start"
+    )
+    start.add_argument(
+        "--with", dest="together", action="append", default=[], metavar="ID",
+        help="start together with this waiting task (repeatable)",
+    )  # fmt: skip
     start.set_defaults(run=run_start)
     listing = tsub.add_parser("list", help="every task with its state and configuration")
     listing.set_defaults(run=run_list)
@@ -73,8 +83,11 @@ def _goal(pairs: list[str]) -> dict[str, Any]:
 
 def run_start(args: argparse.Namespace) -> int:
     payload: dict[str, Any] = {"task": args.task, "goal": _goal(args.arg)}
-    if args.duration is not None:
-        payload["duration"] = args.duration
+    for key in ("duration", "earliest", "deadline"):
+        if getattr(args, key) is not None:
+            payload[key] = getattr(args, key)
+    if args.together:
+        payload["together"] = args.together
     reply = _ask(args, "task/start", payload)
     if args.json:
         print_json(reply)
