@@ -247,7 +247,7 @@ def latency_table(repeats: int, tmp: Path) -> None:
     submitted: list[float] = []
     replanned: list[float] = []
     with RobotProcess(description, tmp / "run") as robot:
-        places = ["lab", "dock"]
+        places = ["dock", "lab"]  # the robot starts at the dock
         for i in range(repeats):
             here = places[i % 2]
             there = places[(i + 1) % 2]
