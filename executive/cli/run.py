@@ -23,8 +23,10 @@ def register(sub: Any) -> None:
         "run",
         help="run the executive for a robot in the foreground",
         description="Run the executive for a robot: its bus (listening), knowledge base, "
-        "launcher and resource monitor. Components are started with 'dura component start'. "
-        "Ctrl-C or SIGTERM stops every component and then the executive.",
+        "launcher, resource monitor, observers, diagnosis and repair rules, task executor "
+        "and goal planner. Goals come with 'dura goal add'; the task executor starts the "
+        "components each task needs. Ctrl-C or SIGTERM stops every component and then the "
+        "executive.",
     )
     p.add_argument("robot", metavar="ROBOT.yaml", type=Path, help="the robot description")
     p.add_argument("--endpoint", help="listen here instead of the robot's bus endpoint")
