@@ -16,6 +16,7 @@ registered under the entry-point group ``dura.planners`` (``name = "pkg.mod:Engi
 
 from __future__ import annotations
 
+import contextlib
 import enum
 import logging
 import os
@@ -45,6 +46,7 @@ log = logging.getLogger("dura.planner")
 
 BUILTIN_ENGINES = ("kairos", "aries", "fast-downward", "tamer")
 PLUGIN_GROUP = "dura.planners"
+TMP_PREFIX = "dura-planner-"  # the worker's temporary folder (engines write there)
 STARTUP_TIMEOUT = 120.0  # seconds for a worker to import unified-planning and the engines
 _HEADER = struct.Struct("!Q")
 _LOG_TAIL = 40  # lines of engine output kept in a result
@@ -166,7 +168,7 @@ class Planner:
         if self._process is not None and self._process.poll() is None:
             return
         self._reap()
-        self._tmp = Path(tempfile.mkdtemp(prefix="dura-planner-"))
+        self._tmp = Path(tempfile.mkdtemp(prefix=TMP_PREFIX))
         root = str(Path(__file__).resolve().parent.parent)
         path = os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH", "")) if p)
         env = {**os.environ, "TMPDIR": str(self._tmp), "PYTHONPATH": path}
@@ -502,13 +504,19 @@ def serve() -> None:
     worker = _Worker(Path(tempfile.gettempdir()) / "engine-output.txt")
     worker.setup()
     _send(protocol_out, "ready")
-    for message in _frames(protocol_in):
-        kind, engine, *args = message
-        try:
-            answer = getattr(worker, kind)(engine, *args)
-        except DuraError as e:
-            answer = PlanResult(PlanStatus.ERROR, None, engine, (str(e),))
-        _send(protocol_out, answer)
+    with contextlib.suppress(BrokenPipeError):  # dura died while the worker planned
+        for message in _frames(protocol_in):
+            kind, engine, *args = message
+            try:
+                answer = getattr(worker, kind)(engine, *args)
+            except DuraError as e:
+                answer = PlanResult(PlanStatus.ERROR, None, engine, (str(e),))
+            _send(protocol_out, answer)
+    # the input closed: dura is done with this worker, or died without cleaning up
+    # (SIGKILL); either way the engines' temporary files go with it
+    own = Path(tempfile.gettempdir())
+    if own.name.startswith(TMP_PREFIX):
+        shutil.rmtree(own, ignore_errors=True)
 
 
 if __name__ == "__main__":

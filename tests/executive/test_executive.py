@@ -174,6 +174,10 @@ def test_sigkill_of_the_executive_takes_all_its_components_with_it(
         # every child goes: the three components and the planner's worker
         children = psutil.Process(process.pid).children(recursive=True)
         assert components <= {c.pid for c in children}
+        (planner,) = [c for c in children if "executive.planner" in c.cmdline()]
+        scratch = Path(planner.environ()["TMPDIR"])  # the engines' temporary files
+        assert scratch.is_dir()
         process.kill()
         process.wait()
         assert wait_for(lambda: all(gone(c) for c in children), 10)
+        assert wait_for(lambda: not scratch.exists(), 10)
