@@ -160,6 +160,19 @@ class Component:
 
         self.bus.subscribe(protocol.topic(topic), deliver)
 
+    def set_fact(self, fact: str) -> None:
+        """Make a fact true in the robot's world (the planner's state), e.g.
+        ``(battery_low)``, through the executive.
+
+        Raises:
+            BusError: the executive refused it (unknown predicate or object) or is gone.
+        """
+        self.bus.request(protocol.api("state/set"), {"fact": fact}, timeout=5.0)
+
+    def unset_fact(self, fact: str) -> None:
+        """Make a fact false in the robot's world (see :meth:`set_fact`)."""
+        self.bus.request(protocol.api("state/unset"), {"fact": fact}, timeout=5.0)
+
     def at_rate(self, hz: float, step: Callable[[], None]) -> None:
         """Call ``step`` ``hz`` times a second while running (held while paused).
 
@@ -425,12 +438,69 @@ class Behavior(Component, ABC):
         self._goal_id: str | None = None
         self._cancelled = False
         self._goal_thread: threading.Thread | None = None
+        self._input_timeout: dict[str, float] = {}
+        self._heard: dict[str, float] = {}
+        self._fresh_since = time.monotonic()
 
     @abstractmethod
     def execute(self, goal: dict[str, Any]) -> dict[str, Any] | None:
         """Carry out one goal and return the result's value; raise :class:`GoalFailed` to fail."""
 
     # --- helpers ----------------------------------------------------------------------
+
+    def watch(self, *topics: str, timeout: float) -> None:
+        """Watch inputs a goal needs (call in :meth:`on_start`): :meth:`check_inputs`
+        fails the goal when one of them has been silent for ``timeout`` seconds, counted
+        from its last message, the goal's start and the last resume."""
+
+        def hearing(topic: str) -> Callable[[Message], None]:
+            return lambda message: self._heard.__setitem__(topic, time.monotonic())
+
+        for topic in topics:
+            self._input_timeout[topic] = timeout
+            self.subscribe(topic, hearing(topic))
+
+    def check_inputs(self) -> None:
+        """Raise :class:`GoalFailed` if a watched input has gone silent."""
+        now = time.monotonic()
+        for topic, timeout in self._input_timeout.items():
+            silent = now - max(self._heard.get(topic, 0.0), self._fresh_since)
+            if silent > timeout:
+                raise GoalFailed(f"no {topic} for {silent:.1f} s")
+
+    def work_for(
+        self,
+        seconds: float,
+        step: Callable[[float], None],
+        *,
+        job: str,
+        rate: float = 10.0,
+        store_every: float = 1.0,
+    ) -> None:
+        """Work for ``seconds`` of running time: call ``step(fraction_done)`` ``rate``
+        times a second, check the watched inputs before each step, publish the progress
+        as feedback and store it as the achievement ``progress`` every ``store_every``
+        seconds. A behavior restarted on the same ``job`` (e.g. the same target) goes on
+        from the stored progress: a warm start.
+        """
+        stored = self.achievements.get("progress")
+        done = 0.0
+        if isinstance(stored, dict) and stored.get("job") == job:
+            done = float(stored.get("done", 0.0))
+            self.log.info("warm start of %s at %.0f%%", job, done * 100)
+        period = 1.0 / rate
+        since_stored = 0.0
+        while done < 1.0:
+            self.sleep(period)
+            self.check_inputs()
+            done = min(1.0, done + period / seconds)
+            step(done)
+            self.feedback(job=job, done=round(done, 3))
+            since_stored += period
+            if since_stored >= store_every and done < 1.0:
+                self.achieve("progress", {"job": job, "done": done})
+                since_stored = 0.0
+        self.achievements.pop("progress", None)  # the executive forgets it on success
 
     def feedback(self, **values: Any) -> None:
         """Publish feedback on the running goal (``component/<name>/feedback``)."""
@@ -508,8 +578,13 @@ class Behavior(Component, ABC):
             self._cancelled = True
             self._changed.notify_all()
 
+    def resume(self) -> None:
+        self._fresh_since = time.monotonic()  # inputs get their timeout again
+        super().resume()
+
     def _run_goal(self, goal_id: str, goal: dict[str, Any]) -> None:
         status, value, reason = GoalStatus.FAILED, {}, ""
+        self._fresh_since = time.monotonic()
         try:
             returned = self.execute(goal)
             if returned is not None and not isinstance(returned, dict):

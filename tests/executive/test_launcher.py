@@ -319,7 +319,7 @@ def test_a_restarted_move_to_warm_starts_from_its_achievements(
         assert result is not None and result.status is GoalStatus.FAILED
         assert result.reason == "'move_to' exited with code 1"
         stored = r.kb.achievements("move_to")["progress"]
-        assert stored["target"] == "dock" and stored["done"] > 0
+        assert stored["job"] == "move to dock" and stored["done"] > 0
         assert r.launcher.restart("move_to").state is Lifecycle.READY
         again = r.launcher.send_goal("move_to", {"target": "dock"})
         assert wait_for(lambda: "done" in again.feedback)
