@@ -50,6 +50,7 @@ T = TypeVar("T")
 EXECUTIVE_GONE_DEADLINE = 1.5
 # How long stop waits for a running goal to publish its (cancelled) result.
 GOAL_STOP_TIMEOUT = 2.0
+WAIT_STEP = 0.05  # seconds between two looks of Behavior.wait_until
 
 
 class GoalFailed(Exception):
@@ -80,6 +81,7 @@ class Component:
         self.name = name
         self.bus = bus
         self.params: dict[str, Any] = {}
+        self.achievements: dict[str, Any] = {}
         self.log = logging.getLogger(f"dura.component.{name}")
         self.faults = FaultInjector(on_hang=self._hang)
         self._phase = Phase.CREATED
@@ -160,6 +162,19 @@ class Component:
 
         self.bus.subscribe(protocol.topic(topic), deliver)
 
+    def achieve(self, key: str, value: Any) -> None:
+        """Store an achievement in the KB (through the executive): it comes back in
+        ``on_configure`` when the component starts again (a warm start)."""
+        self.achievements[key] = value
+        try:
+            self.bus.request(
+                protocol.api("component/achieve"),
+                {"component": self.name, "key": key, "value": value},
+                timeout=2.0,
+            )
+        except BusError as e:
+            self.log.warning("achievement %r not stored: %s", key, e)
+
     def set_fact(self, fact: str) -> None:
         """Make a fact true in the robot's world (the planner's state), e.g.
         ``(battery_low)``, through the executive.
@@ -220,6 +235,7 @@ class Component:
     def configure(self, params: dict[str, Any], achievements: dict[str, Any]) -> None:
         self._expect("configure", Phase.CREATED, Phase.CONFIGURED)
         self.params = dict(params)
+        self.achievements = dict(achievements)
         fault = self.params.get("fault")
         self._start_fault = Fault.parse(fault) if fault is not None else None
         self.on_configure(self.params, achievements)
@@ -434,10 +450,10 @@ class Behavior(Component, ABC):
 
     def __init__(self, name: str, bus: Bus) -> None:
         super().__init__(name, bus)
-        self.achievements: dict[str, Any] = {}
         self._goal_id: str | None = None
         self._cancelled = False
         self._goal_thread: threading.Thread | None = None
+        self.latest: dict[str, dict[str, Any]] = {}
         self._input_timeout: dict[str, float] = {}
         self._heard: dict[str, float] = {}
         self._fresh_since = time.monotonic()
@@ -451,10 +467,15 @@ class Behavior(Component, ABC):
     def watch(self, *topics: str, timeout: float) -> None:
         """Watch inputs a goal needs (call in :meth:`on_start`): :meth:`check_inputs`
         fails the goal when one of them has been silent for ``timeout`` seconds, counted
-        from its last message, the goal's start and the last resume."""
+        from its last message, the goal's start and the last resume. The newest message
+        of each is in :attr:`latest`."""
 
         def hearing(topic: str) -> Callable[[Message], None]:
-            return lambda message: self._heard.__setitem__(topic, time.monotonic())
+            def heard(message: Message) -> None:
+                self._heard[topic] = time.monotonic()
+                self.latest[topic] = message.payload
+
+            return heard
 
         for topic in topics:
             self._input_timeout[topic] = timeout
@@ -467,6 +488,20 @@ class Behavior(Component, ABC):
             silent = now - max(self._heard.get(topic, 0.0), self._fresh_since)
             if silent > timeout:
                 raise GoalFailed(f"no {topic} for {silent:.1f} s")
+
+    def wait_until(self, condition: Callable[[], bool], timeout: float, what: str) -> None:
+        """Wait (running time) until ``condition()`` holds, checking the watched inputs.
+
+        Raises:
+            GoalFailed: not within ``timeout`` seconds ("no <what> within ... s").
+        """
+        waited = 0.0
+        while not condition():
+            if waited > timeout:
+                raise GoalFailed(f"no {what} within {timeout:g} s")
+            self.sleep(WAIT_STEP)
+            self.check_inputs()
+            waited += WAIT_STEP
 
     def work_for(
         self,
@@ -512,18 +547,6 @@ class Behavior(Component, ABC):
             {"component": self.name, "goal_id": goal_id, "feedback": values},
         )
 
-    def achieve(self, key: str, value: Any) -> None:
-        """Store an achievement in the KB (through the executive) for a warm start."""
-        self.achievements[key] = value
-        try:
-            self.bus.request(
-                protocol.api("component/achieve"),
-                {"component": self.name, "key": key, "value": value},
-                timeout=2.0,
-            )
-        except BusError as e:
-            self.log.warning("achievement %r not stored: %s", key, e)
-
     def checkpoint(self) -> None:
         """Wait while paused; raise :class:`GoalCancelled` once cancelled or stopped."""
         with self._changed:
@@ -546,10 +569,6 @@ class Behavior(Component, ABC):
             remaining -= time.monotonic() - began
 
     # --- lifecycle --------------------------------------------------------------------
-
-    def configure(self, params: dict[str, Any], achievements: dict[str, Any]) -> None:
-        self.achievements = dict(achievements)
-        super().configure(params, achievements)
 
     def stop(self) -> None:
         super().stop()

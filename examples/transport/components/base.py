@@ -1,0 +1,80 @@
+"""A simulated base with a battery: follows ``cmd_vel``, publishes ``odom`` at ``rate``
+Hz and ``battery`` once a second.
+
+The battery drains by ``drain`` percent per second of driving (and ``idle_drain`` at
+rest) and charges by ``charge_rate`` percent per second while a ``charge`` message
+says so (the docking station). Below ``low`` percent the base makes ``(battery_low)``
+true in the robot's world: the integrity goals take it from there. The level starts at
+``battery`` percent and is kept as an achievement while the base is switched off.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from executive.bus import Message
+from executive.component import Functionality
+from knowledge.errors import BusError
+
+
+class Base(Functionality):
+    def on_configure(self, params: dict[str, Any], achievements: dict[str, Any]) -> None:
+        self.rate = self.param("rate", 20.0)
+        self.level = float(achievements.get("battery", self.param("battery", 100.0)))
+        self.low = self.param("low", 20.0)
+        self.drain = self.param("drain", 0.5)
+        self.idle_drain = self.param("idle_drain", 0.0)
+        self.charge_rate = self.param("charge_rate", 10.0)
+        self.x = 0.0
+        self.linear = 0.0
+        self.commanded = self.charging_until = 0.0
+        self.reported_low = False
+
+    def on_start(self) -> None:
+        self.subscribe("cmd_vel", self.command)
+        self.subscribe("charge", self.charge)
+        self.at_rate(self.rate, self.step)
+        self.at_rate(1.0, self.report)
+
+    def command(self, message: Message) -> None:
+        linear = message.payload.get("linear", 0.0)
+        if isinstance(linear, (int, float)):
+            self.linear, self.commanded = float(linear), time.monotonic()
+
+    def charge(self, message: Message) -> None:
+        on = message.payload.get("on") is True
+        self.charging_until = time.monotonic() + 1.0 if on else 0.0
+
+    def step(self) -> None:
+        now, dt = time.monotonic(), 1.0 / self.rate
+        if now - self.commanded > 0.5:  # a command holds for half a second
+            self.linear = 0.0
+        self.x += self.linear * dt
+        if now < self.charging_until:
+            self.level = min(100.0, self.level + self.charge_rate * dt)
+        else:
+            self.level -= (self.drain if self.linear else self.idle_drain) * dt
+            self.level = max(0.0, self.level)
+        self.publish("odom", {"x": self.x, "y": 0.0, "theta": 0.0, "linear": self.linear})
+
+    def report(self) -> None:
+        self.publish("battery", {"level": round(self.level, 2)})
+        self.achieve("battery", round(self.level, 2))
+        low = self.level < self.low
+        if low and not self.reported_low:
+            try:
+                self.set_fact("(battery_low)")
+                self.reported_low = True
+            except BusError as e:  # the executive may be busy; say it again next time
+                self.log.warning("could not report the low battery: %s", e)
+        elif not low:
+            self.reported_low = False
+
+
+def main() -> None:
+    Base.main()
+
+
+if __name__ == "__main__":
+    main()
