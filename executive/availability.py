@@ -14,7 +14,7 @@ from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass
 from functools import cached_property
 
-from knowledge.description import Functionality
+from knowledge.description import Functionality, RobotDescription
 
 
 @dataclass(frozen=True)
@@ -87,3 +87,19 @@ class Availability:
         if not providers:
             return "no functionality provides it"
         return ", ".join(f"{f.name} {self._reason(f.name, seen)}" for f in providers)
+
+
+def blocked_tasks(robot: RobotDescription, faulty: Collection[str]) -> dict[str, str]:
+    """The tasks (PDDL actions) that cannot run, with the reason, given the permanently
+    faulty components: a faulty behavior, or a capability it requires without a usable
+    provider. The goal planner plans without them."""
+    availability = Availability.of(robot.functionalities.values(), faulty)
+    blocked: dict[str, str] = {}
+    for action, task in robot.tasks.items():
+        behavior = robot.behaviors[task.behavior]
+        missing = next((c for c in behavior.requires if not availability.available(c)), None)
+        if behavior.name in faulty:
+            blocked[action] = f"behavior {behavior.name} is permanently faulty"
+        elif missing is not None:
+            blocked[action] = availability.explain(missing)
+    return blocked

@@ -7,14 +7,17 @@ plans for all goals (or the best subset by priority, see
 :mod:`executive.oversubscription`), validates and stores the plan, marks the goals
 planned or unreachable with the reason, and hands the plan to the executer. A goal
 that already holds is achieved without planning; one whose deadline passed fails.
-A goal fails once ``max_attempts`` plans for it have failed.
+A goal fails once ``max_attempts`` plans for it have failed. Actions whose task cannot
+run (its behavior or every provider of a capability it needs is permanently faulty)
+are left out of the problem, and a goal that needs them is unreachable with that reason.
 """
 
 from __future__ import annotations
 
 import logging
 import threading
-from collections import Counter
+from collections import Counter, defaultdict
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 from executive.expression import Signature, State
@@ -56,6 +59,7 @@ class GoalPlanner:
         *,
         max_attempts: int = 5,
         pause_timeout: float | None = None,
+        blocked: Callable[[], Mapping[str, str]] | None = None,
     ) -> None:
         self.kb = kb
         self.domain = domain
@@ -63,6 +67,7 @@ class GoalPlanner:
         self.executer = executer
         self.max_attempts = max_attempts
         self.pause_timeout = pause_timeout
+        self.blocked = blocked or dict  # action -> why its task cannot run now
         self._failures: Counter[int] = Counter()  # failed plans per goal
         self._planned: frozenset[int] | None = None
         self._replan = True
@@ -130,7 +135,12 @@ class GoalPlanner:
         if (not replan and open_ids == self._planned) or (not open_ids and not self._planned):
             self._planned = open_ids
             return None
-        self.kb.log_event("PLANNING", "goal planner", {"reason": reason, "goals": sorted(open_ids)})
+        blocked = dict(self.blocked())
+        self.kb.log_event(
+            "PLANNING",
+            "goal planner",
+            {"reason": reason, "goals": sorted(open_ids), "blocked": sorted(blocked)},
+        )
         self.executer.pause(self.pause_timeout)
         facts = self.executer.planning_facts()
         objects = self.kb.objects()
@@ -160,10 +170,13 @@ class GoalPlanner:
         plan_id = None
         planned: tuple[int, ...] = ()
         if todo:
-            task = PlanningTask(self.domain.path, World(objects, tuple(facts)), tuple(todo))
+            world = World(objects, tuple(facts))
+            task = PlanningTask(self.domain.path, world, tuple(todo), frozenset(blocked))
             outcome = plan_goals(self.planner, task)
             result = outcome.result
-            unreachable.update(outcome.unreachable)
+            unreachable.update(
+                {goal_id: why + _without(blocked) for goal_id, why in outcome.unreachable.items()}
+            )
             planned = outcome.planned if outcome.ok else ()
             if outcome.ok and result.plan is not None:
                 stored = self.kb.store_plan(
@@ -180,3 +193,13 @@ class GoalPlanner:
             self.executer.abandon()
         self._planned = frozenset(planned)
         return Round(reason, plan_id, planned, achieved, unreachable, failed, result)
+
+
+def _without(blocked: Mapping[str, str]) -> str:
+    """``"; cannot run now: call_lift, ride_lift (lift_link is ...)"`` or nothing."""
+    if not blocked:
+        return ""
+    actions: defaultdict[str, list[str]] = defaultdict(list)
+    for action, why in sorted(blocked.items()):
+        actions[why].append(action)
+    return "; cannot run now: " + "; ".join(f"{', '.join(a)} ({why})" for why, a in actions.items())

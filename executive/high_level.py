@@ -19,6 +19,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from executive.availability import blocked_tasks
 from executive.expression import Signature, parse_fact
 from executive.goal import submit
 from executive.goal_planner import GoalPlanner
@@ -90,6 +91,7 @@ class HighLevel(Service):
         self._stopping = threading.Event()
         self._integrity_thread: threading.Thread | None = None
         self._relaying = False
+        self._blocked: dict[str, str] = {}
 
     # --- lifecycle -----------------------------------------------------------------------
 
@@ -105,7 +107,8 @@ class HighLevel(Service):
         self.planner = Planner(robot.planner.engine, robot.planner.timeout)
         self.planner.start(robot.domain)
         self.executer = PlanExecuter(kb, self.runner, robot.tasks, self._replan, self.limits)
-        self.goals = GoalPlanner(kb, self.domain, self.planner, self.executer)
+        self._blocked = self.blocked()
+        self.goals = GoalPlanner(kb, self.domain, self.planner, self.executer, blocked=self.blocked)
         self._relaying = True
         kb.add_listener(self._on_event)
         self._declared = [bus.subscribe(DIAGNOSES, self._on_diagnoses)]
@@ -169,6 +172,25 @@ class HighLevel(Service):
                 continue
             for goal in posted:
                 self.goals.wake(f"integrity goal {goal.id} posted")
+            self._check_blocked()
+
+    def blocked(self) -> dict[str, str]:
+        """The tasks that cannot run with the permanently faulty components, and why."""
+        faulty = [c.name for c in self.context.kb.components() if c.permanent_fault]
+        return blocked_tasks(self.context.robot, faulty)
+
+    def _check_blocked(self) -> None:
+        """Replan when a task can no longer run, or can run again (after a reset)."""
+        blocked = self.blocked()
+        if blocked.keys() == self._blocked.keys():
+            return
+        lost = sorted(blocked.keys() - self._blocked.keys())
+        back = sorted(self._blocked.keys() - blocked.keys())
+        self._blocked = blocked
+        if lost:
+            self.goals.replan(f"{', '.join(lost)} can no longer run ({blocked[lost[0]]})")
+        else:
+            self.goals.replan(f"{', '.join(back)} can run again")
 
     # --- the bus API ---------------------------------------------------------------------
 

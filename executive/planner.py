@@ -69,11 +69,13 @@ class PlanStatus(enum.Enum):
 
 @dataclass(frozen=True)
 class PlanningTask:
-    """What to plan: a domain file, a world to start from and the goals to reach."""
+    """What to plan: a domain file, a world to start from and the goals to reach,
+    without the ``blocked`` actions (the robot cannot do them now)."""
 
     domain: Path
     world: World
     goals: tuple[GoalSpec, ...]
+    blocked: frozenset[str] = frozenset()
 
 
 @dataclass(frozen=True)
@@ -412,7 +414,7 @@ class _Worker:
                               more.get("validator", ""))  # fmt: skip
 
         try:
-            problem = build(self.domain(task.domain), task.world, task.goals)
+            problem = build(self.domain(task.domain), task.world, task.goals, task.blocked)
             engine = self.engine(engine_name)
         except DuraError as e:
             return result(PlanStatus.ERROR, str(e))

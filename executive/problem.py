@@ -15,7 +15,7 @@ The goal must also hold at the end, like every goal.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -174,8 +174,14 @@ def bindings(variables: Sequence[Any], problem: Problem) -> list[dict[str, str]]
 # --- problems ------------------------------------------------------------------------
 
 
-def build(domain: Problem, world: World, goals: Sequence[GoalSpec]) -> Problem:
-    """A problem: the domain (a UP problem without objects), a world and goals.
+def build(
+    domain: Problem,
+    world: World,
+    goals: Sequence[GoalSpec],
+    blocked: Collection[str] = (),
+) -> Problem:
+    """A problem: the domain (a UP problem without objects), a world and goals, without
+    the ``blocked`` actions.
 
     Raises:
         DomainError: an object, fact or goal does not fit the domain.
@@ -183,6 +189,10 @@ def build(domain: Problem, world: World, goals: Sequence[GoalSpec]) -> Problem:
     from unified_planning.model import Fluent, GlobalStartTiming, InstantaneousAction, Object
 
     problem = domain.clone()
+    if blocked:
+        kept = [a for a in problem.actions if a.name not in blocked]
+        problem.clear_actions()
+        problem.add_actions(kept)
     em = problem.environment.expression_manager
     for name, type_name in world.objects.items():
         if problem.has_object(name):

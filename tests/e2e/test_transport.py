@@ -10,6 +10,7 @@ import pytest
 
 from executive.harness import RobotProcess
 from tests.conftest import ROOT
+from tests.executive.test_plan_executer import eventually
 
 pytestmark = pytest.mark.slow
 
@@ -49,3 +50,24 @@ def test_a_low_battery_sends_the_robot_to_charge_and_the_delivery_still_happens(
     assert any(s.startswith("charge") for s in steps(robot))
     assert robot.facts("battery_low") == []
     assert "(crate_at parcel lab)" in robot.facts("crate_at")
+
+
+def test_a_lost_lift_makes_the_delivery_unreachable_and_sends_the_robot_to_its_dock(
+    dura_robot: Start,
+) -> None:
+    robot = dura_robot(TRANSPORT)
+    delivery = robot.submit_goal("(crate_at parcel lab)")
+    eventually(lambda: any(e["subject"].startswith("pick") for e in robot.events("START")))
+    robot.request("component/fault", {"name": "lift_link"})  # beyond repair
+    goal = robot.wait_for(delivery, "unreachable", timeout=60)
+    assert goal["reason"].endswith(
+        "; cannot run now: call_lift, ride_lift"
+        " (no provider for capability 'lift': lift_link is permanently faulty)"
+    ), goal["reason"]
+    replans = [e["data"]["reason"] for e in robot.events("PLANNING")]
+    assert any("call_lift, ride_lift can no longer run" in r for r in replans), replans
+    maintenance = [g for g in robot.goals() if g["source"] == "integrity"]
+    assert [g["expression"] for g in maintenance] == ["(robot_at dock)"]
+    robot.wait_for(maintenance[0]["id"], "achieved", timeout=120)
+    assert "(robot_at dock)" in robot.facts("robot_at")
+    assert not any(s.startswith("ride_lift") for s in steps(robot))

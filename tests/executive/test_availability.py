@@ -1,6 +1,9 @@
 from __future__ import annotations
 
-from executive.availability import Availability
+from executive.availability import Availability, blocked_tasks
+from knowledge.description import RobotDescription
+from knowledge.robot import load_robot
+from tests.conftest import USECASE
 from tests.executive.scheduling_cases import functionality, usecase
 
 
@@ -66,3 +69,20 @@ def test_clearing_a_permanent_fault_makes_what_runs_on_top_of_it_usable_again() 
     faulty = Availability.of(functionalities.values(), {"lidar"})
     repaired = Availability.of(functionalities.values(), set())
     assert repaired.usable - faulty.usable == {"lidar", "lidar_filter"}
+
+
+def test_a_task_is_blocked_when_its_behavior_or_a_capability_it_needs_is_lost() -> None:
+    robot = load_robot(USECASE)
+    assert blocked_tasks(robot, ()) == {}
+    assert blocked_tasks(robot, {"lidar"}) == {}  # cam_to_lidar takes over
+    assert blocked_tasks(robot, {"lidar", "cam"}) == {
+        "move_to": availability_of(robot, {"lidar", "cam"}).explain("obstacle_scan"),
+        "take_picture": "no provider for capability 'camera': cam is permanently faulty",
+    }
+    assert blocked_tasks(robot, {"take_picture"}) == {
+        "take_picture": "behavior take_picture is permanently faulty"
+    }
+
+
+def availability_of(robot: RobotDescription, faulty: set[str]) -> Availability:
+    return Availability.of(robot.functionalities.values(), faulty)

@@ -26,13 +26,24 @@ class Executive:
     """The high level of an executive: goal planner and plan executer on one KB."""
 
     def __init__(
-        self, kb: KnowledgeBase, planner: Planner, runner: ScriptedRunner, attempts: int = 5
+        self,
+        kb: KnowledgeBase,
+        planner: Planner,
+        runner: ScriptedRunner,
+        attempts: int = 5,
+        blocked: dict[str, str] | None = None,
     ) -> None:
         self.kb = kb
         self.runner = runner
+        self.blocked = dict(blocked or {})
         self.executer = PlanExecuter(kb, runner, TASKS, self._replan)
         self.goals = GoalPlanner(
-            kb, usecase_domain(), planner, self.executer, max_attempts=attempts
+            kb,
+            usecase_domain(),
+            planner,
+            self.executer,
+            max_attempts=attempts,
+            blocked=lambda: self.blocked,
         )
         self.executer.start()
         self.goals.start()
@@ -60,8 +71,12 @@ class Executive:
 def executive(usecase_kb: KnowledgeBase, kairos: Planner) -> Iterator[Callable[..., Executive]]:
     made: list[Executive] = []
 
-    def make(runner: ScriptedRunner | None = None, attempts: int = 5) -> Executive:
-        e = Executive(usecase_kb, kairos, runner or ScriptedRunner(), attempts)
+    def make(
+        runner: ScriptedRunner | None = None,
+        attempts: int = 5,
+        blocked: dict[str, str] | None = None,
+    ) -> Executive:
+        e = Executive(usecase_kb, kairos, runner or ScriptedRunner(), attempts, blocked)
         made.append(e)
         return e
 
@@ -107,6 +122,28 @@ def test_an_unreachable_goal_is_reported_with_a_reason_while_the_others_are_achi
     assert record.state is GoalState.UNREACHABLE
     assert record.reason.startswith("no plan reaches it from the current state")
     assert [e.subject for e in ex.kb.events(kind="GOAL_UNREACHABLE")] == [f"goal {dock.id}"]
+
+
+def test_a_goal_that_needs_a_task_which_cannot_run_is_unreachable_with_the_reason(
+    executive: Callable[..., Executive],
+) -> None:
+    ex = executive(blocked={"take_picture": "behavior take_picture is permanently faulty"})
+    picture = ex.submit("(picture_taken lab)", priority=5)
+    there = ex.submit("(robot_at lab)")
+    eventually(ex.settled)
+    assert ex.state(there) is GoalState.ACHIEVED
+    record = ex.kb.goal(picture.id)
+    assert record.state is GoalState.UNREACHABLE
+    assert record.reason.endswith(
+        "; cannot run now: take_picture (behavior take_picture is permanently faulty)"
+    )
+    assert "take_picture(lab)" not in ex.runner.labels()
+    assert ex.kb.events(kind="PLANNING")[-1].data["blocked"] == ["take_picture"]
+    # the task can run again (a reset after maintenance): a new goal for it is planned
+    ex.blocked.clear()
+    again = ex.submit("(picture_taken lab)")
+    eventually(ex.settled)
+    assert ex.state(again) is GoalState.ACHIEVED
 
 
 def test_a_critical_task_is_not_interrupted_by_replanning(

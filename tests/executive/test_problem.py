@@ -95,6 +95,15 @@ def test_a_problem_holds_the_world_the_goals_and_a_window_for_each_deadline() ->
     assert problem.action("dura_reach_goal_2") is not None
 
 
+def test_blocked_actions_are_left_out_of_the_problem() -> None:
+    domain = parse(USECASE_DOMAIN)
+    problem = build(domain, world(USECASE_DOMAIN, USECASE_PROBLEM), [], {"take_picture"})
+    assert [a.name for a in problem.actions] == [
+        a.name for a in domain.actions if a.name != "take_picture"
+    ]
+    assert domain.has_action("take_picture")  # the domain itself is left as it was
+
+
 def test_a_fact_the_domain_does_not_know_is_refused() -> None:
     bad = world(USECASE_DOMAIN, USECASE_PROBLEM)
     from executive.problem import World
