@@ -5,6 +5,7 @@ goal). Real components, a real planner, the real executive."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import pytest
 
@@ -16,6 +17,8 @@ pytestmark = pytest.mark.slow
 
 TRANSPORT = ROOT / "examples" / "transport" / "robot.yaml"
 Start = Callable[..., RobotProcess]
+# shorter drives than the planner's estimates: the same steps, in less test time
+QUICK: dict[str, Any] = {"behaviors": {"drive_to": {"params": {"duration": 2.0}}}}
 
 
 def steps(robot: RobotProcess) -> list[str]:
@@ -24,7 +27,7 @@ def steps(robot: RobotProcess) -> list[str]:
 
 
 def test_a_crate_goes_upstairs_by_lift(dura_robot: Start) -> None:
-    robot = dura_robot(TRANSPORT)
+    robot = dura_robot(TRANSPORT, changes=QUICK)
     goal = robot.submit_goal("(crate_at parcel lab)")
     robot.wait_for(goal, "achieved", timeout=180)
     assert "(crate_at parcel lab)" in robot.facts("crate_at")
@@ -40,8 +43,9 @@ def test_a_low_battery_sends_the_robot_to_charge_and_the_delivery_still_happens(
     dura_robot: Start,
 ) -> None:
     # a battery that runs low on the way: the base says so, an integrity goal follows
-    battery = {"battery": 24.0, "low": 20.0, "drain": 1.0}
-    robot = dura_robot(TRANSPORT, changes={"functionalities": {"base": {"params": battery}}})
+    battery = {"battery": 22.5, "low": 20.0, "drain": 1.0, "charge_rate": 40.0}
+    changes = {**QUICK, "functionalities": {"base": {"params": battery}}}
+    robot = dura_robot(TRANSPORT, changes=changes)
     delivery = robot.submit_goal("(crate_at parcel lab)")
     robot.wait_for(delivery, "achieved", timeout=240)
     recharge = [g for g in robot.goals() if g["source"] == "integrity"]
@@ -55,7 +59,7 @@ def test_a_low_battery_sends_the_robot_to_charge_and_the_delivery_still_happens(
 def test_a_lost_lift_makes_the_delivery_unreachable_and_sends_the_robot_to_its_dock(
     dura_robot: Start,
 ) -> None:
-    robot = dura_robot(TRANSPORT)
+    robot = dura_robot(TRANSPORT, changes=QUICK)
     delivery = robot.submit_goal("(crate_at parcel lab)")
     eventually(lambda: any(e["subject"].startswith("pick") for e in robot.events("START")))
     robot.request("component/fault", {"name": "lift_link"})  # beyond repair
