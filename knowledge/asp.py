@@ -34,6 +34,7 @@ Value = int | str | tuple["Value", ...]
 _LOCATION = re.compile(
     r"^(?P<src>.*?):(?P<line>\d+):\d+(?:-\d+(?::\d+)?)?: (?P<kind>\w+): (?P<msg>.*)$"
 )
+SHOWN_CACHE = 100_000  # converted shown atoms kept per control
 
 
 def to_python(symbol: clingo.Symbol) -> Value:
@@ -86,6 +87,7 @@ class Answer:
     atoms: dict[str, list[tuple[Value, ...]]]
     cost: tuple[int, ...] = ()
     priority: tuple[int, ...] = ()
+    optimal: bool = False  # proven optimal (with ``costs``, e.g. in clasp's optN mode)
 
     def get(self, name: str) -> list[tuple[Value, ...]]:
         return self.atoms.get(name, [])
@@ -118,6 +120,8 @@ class Asp:
     def __init__(self, arguments: Sequence[str] = (), *, theory: Theory | None = None) -> None:
         self._messages: list[str] = []
         self._theory = theory
+        # shown atoms already converted: a symbol recurs in many models of an enumeration
+        self._shown: dict[clingo.Symbol, tuple[str, tuple[Value, ...]]] = {}
         try:
             self._control = clingo.Control(list(arguments), logger=self._log, message_limit=20)
         except RuntimeError as e:
@@ -239,7 +243,7 @@ class Asp:
         late = threading.Event()  # past the timeout without a model: the next one ends it
 
         def on_model(model: clingo.Model) -> bool:
-            answer = _answer(model, costs)
+            answer = self._answer(model, costs)
             if keep or not answers:
                 answers.append(answer)
             else:
@@ -273,6 +277,21 @@ class Asp:
             core=self._core_symbols(core, assumptions) if result.unsatisfiable else [],
         )
 
+    def _answer(self, model: clingo.Model, costs: bool) -> Answer:
+        atoms: dict[str, list[tuple[Value, ...]]] = {}
+        shown = self._shown
+        for symbol in model.symbols(shown=True):
+            known = shown.get(symbol)
+            if known is None:
+                if len(shown) >= SHOWN_CACHE:  # a long-lived control meets new atoms
+                    shown.clear()
+                args = tuple(to_python(a) for a in symbol.arguments)
+                known = shown[symbol] = (symbol.name, args)
+            atoms.setdefault(known[0], []).append(known[1])
+        if not costs:
+            return Answer(atoms)
+        return Answer(atoms, tuple(model.cost), tuple(model.priority), model.optimality_proven)
+
     def _core_symbols(
         self, literals: list[int], assumptions: Sequence[tuple[clingo.Symbol, bool]]
     ) -> list[clingo.Symbol]:
@@ -285,12 +304,3 @@ class Asp:
             if found is not None and found.literal in wanted:
                 out.append(symbol)
         return out
-
-
-def _answer(model: clingo.Model, costs: bool) -> Answer:
-    atoms: dict[str, list[tuple[Value, ...]]] = {}
-    for symbol in model.symbols(shown=True):
-        atoms.setdefault(symbol.name, []).append(tuple(to_python(a) for a in symbol.arguments))
-    if not costs:
-        return Answer(atoms)
-    return Answer(atoms, tuple(model.cost), tuple(model.priority))

@@ -6,8 +6,11 @@ region alone: the cost of a diagnosis grows with the region, not with the robot.
 grounded region is kept and observations are externals: while the failed
 observations stay inside it (a fault disappears, a verdict within it changes), a new
 diagnosis only re-solves. Every answer set of the domain-heuristic enumeration
-(``--enum-mode=domRec``) is a subset-minimal diagnosis. Not thread-safe: the service
-calls it from one thread.
+(``--enum-mode=domRec``) is a subset-minimal diagnosis. When that enumeration runs out
+of time, the rest of the time bound goes to the smallest diagnoses (a cardinality
+optimisation that enumerates every optimum): a TIMEOUT result still holds all the
+most likely diagnoses, however many larger ones there are. Not thread-safe: the
+service calls it from one thread.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from pathlib import Path
 import clingo
 
 from executive.protocol import ObservationInfo
-from knowledge.asp import Asp, atom
+from knowledge.asp import Answer, Asp, atom
 from knowledge.errors import ConfigError
 from monitoring.diagnosis.model import (
     ModelUpdate,
@@ -31,7 +34,14 @@ from monitoring.diagnosis.model import (
 from monitoring.diagnosis.result import DiagnosisResult, Status, ordered
 
 PROGRAM = Path(__file__).with_name("diagnosis.lp")
-OPTIONS = ("--heuristic=Domain", "--enum-mode=domRec", "--project", "--models=0")
+OPTIONS = (
+    "--heuristic=Domain",
+    "--enum-mode=domRec",
+    "--project",
+    "--models=0",
+    "--opt-mode=ignore",
+)
+SMALLEST_SHARE = 0.25  # of the time bound, kept for the smallest diagnoses
 
 
 def model_facts(model: SystemDescription, observers: Iterable[Observer]) -> str:
@@ -85,6 +95,7 @@ class _Grounded:
     index: dict[Observer, int]  # the observers of the region by number
     assigned: list[tuple[bool, bool]]  # (failed, ok) as assigned, per observer
     bounds: set[int]
+    smallest: bool = False  # the part "smallest" is grounded
 
 
 class DiagnosisEngine:
@@ -193,12 +204,20 @@ class DiagnosisEngine:
         grounded = self._region(failed)
         self._assign(grounded, self._wanted(grounded))
         self._bound(grounded, self.max_card)
-        outcome = grounded.asp.solve(timeout=self.timeout)
+        timeout = self.timeout
+        outcome = grounded.asp.solve(
+            timeout=None if timeout is None else timeout * (1 - SMALLEST_SHARE)
+        )
+        answers = list(outcome.answers)
+        if outcome.interrupted and timeout is not None:
+            # at least its share, also when the interrupted search overran its own
+            left = timeout - (time.perf_counter() - start)
+            answers += self._smallest(grounded, max(timeout * SMALLEST_SHARE, left))
         names = grounded.names
         found = ordered(
             [
                 tuple(names[n] for (n,) in answer.get("faulty") if isinstance(n, int))
-                for answer in outcome.answers
+                for answer in answers
             ]
         )
         if outcome.interrupted:
@@ -299,6 +318,22 @@ class DiagnosisEngine:
             grounded.bounds.add(max_card)
         for k in grounded.bounds:
             grounded.asp.assign_external(atom("limit", k), k == max_card)
+
+    @staticmethod
+    def _smallest(grounded: _Grounded, timeout: float) -> list[Answer]:
+        """Every diagnosis of the smallest size that can be proven so within ``timeout``."""
+        asp = grounded.asp
+        if not grounded.smallest:
+            asp.ground([("smallest", ())])
+            grounded.smallest = True
+        asp.set("solve.opt_mode", "optN")
+        asp.set("solve.enum_mode", "auto")
+        try:
+            outcome = asp.solve(timeout=timeout, costs=True)
+        finally:
+            asp.set("solve.opt_mode", "ignore")
+            asp.set("solve.enum_mode", "domRec")
+        return [a for a in outcome.answers if a.optimal]
 
     def _consistent(self, grounded: _Grounded) -> bool | None:
         """Whether some diagnosis exists, of any size (None: no answer in time)."""

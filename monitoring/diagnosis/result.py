@@ -13,7 +13,7 @@ class Status(enum.Enum):
     OK = "OK"  # no observation failed
     DIAGNOSED = "DIAGNOSED"  # every minimal diagnosis (within the size bound) is listed
     INCONSISTENT = "INCONSISTENT"  # no set of faulty candidates explains the observations
-    TIMEOUT = "TIMEOUT"  # cut off by the time bound: the diagnoses found until then
+    TIMEOUT = "TIMEOUT"  # cut off by the time bound: those found, and every smallest one
 
 
 @dataclass(frozen=True)

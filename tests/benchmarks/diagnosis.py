@@ -22,6 +22,9 @@ Columns (milliseconds, median over the instances of a size):
 - Berge: minimal hitting sets of the failed observations' upstream cones, computed
   directly (no solver): the lower bound.
 Every method's diagnoses are checked against Berge's.
+
+Last, a model with very many diagnoses (a root and 2**k alternatives) under a time
+bound of 100 ms: how many diagnoses came back, and whether the smallest is among them.
 """
 
 from __future__ import annotations
@@ -267,6 +270,46 @@ def rediagnose(
     return seconds
 
 
+def fan(topics: int) -> Instance:
+    """One root feeding ``topics`` topics with two publishers each, every topic failed:
+    {root} and the 2**topics choices of one publisher per topic are the diagnoses."""
+    nodes = [Node("root", (), ("r",))]
+    for i in range(topics):
+        nodes += [Node(f"a{i}", ("r",), (f"m{i}",)), Node(f"b{i}", ("r",), (f"m{i}",))]
+    model = SystemDescription(
+        tuple(nodes), tuple(Observer.make("frequency", [f"m{i}"]) for i in range(topics))
+    )
+    failed = [ObservationInfo("frequency", (f"m{i}",), -1) for i in range(topics)]
+    return Instance(f"fan {topics}", model, failed, ("root",))
+
+
+def time_bounded(bound: float) -> None:
+    """Very many diagnoses under a time bound: is the smallest one among those found?"""
+    print(f"\nvery many diagnoses, time bound {bound * 1000:g} ms")
+    print("model   diagnoses  all (ms)  status    found  {root} found  elapsed (ms)")
+    for topics in (12, 14, 16, 18):
+        instance = fan(topics)
+        if topics <= 14:
+            engine = DiagnosisEngine(instance.model)
+            for info in instance.observations:
+                engine.observe(info)
+            seconds, every = timed(engine.diagnose)
+            assert isinstance(every, DiagnosisResult)
+            total, all_ms = str(len(every.diagnoses)), f"{seconds * 1000:.0f}"
+        else:
+            total, all_ms = str(2**topics + 1), "-"
+        engine = DiagnosisEngine(instance.model, timeout=bound)
+        for info in instance.observations:
+            engine.observe(info)
+        seconds, result = timed(engine.diagnose)
+        assert isinstance(result, DiagnosisResult)
+        print(
+            f"{instance.name:<8}{total:>9}{all_ms:>10}  {result.status.value:<9}"
+            f"{len(result.diagnoses):>6}  {'yes' if ('root',) in result.diagnoses else 'NO':>12}"
+            f"{seconds * 1000:>14.1f}"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--instances", type=int, default=5, help="instances per size")
@@ -371,6 +414,7 @@ def main() -> None:
         f"1000 nodes: diagnose / Berge {big['diagnose'] / big['bound']:.1f}x, "
         f"full / Berge {big['full'] / big['bound']:.1f}x (target <= 5x)"
     )
+    time_bounded(0.1)
 
 
 if __name__ == "__main__":

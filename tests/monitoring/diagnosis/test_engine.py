@@ -230,3 +230,20 @@ def test_a_time_bound_returns_timeout_with_what_was_found() -> None:
     result = engine.diagnose()
     assert result.status is Status.TIMEOUT
     assert all(len(d) == 1 for d in result.diagnoses)
+
+
+def test_a_time_bound_keeps_the_smallest_diagnoses_among_very_many() -> None:
+    # root feeds 18 topics with two publishers each: {root} explains every failure, and
+    # so does each of the 2**18 choices of one publisher per topic
+    topics = 18
+    nodes = [Node("root", (), ("r",))]
+    for i in range(topics):
+        nodes += [Node(f"a{i}", ("r",), (f"m{i}",)), Node(f"b{i}", ("r",), (f"m{i}",))]
+    observers = tuple(Observer.make("hz", [f"m{i}"]) for i in range(topics))
+    engine = DiagnosisEngine(SystemDescription(tuple(nodes), observers), timeout=1.0)
+    for i in range(topics):
+        engine.observe(ObservationInfo("hz", (f"m{i}",), -1))
+    result = engine.diagnose()
+    assert result.status is Status.TIMEOUT  # far too many to enumerate in a second
+    assert result.diagnoses[0] == ("root",)
+    assert all(len(d) == topics for d in result.diagnoses[1:])
