@@ -49,7 +49,7 @@ def register(sub: Any) -> None:
     p = sub.add_parser(
         "demo",
         help="run the thesis use case end to end (about a minute)",
-        description="Start the example robot, submit goals, crash lidar until it is "
+        description="Start the example robot, submit goals, stop lidar's scan until it is "
         "permanently faulty, watch the diagnosis and the switch to the camera, and print a "
         "summary once every goal is achieved. Exit 0 if they all are.",
     )
