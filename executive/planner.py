@@ -47,6 +47,8 @@ log = logging.getLogger("dura.planner")
 BUILTIN_ENGINES = ("kairos", "aries", "fast-downward", "tamer")
 PLUGIN_GROUP = "dura.planners"
 TMP_PREFIX = "dura-planner-"  # the worker's temporary folder (engines write there)
+WORKER_PID = "worker.pid"  # in that folder: whose it is
+ABANDONED = 3600.0  # seconds after which a folder without a worker pid is left over
 STARTUP_TIMEOUT = 120.0  # seconds for a worker to import unified-planning and the engines
 _HEADER = struct.Struct("!Q")
 _LOG_TAIL = 40  # lines of engine output kept in a result
@@ -170,6 +172,7 @@ class Planner:
         if self._process is not None and self._process.poll() is None:
             return
         self._reap()
+        _sweep(Path(tempfile.gettempdir()))
         self._tmp = Path(tempfile.mkdtemp(prefix=TMP_PREFIX))
         root = str(Path(__file__).resolve().parent.parent)
         path = os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH", "")) if p)
@@ -183,6 +186,7 @@ class Planner:
                 env=env,
                 start_new_session=True,  # its own process group, killed as a whole
             )
+        (self._tmp / WORKER_PID).write_text(str(self._process.pid))
         self._ready = False
 
     def _reap(self) -> None:
@@ -292,6 +296,32 @@ class _suppress_lookup:
 
 
 # --- framing --------------------------------------------------------------------------
+
+
+def _sweep(folder: Path) -> None:
+    """Remove the temporary folders of workers that are gone without cleaning up: a
+    worker removes its own when its input closes, but not when it is killed together
+    with dura (a power cut, a killed container)."""
+    for stale in folder.glob(f"{TMP_PREFIX}*"):
+        try:
+            pid = int((stale / WORKER_PID).read_text())
+        except (OSError, ValueError):  # no pid (yet): left over only once it is old
+            with contextlib.suppress(OSError):
+                if time.time() - stale.stat().st_mtime > ABANDONED:
+                    shutil.rmtree(stale, ignore_errors=True)
+            continue
+        if not _alive(pid):
+            shutil.rmtree(stale, ignore_errors=True)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # somebody else's process
+        return True
+    return True
 
 
 def _send(stream: IO[bytes], message: object) -> None:

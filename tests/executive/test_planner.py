@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import tempfile
 import time
 from pathlib import Path
 
 import pytest
 
 from executive.goal import GoalSpec
-from executive.planner import Planner, PlanningTask, PlanStatus, engine_names
+from executive.planner import TMP_PREFIX, Planner, PlanningTask, PlanStatus, engine_names
 from executive.problem import World
 from knowledge.errors import PlanningError
 from tests.executive.planning_cases import (
@@ -200,3 +203,30 @@ def test_closing_a_planner_leaves_no_worker_and_no_temp_files(kairos: Planner) -
     assert process is not None and process.poll() is not None
     assert private is not None and not private.exists()
     assert gone(process.pid)
+
+
+def test_a_new_worker_removes_the_folders_of_workers_killed_without_cleaning_up(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    ended = subprocess.Popen(["true"])
+    ended.wait()
+
+    def folder(name: str, pid: int | None, age: float = 0.0) -> Path:
+        path = tmp_path / f"{TMP_PREFIX}{name}"
+        path.mkdir()
+        if pid is not None:
+            (path / "worker.pid").write_text(str(pid))
+        (path / "engine-output.txt").write_text("left over")
+        os.utime(path, (time.time() - age, time.time() - age))
+        return path
+
+    dead = folder("dead", ended.pid)
+    alive = folder("alive", os.getpid())
+    old = folder("old", None, age=7200)
+    young = folder("young", None)
+    with Planner("kairos", timeout=5) as planner:
+        planner.start()
+        assert planner._tmp is not None and planner._tmp.parent == tmp_path
+    assert not dead.exists() and not old.exists()
+    assert alive.exists() and young.exists()
