@@ -97,9 +97,10 @@ def blocked_tasks(robot: RobotDescription, faulty: Collection[str]) -> dict[str,
     blocked: dict[str, str] = {}
     for action, task in robot.tasks.items():
         behavior = robot.behaviors[task.behavior]
-        missing = next((c for c in behavior.requires if not availability.available(c)), None)
         if behavior.name in faulty:
             blocked[action] = f"behavior {behavior.name} is permanently faulty"
-        elif missing is not None:
-            blocked[action] = availability.explain(missing)
+            continue
+        missing = [c for c in behavior.requires if not availability.available(c)]
+        if missing:
+            blocked[action] = availability.explain(missing[0])
     return blocked

@@ -34,6 +34,7 @@ from knowledge.errors import DuraError, KnowledgeError
 from knowledge.records import Event, GoalState, to_plain
 
 log = logging.getLogger("dura.high_level")
+FAULT_CHANGES = ("PERMANENT_FAULT", "COMPONENT_RESET")  # events that may block or free tasks
 
 MAX_EVENTS = 10_000  # the most events one request returns
 
@@ -92,6 +93,7 @@ class HighLevel(Service):
         self._integrity_thread: threading.Thread | None = None
         self._relaying = False
         self._blocked: dict[str, str] = {}
+        self._faults_changed = threading.Event()  # a permanent fault came or went
 
     # --- lifecycle -----------------------------------------------------------------------
 
@@ -147,6 +149,8 @@ class HighLevel(Service):
         if not self._relaying:
             return
         self.context.bus.publish(EVENTS, to_plain(event))
+        if event.kind in FAULT_CHANGES:
+            self._faults_changed.set()
         if not event.kind.startswith("INTEGRITY_"):
             self._check.set()
 
@@ -172,7 +176,9 @@ class HighLevel(Service):
                 continue
             for goal in posted:
                 self.goals.wake(f"integrity goal {goal.id} posted")
-            self._check_blocked()
+            if self._faults_changed.is_set():
+                self._faults_changed.clear()
+                self._check_blocked()
 
     def blocked(self) -> dict[str, str]:
         """The tasks that cannot run with the permanently faulty components, and why."""

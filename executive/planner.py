@@ -295,7 +295,7 @@ class _suppress_lookup:
         return kind is not None and issubclass(kind, (ProcessLookupError, PermissionError))
 
 
-# --- framing --------------------------------------------------------------------------
+# --- temporary folders ------------------------------------------------------------------
 
 
 def _sweep(folder: Path) -> None:
@@ -322,6 +322,9 @@ def _alive(pid: int) -> bool:
     except PermissionError:  # somebody else's process
         return True
     return True
+
+
+# --- framing --------------------------------------------------------------------------
 
 
 def _send(stream: IO[bytes], message: object) -> None:

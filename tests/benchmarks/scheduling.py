@@ -28,7 +28,7 @@ from executive.harness import RobotProcess, robot_variant
 from executive.protocol import topic
 from executive.schedule import ScheduleStatus
 from executive.scheduler import Scheduler
-from tests.conftest import USECASE
+from tests.conftest import USECASE, wait_for
 from tests.executive.scheduling_cases import generate
 
 SIZES = (5, 20, 50, 200)
@@ -80,11 +80,8 @@ def main() -> None:
 
 
 def _wait(check: Callable[[], bool], timeout: float = 30.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not check():
-        if time.monotonic() > deadline:
-            raise TimeoutError("the robot did not get there in time")
-        time.sleep(0.01)
+    if not wait_for(check, timeout):
+        raise TimeoutError("the robot did not get there in time")
 
 
 def _failover_once(folder: Path) -> float:

@@ -64,17 +64,25 @@ def test_task_commands_say_clearly_when_no_executive_runs(tmp_path: Path) -> Non
         assert len(done.stderr.splitlines()) == 1
 
 
+def crashing_move(
+    dura_robot: Start, *, after: float, max_restarts: int
+) -> tuple[RobotProcess, Dura, str]:
+    """The use case with a 5 s move_to whose every process crashes ``after`` seconds
+    after it starts; the robot, its command line, and the started move's task id."""
+    crash = {"mode": "crash", "after": after}
+    params = {"duration": 5.0, "fault": crash}
+    robot = dura_robot(
+        USECASE,
+        changes={"behaviors": {"move_to": {"max_restarts": max_restarts, "params": params}}},
+    )
+    dura = cli(robot)
+    return robot, dura, start(dura, "move_to", "--arg", "start=dock", "--arg", "target=lab")
+
+
 def test_a_crashed_behavior_starts_again_warm_from_its_achievements(dura_robot: Start) -> None:
     # every move_to process crashes 4 s after it starts: a 5 s move only ends because
     # the second attempt goes on from the progress the first one stored
-    crash = {"mode": "crash", "after": 4.0}
-    robot = dura_robot(
-        USECASE,
-        changes={"behaviors": {"move_to": {"max_restarts": 1,
-                                           "params": {"duration": 5.0, "fault": crash}}}},
-    )  # fmt: skip
-    dura = cli(robot)
-    move = start(dura, "move_to", "--arg", "start=dock", "--arg", "target=lab")
+    robot, dura, move = crashing_move(dura_robot, after=4.0, max_restarts=1)
     assert wait_for(lambda: task(dura, move)["state"] in ("succeeded", "failed"), 60)
     assert task(dura, move)["state"] == "succeeded", task(dura, move)["reason"]
     kinds = [e["kind"] for e in trace(robot, move)]
@@ -84,14 +92,7 @@ def test_a_crashed_behavior_starts_again_warm_from_its_achievements(dura_robot: 
 def test_a_behavior_that_keeps_failing_fails_its_task_after_max_restarts(
     dura_robot: Start,
 ) -> None:
-    crash = {"mode": "crash", "after": 0.5}
-    robot = dura_robot(
-        USECASE,
-        changes={"behaviors": {"move_to": {"max_restarts": 2,
-                                           "params": {"duration": 5.0, "fault": crash}}}},
-    )  # fmt: skip
-    dura = cli(robot)
-    move = start(dura, "move_to", "--arg", "start=dock", "--arg", "target=lab")
+    robot, dura, move = crashing_move(dura_robot, after=0.5, max_restarts=2)
     assert wait_for(lambda: task(dura, move)["state"] == "failed", 60)
     kinds = [e["kind"] for e in trace(robot, move)]
     assert kinds.count("TASK_RESTARTED") == 2 and kinds[-1] == "TASK_FAILED"

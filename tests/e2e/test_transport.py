@@ -10,8 +10,7 @@ from typing import Any
 import pytest
 
 from executive.harness import RobotProcess
-from tests.conftest import ROOT
-from tests.executive.test_plan_executer import eventually
+from tests.conftest import ROOT, wait_for
 
 pytestmark = pytest.mark.slow
 
@@ -24,6 +23,11 @@ QUICK: dict[str, Any] = {"behaviors": {"drive_to": {"params": {"duration": 2.0}}
 def steps(robot: RobotProcess) -> list[str]:
     """The actions that ended, in order: ``drive(dock, store)``, ..."""
     return [e["subject"] for e in robot.events("END")]
+
+
+def started(robot: RobotProcess) -> list[str]:
+    """The actions that started, in order."""
+    return [e["subject"] for e in robot.events("START")]
 
 
 def test_a_crate_goes_upstairs_by_lift(dura_robot: Start) -> None:
@@ -61,7 +65,7 @@ def test_a_lost_lift_makes_the_delivery_unreachable_and_sends_the_robot_to_its_d
 ) -> None:
     robot = dura_robot(TRANSPORT, changes=QUICK)
     delivery = robot.submit_goal("(crate_at parcel lab)")
-    eventually(lambda: any(e["subject"].startswith("pick") for e in robot.events("START")))
+    assert wait_for(lambda: any(s.startswith("pick") for s in started(robot)), timeout=60)
     robot.request("component/fault", {"name": "lift_link"})  # beyond repair
     goal = robot.wait_for(delivery, "unreachable", timeout=60)
     assert goal["reason"].endswith(
