@@ -14,6 +14,8 @@ grounding.
 
 from __future__ import annotations
 
+import math
+import os
 import re
 import threading
 import time
@@ -35,6 +37,8 @@ _LOCATION = re.compile(
     r"^(?P<src>.*?):(?P<line>\d+):\d+(?:-\d+(?::\d+)?)?: (?P<kind>\w+): (?P<msg>.*)$"
 )
 SHOWN_CACHE = 100_000  # converted shown atoms kept per control
+PARSED_FILES = 64  # program files kept parsed
+PARSED: dict[tuple[str, int, int], list[ast.AST]] = {}  # (path, mtime, size) -> statements
 
 
 def to_python(symbol: clingo.Symbol) -> Value:
@@ -73,6 +77,79 @@ def atom(name: str, *args: object) -> clingo.Symbol:
 def facts(atoms: Iterable[clingo.Symbol]) -> str:
     """Program text with one fact per atom (symbols print as valid, escaped ASP)."""
     return "".join(f"{a}.\n" for a in atoms)
+
+
+class _Alarm:
+    """The time bound of one solve call: interrupts it, or (with a grace period and no
+    model yet) lets the first model end it."""
+
+    def __init__(self, control: clingo.Control, timeout: float, grace: float) -> None:
+        self.control = control
+        self.timeout = timeout
+        self.grace = grace
+        self.answered = False  # a model came
+        self.late = False  # past the bound without a model: the next model ends the search
+        self.fired = False  # the control was interrupted
+
+    def ring(self) -> float | None:
+        """Called at the bound; returns the seconds more to wait, or None when done."""
+        if self.grace > 0 and not self.late and not self.answered:
+            self.late = True
+            return self.grace
+        self.fired = True
+        self.control.interrupt()
+        return None
+
+
+class _Watchdog:
+    """One thread that rings the alarms of every solve call with a time bound.
+
+    Arming, disarming and ringing hold one lock, so once :meth:`disarm` returns the
+    alarm never rings. An alarm that rang just after its search ended left an
+    interrupt for the control's next call: :meth:`Asp.solve` takes it up.
+    """
+
+    def __init__(self) -> None:
+        self._reset()
+        os.register_at_fork(after_in_child=self._reset)  # the thread is not forked
+
+    def _reset(self) -> None:
+        self._lock = threading.Condition()
+        self._alarms: dict[_Alarm, float] = {}  # alarm -> monotonic deadline
+        self._thread: threading.Thread | None = None
+        self._until = math.inf  # when the thread wakes up next
+
+    def arm(self, alarm: _Alarm) -> None:
+        """Ring the alarm when its time bound has passed from now."""
+        deadline = time.monotonic() + alarm.timeout
+        with self._lock:
+            self._alarms[alarm] = deadline
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, name="asp-watchdog", daemon=True)
+                self._thread.start()
+            elif deadline < self._until:  # else the thread finds it when it wakes anyway
+                self._lock.notify()
+
+    def disarm(self, alarm: _Alarm) -> None:
+        with self._lock:
+            self._alarms.pop(alarm, None)
+
+    def _run(self) -> None:
+        with self._lock:
+            while True:
+                now = time.monotonic()
+                for alarm, deadline in list(self._alarms.items()):
+                    if deadline <= now:
+                        later = alarm.ring()
+                        if later is None:
+                            del self._alarms[alarm]
+                        else:
+                            self._alarms[alarm] = now + later
+                self._until = min(self._alarms.values(), default=math.inf)
+                self._lock.wait(None if self._until == math.inf else self._until - now)
+
+
+WATCHDOG = _Watchdog()
 
 
 @dataclass(frozen=True)
@@ -156,13 +233,30 @@ class Asp:
             raise AspError(f"{path}: cannot read: no such file")
         try:
             if self._theory is None:
-                self._control.load(str(path))
+                statements = self._parsed(path)
+                with ast.ProgramBuilder(self._control) as builder:
+                    for statement in statements:
+                        builder.add(statement)
             else:
                 with ast.ProgramBuilder(self._control) as builder:
                     rewrite = self._rewriter(self._theory, builder)
                     ast.parse_files([str(path)], rewrite, logger=self._log)
         except RuntimeError as e:
             raise self._fail(str(path), e) from e
+
+    def _parsed(self, path: Path) -> list[ast.AST]:
+        """The statements of a program file, parsed once while the file stays the same
+        (parsing costs more than building a control from parsed statements)."""
+        stat = path.stat()
+        key = (str(path), stat.st_mtime_ns, stat.st_size)
+        statements = PARSED.get(key)
+        if statements is None:
+            statements = []
+            ast.parse_files([str(path)], statements.append, logger=self._log)
+            if len(PARSED) >= PARSED_FILES:
+                PARSED.clear()
+            PARSED[key] = statements
+        return statements
 
     def add(
         self,
@@ -238,44 +332,51 @@ class Asp:
             keep: keep every model in the outcome (else only the last).
             costs: record each model's cost and priorities (optimisation; slower).
         """
-        until = time.monotonic() + (timeout or 0.0)
         answers: list[Answer] = []
-        late = threading.Event()  # past the timeout without a model: the next one ends it
-
-        def on_model(model: clingo.Model) -> bool:
-            answer = self._answer(model, costs)
-            if keep or not answers:
-                answers.append(answer)
-            else:
-                answers[-1] = answer
-            return not late.is_set()
-
-        # An asynchronous solve cancelled through its own handle: an interrupt from a
-        # timer that fires just after the search ended would hit the next solve call.
+        alarm = None if timeout is None else _Alarm(self._control, timeout, grace)
         try:
-            with self._control.solve(
-                assumptions=list(assumptions), on_model=on_model, async_=True
-            ) as handle:
-                finished = timeout is None or handle.wait(max(0.0, until - time.monotonic()))
-                if not finished and grace > 0 and not answers:
-                    late.set()
-                    finished = handle.wait(grace)
-                if not finished:
-                    handle.cancel()
+            # Synchronous: models are read in this thread as the search yields them (a
+            # callback from clasp's own thread costs twice as much per call).
+            with self._control.solve(assumptions=list(assumptions), yield_=True) as handle:
+                if alarm is not None:
+                    WATCHDOG.arm(alarm)
+                for model in handle:
+                    answer = self._answer(model, costs)
+                    if keep or not answers:
+                        answers.append(answer)
+                    else:
+                        answers[-1] = answer
+                    if alarm is not None:
+                        alarm.answered = True
+                        if alarm.late:  # the first model after the time bound ends the search
+                            handle.cancel()
+                            break
                 result = handle.get()
                 core = list(handle.core()) if result.unsatisfiable and assumptions else []
         except RuntimeError as e:
             raise self._fail("solving", e) from e
+        finally:
+            if alarm is not None:
+                WATCHDOG.disarm(alarm)
+        if alarm is not None and alarm.fired and not result.interrupted:
+            self._absorb_interrupt()
         satisfiable: bool | None = None if result.unknown else bool(result.satisfiable)
         if answers and satisfiable is None:
             satisfiable = True
+        late = alarm is not None and alarm.late
         return Outcome(
             answers=answers,
             satisfiable=satisfiable,
             exhausted=bool(result.exhausted),
-            interrupted=bool(result.interrupted) or late.is_set(),
+            interrupted=bool(result.interrupted) or late,
             core=self._core_symbols(core, assumptions) if result.unsatisfiable else [],
         )
+
+    def _absorb_interrupt(self) -> None:
+        """Take up an interrupt that came after the search ended: clingo keeps it for
+        the next solve call, which would otherwise stop at once."""
+        with self._control.solve(yield_=True) as handle:
+            handle.cancel()
 
     def _answer(self, model: clingo.Model, costs: bool) -> Answer:
         atoms: dict[str, list[tuple[Value, ...]]] = {}

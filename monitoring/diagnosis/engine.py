@@ -125,6 +125,9 @@ class DiagnosisEngine:
         self._node_rank: dict[str, int] = {}
         self._watchers: dict[str, list[Observer]] = {}  # node -> observers of its streams
         self._observations: dict[Observer, ObservationInfo] = {}
+        self._failed: dict[Observer, None] = {}  # observers whose newest observation failed
+        self._changed: set[Observer] = set()  # verdicts changed since the last diagnosis
+        self._cones: dict[Observer, tuple[frozenset[str], frozenset[Observer]]] = {}
         self._known: dict[tuple[str, tuple[str, ...], tuple[str, ...]], Observer] = {}
         self._grounded: _Grounded | None = None
         if model is not None:
@@ -138,7 +141,7 @@ class DiagnosisEngine:
 
     def update(self, update: ModelUpdate) -> SystemDescription:
         """Change the model; raises :class:`ConfigError` (and changes nothing) if invalid."""
-        self.set_model(self._model.apply(update))
+        self._install(self._model.apply(update))  # apply checks the result
         return self._model
 
     def set_model(self, model: SystemDescription) -> None:
@@ -146,6 +149,9 @@ class DiagnosisEngine:
         problems = model.problems()
         if problems:
             raise ConfigError(problems[0][1])
+        self._install(model)
+
+    def _install(self, model: SystemDescription) -> None:
         self._model = model
         self._observers = frozenset(model.observers)
         self._rank = {o: i for i, o in enumerate(model.observers)}
@@ -160,6 +166,8 @@ class DiagnosisEngine:
                     watchers.setdefault(name, []).append(o)
         self._watchers = watchers
         self._observations = {o: v for o, v in self._observations.items() if o in self._observers}
+        self._failed = {o: None for o, v in self._observations.items() if v.failed}
+        self._cones = {}
         self._known = {key: o for o in model.observers for key in o.spellings}
         self._grounded = None
 
@@ -184,14 +192,21 @@ class DiagnosisEngine:
         if old is not None and info.stamp < old.stamp:
             return False
         self._observations[observer] = info
-        return old is None or old.failed != info.failed
+        if old is not None and old.failed == info.failed:
+            return False
+        if info.failed:
+            self._failed[observer] = None
+        else:
+            self._failed.pop(observer, None)
+        self._changed.add(observer)
+        return True
 
     @property
     def observations(self) -> dict[Observer, ObservationInfo]:
         return dict(self._observations)
 
     def failed(self) -> tuple[Observer, ...]:
-        return tuple(o for o, info in self._observations.items() if info.failed)
+        return tuple(self._failed)
 
     # --- diagnosis ----------------------------------------------------------------------
 
@@ -202,7 +217,8 @@ class DiagnosisEngine:
         if not failed:
             return DiagnosisResult(Status.OK, elapsed=time.perf_counter() - start)
         grounded = self._region(failed)
-        self._assign(grounded, self._wanted(grounded))
+        self._assign(grounded, self._wanted(grounded, self._changed))
+        self._changed.clear()
         self._bound(grounded, self.max_card)
         timeout = self.timeout
         outcome = grounded.asp.solve(
@@ -233,20 +249,23 @@ class DiagnosisEngine:
         conflicts = self._conflicts(grounded) if status is Status.INCONSISTENT else ()
         return DiagnosisResult(status, found, conflicts, failed, time.perf_counter() - start)
 
-    def _upstream(self, failed: Iterable[Observer]) -> set[str]:
-        """The nodes whose faults could reach a failed observation."""
+    def _cone(self, observer: Observer) -> tuple[frozenset[str], frozenset[Observer]]:
+        """The nodes whose faults could reach an observer, and the observers of those
+        nodes (kept until the model changes)."""
+        known = self._cones.get(observer)
+        if known is not None:
+            return known
         model = self._model
         nodes: set[str] = set()
         topics: list[tuple[str, tuple[str, ...]]] = []  # (topic, caller ids)
-        for observer in failed:
-            if observer.type.watches_nodes:
-                name = observer.resource[0]
-                nodes.add(name)
-                node = model.node(name)
-                if observer.type is ObserverType.RESOURCES and node is not None:
-                    topics += [(t, ()) for t in node.sub_topic]
-            else:
-                topics += [(t, observer.callerids) for t in observer.topics]
+        if observer.type.watches_nodes:
+            name = observer.resource[0]
+            nodes.add(name)
+            node = model.node(name)
+            if observer.type is ObserverType.RESOURCES and node is not None:
+                topics += [(t, ()) for t in node.sub_topic]
+        else:
+            topics += [(t, observer.callerids) for t in observer.topics]
         while topics:
             topic, callerids = topics.pop()
             for name in model.publishers(topic):
@@ -254,7 +273,9 @@ class DiagnosisEngine:
                     nodes.add(name)
                     node = model.node(name)
                     topics += [(t, ()) for t in node.sub_topic] if node else []
-        return nodes
+        near = frozenset(o for n in nodes for o in self._watchers.get(n, ()))
+        self._cones[observer] = cone = (frozenset(nodes), near)
+        return cone
 
     def _region(self, failed: tuple[Observer, ...]) -> _Grounded:
         """The grounded region of the failed observations (kept if it still covers them).
@@ -262,8 +283,9 @@ class DiagnosisEngine:
         With exoneration, OK observations of the region belong to it too: they clear
         its streams.
         """
-        nodes = self._upstream(failed)
-        near = {o for n in nodes for o in self._watchers.get(n, ())}  # observers of the region
+        cones = [self._cone(o) for o in failed]
+        nodes = frozenset().union(*(c[0] for c in cones))
+        near = frozenset().union(*(c[1] for c in cones))  # observers of the region
         observers = set(failed)
         if self.exonerate:
             for o in near:
@@ -275,6 +297,10 @@ class DiagnosisEngine:
             return grounded
         # Every observer of the region: a later verdict of one of them re-solves only.
         observers.update(o for o in near if o in self._observations or self.exonerate)
+        return self._ground(nodes, observers)
+
+    def _ground(self, nodes: frozenset[str], observers: Iterable[Observer]) -> _Grounded:
+        """Ground a region: nodes, and the observers whose verdicts it takes."""
         index = {o: i for i, o in enumerate(sorted(observers, key=self._rank.__getitem__))}
         region = SystemDescription(
             tuple(self._model.nodes[i] for i in sorted(self._node_rank[n] for n in nodes)),
@@ -286,23 +312,29 @@ class DiagnosisEngine:
         asp.ground()
         # Externals start false: only observations that say otherwise are assigned.
         self._grounded = _Grounded(
-            asp, frozenset(nodes), region.candidates, index, [(False, False)] * len(index), set()
+            asp, nodes, region.candidates, index, [(False, False)] * len(index), set()
         )
+        self._changed = set(index)  # every observer of a new region is assigned
         return self._grounded
 
-    def _wanted(self, grounded: _Grounded) -> list[tuple[bool, bool]]:
-        """(failed, ok) of every observer of the region for the newest observations."""
-        wanted = [(False, False)] * len(grounded.index)
-        for observer, i in grounded.index.items():
-            info = self._observations.get(observer)
-            if info is not None:
-                wanted[i] = (info.failed, not info.failed and self.exonerate)
+    def _wanted(
+        self, grounded: _Grounded, observers: Iterable[Observer]
+    ) -> dict[int, tuple[bool, bool]]:
+        """(failed, ok) by number for those of the observers in the region, as the newest
+        observations say."""
+        wanted: dict[int, tuple[bool, bool]] = {}
+        for observer in observers:
+            i = grounded.index.get(observer)
+            if i is not None:
+                info = self._observations.get(observer)
+                failed = info is not None and info.failed
+                wanted[i] = (failed, info is not None and not failed and self.exonerate)
         return wanted
 
     @staticmethod
-    def _assign(grounded: _Grounded, wanted: list[tuple[bool, bool]]) -> None:
+    def _assign(grounded: _Grounded, wanted: dict[int, tuple[bool, bool]]) -> None:
         assign = grounded.asp.assign_external
-        for i, value in enumerate(wanted):
+        for i, value in wanted.items():
             old = grounded.assigned[i]
             if old != value:
                 if old[0] != value[0]:
@@ -351,10 +383,10 @@ class DiagnosisEngine:
         The observations become assumptions: clingo's unsatisfiable core is a first
         conflict, and dropping each member that is not needed makes it minimal.
         """
-        wanted = self._wanted(grounded)
+        wanted = self._wanted(grounded, grounded.index)
         count = len(wanted)
         symbols = [atom("failed", i) for i in range(count)] + [atom("ok", i) for i in range(count)]
-        values = [w[0] for w in wanted] + [w[1] for w in wanted]
+        values = [wanted[i][0] for i in range(count)] + [wanted[i][1] for i in range(count)]
         present = [s for s, value in zip(symbols, values, strict=True) if value]
         for symbol in symbols:
             grounded.asp.assign_external(symbol, None)

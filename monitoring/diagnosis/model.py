@@ -31,9 +31,9 @@ class ObserverType(enum.Enum):
     COMPONENT = "component"
     RESOURCES = "resources"
 
-    @property
-    def watches_nodes(self) -> bool:
-        return self in (ObserverType.COMPONENT, ObserverType.RESOURCES)
+    def __init__(self, value: str) -> None:
+        # an attribute, not a property: the engine asks it for every observer
+        self.watches_nodes = value in ("component", "resources")
 
     @property
     def arity(self) -> tuple[int, int]:
@@ -52,6 +52,8 @@ ALIASES = {
     "velocity": ObserverType.MOVEMENT,
     "resource": ObserverType.RESOURCES,
 }
+# every name an observation of a type may carry
+SPELLINGS = {t: [t.value] + [a for a, k in ALIASES.items() if k is t] for t in ObserverType}
 
 
 def observer_type(name: str) -> ObserverType:
@@ -124,7 +126,7 @@ class Observer:
     @property
     def spellings(self) -> list[tuple[str, tuple[str, ...], tuple[str, ...]]]:
         """The (type, resource, caller ids) an observation of this observer may carry."""
-        names = [self.type.value] + [a for a, t in ALIASES.items() if t is self.type]
+        names = SPELLINGS[self.type]
         resources = [self.resource]
         if self.behavior == DEFAULT_BEHAVIOR:
             resources.append(self.resource[:2])

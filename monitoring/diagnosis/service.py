@@ -25,6 +25,7 @@ from monitoring.diagnosis.model import ModelUpdate, Observer, SystemDescription,
 from monitoring.diagnosis.result import DiagnosisResult, Status
 
 log = logging.getLogger("dura.diagnosis")
+TIMEOUT = 2.0  # seconds one diagnosis may take by default
 
 
 class DiagnosisService(Service):
@@ -53,7 +54,7 @@ class DiagnosisService(Service):
         *,
         exonerate: bool = False,
         max_card: int | None = None,
-        timeout: float = 2.0,
+        timeout: float = TIMEOUT,
         settle: float = 0.02,
         period: float = 1.0,
         learn: bool = False,

@@ -77,3 +77,29 @@ def test_a_time_bound_interrupts_a_long_search() -> None:
     outcome = asp.solve(timeout=0.05, keep=False)
     assert outcome.interrupted and not outcome.exhausted
     assert outcome.satisfiable is True
+
+
+def test_a_time_bound_never_cuts_short_a_later_solve_call() -> None:
+    # bounds close to the search's own length: some alarms ring just as a search ends,
+    # and their interrupt must not stop the unbounded call that follows
+    asp = Asp(["0"])
+    asp.add("{ p(1..3) }.")
+    asp.ground()
+    for i in range(300):
+        asp.solve(timeout=i * 2e-6)
+        outcome = asp.solve()
+        assert outcome.exhausted and not outcome.interrupted and len(outcome.answers) == 8
+
+
+def test_a_program_file_is_read_again_once_it_changed(tmp_path: Path) -> None:
+    path = tmp_path / "rules.lp"
+    path.write_text("a.\n")
+    first = Asp()
+    first.load(path)
+    first.ground()
+    path.write_text("b. c.\n")  # parsed once, kept while the file stays the same
+    second = Asp()
+    second.load(path)
+    second.ground()
+    assert first.solve().answers[0].atoms == {"a": [()]}
+    assert second.solve().answers[0].atoms == {"b": [()], "c": [()]}
