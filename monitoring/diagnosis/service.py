@@ -25,7 +25,6 @@ from monitoring.diagnosis.model import ModelUpdate, Observer, SystemDescription,
 from monitoring.diagnosis.result import DiagnosisResult, Status
 
 log = logging.getLogger("dura.diagnosis")
-TIMEOUT = 2.0  # seconds one diagnosis may take by default
 
 
 class DiagnosisService(Service):
@@ -54,7 +53,7 @@ class DiagnosisService(Service):
         *,
         exonerate: bool = False,
         max_card: int | None = None,
-        timeout: float = TIMEOUT,
+        timeout: float = 2.0,
         settle: float = 0.02,
         period: float = 1.0,
         learn: bool = False,
