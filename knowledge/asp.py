@@ -232,15 +232,11 @@ class Asp:
         if not path.is_file():
             raise AspError(f"{path}: cannot read: no such file")
         try:
-            if self._theory is None:
-                statements = self._parsed(path)
-                with ast.ProgramBuilder(self._control) as builder:
-                    for statement in statements:
-                        builder.add(statement)
-            else:
-                with ast.ProgramBuilder(self._control) as builder:
-                    rewrite = self._rewriter(self._theory, builder)
-                    ast.parse_files([str(path)], rewrite, logger=self._log)
+            statements = self._parsed(path)
+            with ast.ProgramBuilder(self._control) as builder:
+                add = builder.add if self._theory is None else self._rewriter(self._theory, builder)
+                for statement in statements:
+                    add(statement)
         except RuntimeError as e:
             raise self._fail(str(path), e) from e
 
