@@ -359,12 +359,14 @@ class Asp:
         satisfiable: bool | None = None if result.unknown else bool(result.satisfiable)
         if answers and satisfiable is None:
             satisfiable = True
-        late = alarm is not None and alarm.late
+        # An interrupt that lands while a model is being read ends the search without
+        # clingo calling it interrupted: a search the alarm stopped is not exhausted.
+        cut = alarm is not None and (alarm.late or (alarm.fired and not result.exhausted))
         return Outcome(
             answers=answers,
             satisfiable=satisfiable,
             exhausted=bool(result.exhausted),
-            interrupted=bool(result.interrupted) or late,
+            interrupted=bool(result.interrupted) or cut,
             core=self._core_symbols(core, assumptions) if result.unsatisfiable else [],
         )
 

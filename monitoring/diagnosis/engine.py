@@ -1,29 +1,39 @@
 """The diagnosis engine: the newest observations against the current model, in clingo.
 
-Only the part of the model upstream of the failed observations can contribute to a
-minimal diagnosis, so the engine grounds ``diagnosis.lp`` with the facts of that
-region alone: the cost of a diagnosis grows with the region, not with the robot. The
-grounded region is kept and observations are externals: while the failed
-observations stay inside it (a fault disappears, a verdict within it changes), a new
-diagnosis only re-solves. Every answer set of the domain-heuristic enumeration
-(``--enum-mode=domRec``) is a subset-minimal diagnosis. When that enumeration runs out
-of time, the rest of the time bound goes to the smallest diagnoses (a cardinality
-optimisation that enumerates every optimum): a TIMEOUT result still holds all the
-most likely diagnoses, however many larger ones there are. Not thread-safe: the
-service calls it from one thread.
+A diagnosis is a set of faulty candidates that explains every failed observation; the
+engine lists the subset-minimal ones (Reiter's consistency-based diagnosis). Under
+the model's semantics (abnormal streams derived from faulty nodes along the
+communication graph, well-founded, cut by cleared streams under exoneration) a set
+of candidates explains a failed observation exactly when it holds one of the
+observation's *conflict*: the candidates from which a path of abnormal streams can
+reach what it watches (or that it blames directly). So the minimal diagnoses are the
+minimal hitting sets of the conflicts.
+
+The engine computes each conflict from the graph (upstream cones, kept per observer
+until the model changes), drops conflicts that contain another, and merges the
+candidates that lie in exactly the same conflicts into classes: those are
+interchangeable in every minimal diagnosis. clingo enumerates the minimal sets of
+classes that hit every conflict (``diagnosis.lp``: a template grounded once, each
+problem set through its externals, the domain heuristic ``--enum-mode=domRec``
+making every answer set subset-minimal); each class set stands for the diagnoses
+that pick one candidate of each of its classes, expanded smallest first. When the
+enumeration runs out of time, the rest of the time bound goes to the smallest
+diagnoses (a cardinality optimisation that enumerates every optimum): a TIMEOUT
+result still holds all the most likely diagnoses, however many larger ones there
+are. Not thread-safe: the service calls it from one thread.
 """
 
 from __future__ import annotations
 
+import itertools
+import os
+import threading
 import time
-from collections.abc import Iterable
-from dataclasses import dataclass
+from collections.abc import Container, Sequence
 from pathlib import Path
 
-import clingo
-
 from executive.protocol import ObservationInfo
-from knowledge.asp import Answer, Asp, atom
+from knowledge.asp import Asp, atom
 from knowledge.errors import ConfigError
 from monitoring.diagnosis.model import (
     ModelUpdate,
@@ -31,7 +41,7 @@ from monitoring.diagnosis.model import (
     ObserverType,
     SystemDescription,
 )
-from monitoring.diagnosis.result import DiagnosisResult, Status, ordered
+from monitoring.diagnosis.result import DiagnosisResult, Status
 
 PROGRAM = Path(__file__).with_name("diagnosis.lp")
 OPTIONS = (
@@ -42,60 +52,170 @@ OPTIONS = (
     "--opt-mode=ignore",
 )
 SMALLEST_SHARE = 0.25  # of the time bound, kept for the smallest diagnoses
+KEPT = 10_000  # diagnoses of the smallest size expanded even past the time bound
+CHUNK = 4_096  # diagnoses expanded between looks at the clock
+
+Stream = tuple[str, str]  # what one node publishes on one topic: (node, topic)
 
 
-def model_facts(model: SystemDescription, observers: Iterable[Observer]) -> str:
-    """The facts of a system description (see ``diagnosis.lp``).
+class _HittingSets:
+    """``diagnosis.lp`` grounded for some conflict and class slots, one problem at a
+    time; or grounded for one problem (``members`` given, no slots)."""
 
-    Candidates are numbered in the order of ``model.candidates``, streams (node, topic)
-    in the order of the nodes, observers in the order given: numbers parse, ground
-    and solve faster than names.
+    def __init__(
+        self, conflicts: int, classes: int, members: set[tuple[int, int]] | None = None
+    ) -> None:
+        self.conflicts = conflicts
+        self.classes = classes
+        self.asp = Asp(OPTIONS)
+        self.asp.load(PROGRAM)
+        if members is None:
+            self.asp.ground([("slots", (conflicts, classes))])
+        else:
+            self.asp.add_facts(
+                [atom("member", i, k) for i, k in members]
+                + [atom("class", k) for k in range(classes)]
+            )
+            self.asp.ground([("base", ()), ("slots", (0, 0))])
+        self.members: set[tuple[int, int]] = members or set()  # as assigned
+        self.pooled = members is None
+        self.bounds: set[int] = set()
+
+    def pose(self, members: set[tuple[int, int]], max_card: int | None) -> None:
+        """Set a problem: (conflict, class) memberships, and the size bound."""
+        assign = self.asp.assign_external
+        for i, k in self.members - members:
+            assign(atom("member", i, k), False)
+        for i, k in members - self.members:
+            assign(atom("member", i, k), True)
+        self.members = members
+        if max_card is not None and max_card not in self.bounds:
+            self.asp.ground([("bound", (max_card,))])
+            self.bounds.add(max_card)
+        for k in self.bounds:
+            assign(atom("limit", k), k == max_card)
+
+    def enumerate(self, timeout: float | None) -> tuple[list[tuple[int, ...]], bool]:
+        """Every minimal hitting set (as classes), and whether the time bound cut it."""
+        outcome = self.asp.solve(timeout=timeout)
+        return [_picked(a.get("pick")) for a in outcome.answers], outcome.interrupted
+
+    def least(self, timeout: float) -> list[tuple[int, ...]]:
+        """Every hitting set of the smallest size that can be proven so within ``timeout``.
+
+        Core-guided optimisation (``usc``) finds the smallest from below, where the
+        enumeration's heuristic would lead branch-and-bound through large sets first.
+        The solver's options stay changed: the template is not reused.
+        """
+        self.pooled = False
+        asp = self.asp
+        asp.ground([("smallest", ())])
+        asp.set("solve.opt_mode", "optN")
+        asp.set("solve.enum_mode", "auto")
+        asp.set("solver.opt_strategy", "usc")
+        outcome = asp.solve(timeout=timeout, costs=True)
+        return [_picked(a.get("pick")) for a in outcome.answers if a.optimal]
+
+
+def _picked(rows: Sequence[tuple[object, ...]]) -> tuple[int, ...]:
+    return tuple(k for (k,) in rows if isinstance(k, int))
+
+
+class _Templates:
+    """Grounded templates shared by the engines of a process: grounding one costs more
+    than a diagnosis, and it does not depend on the model. Each solve costs in
+    proportion to the template's slots, so a problem takes the smallest template that
+    fits (slots in powers of two). An engine takes one for a diagnosis and gives it
+    back, so engines in different threads never share one."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._free: dict[tuple[int, int], list[_HittingSets]] = {}
+        os.register_at_fork(after_in_child=self._free.clear)  # no control crosses a fork
+
+    def take(self, conflicts: int, classes: int, members: set[tuple[int, int]]) -> _HittingSets:
+        """A template for a problem (grounded for it alone when templates grow too large)."""
+        size = (_slots(conflicts), _slots(classes))
+        if size[0] * size[1] > TEMPLATE_SLOTS:
+            return _HittingSets(conflicts, classes, members)
+        with self._lock:
+            free = self._free.get(size)
+            if free:
+                return free.pop()
+        return _HittingSets(*size)
+
+    def give(self, template: _HittingSets) -> None:
+        if not template.pooled:
+            return
+        with self._lock:
+            free = self._free.setdefault((template.conflicts, template.classes), [])
+            if len(free) < TEMPLATES:
+                free.append(template)
+
+
+def _slots(count: int) -> int:
+    """The smallest power of two that holds ``count`` (at least 2)."""
+    return max(2, 1 << (count - 1).bit_length())
+
+
+TEMPLATES = 2  # templates of one size kept for reuse
+TEMPLATE_SLOTS = 1024  # conflicts x classes of the largest template (64 x 64: 20 ms to ground,
+# 1.2 ms a solve): a larger problem is grounded on its own
+POOL = _Templates()
+
+
+def classes_of(
+    conflicts: list[frozenset[str]],
+) -> tuple[list[list[str]], set[tuple[int, int]], int]:
+    """The classes of a hitting-set problem: candidates that lie in the same minimal
+    conflicts, each sorted; the (conflict, class) memberships; the number of conflicts.
+
+    A conflict that contains another is dropped (whatever hits the smaller hits it).
     """
-    candidate = {name: i for i, name in enumerate(model.candidates)}
-    streams: dict[str, list[tuple[int, str]]] = {}  # topic -> (stream, publisher)
-    out = [f"candidate(0..{len(candidate) - 1}).", f"observer(0..{len(model.observers) - 1})."]
-    count = 0
-    for node in model.nodes:
-        for topic in node.pub_topic:
-            streams.setdefault(topic, []).append((count, node.name))
-            out.append(f"out({count},{candidate[node.name]}).")
-            count += 1
-    for node in model.nodes:
-        inputs = [t for topic in node.sub_topic for t, _ in streams.get(topic, ())]
-        for topic in node.pub_topic:
-            for s, publisher in streams[topic]:
-                if publisher == node.name:
-                    out += [f"dep({s},{t})." for t in inputs]
-    for i, observer in enumerate(observers):
-        if observer.type.watches_nodes:
-            name = observer.resource[0]
-            out.append(f"blame({i},{candidate[name]}).")
-            watched = model.node(name)
-            if observer.type is ObserverType.RESOURCES and watched is not None:
-                out += [
-                    f"feeds({i},{t})." for m in watched.sub_topic for t, _ in streams.get(m, ())
-                ]
-            continue
-        for topic in observer.topics:
-            for s, publisher in streams.get(topic, ()):
-                if not observer.callerids or publisher in observer.callerids:
-                    out.append(f"watch({i},{s}).")
-        if observer.behavior:
-            out.append(f"blame({i},{candidate[observer.behavior]}).")
-    return "\n".join(out)
+    minimal: list[frozenset[str]] = []
+    for conflict in sorted(set(conflicts), key=len):
+        if not any(m <= conflict for m in minimal):
+            minimal.append(conflict)
+    signature: dict[str, list[int]] = {}
+    for i, conflict in enumerate(minimal):
+        for name in conflict:
+            signature.setdefault(name, []).append(i)
+    groups: dict[tuple[int, ...], list[str]] = {}
+    for name, where in signature.items():
+        groups.setdefault(tuple(where), []).append(name)
+    members = {(i, k) for k, where in enumerate(groups) for i in where}
+    return [sorted(g) for g in groups.values()], members, len(minimal)
 
 
-@dataclass
-class _Grounded:
-    """A region of the model, grounded, and what is assigned to its externals."""
+def expand(
+    chosen: list[tuple[int, ...]], classes: list[list[str]], deadline: float | None
+) -> tuple[list[tuple[str, ...]], bool]:
+    """The diagnoses that class sets stand for (one candidate of each class), sorted,
+    smallest first; and whether the deadline cut the expansion.
 
-    asp: Asp
-    nodes: frozenset[str]  # the nodes of the region
-    names: tuple[str, ...]  # candidate names by number
-    index: dict[Observer, int]  # the observers of the region by number
-    assigned: list[tuple[bool, bool]]  # (failed, ok) as assigned, per observer
-    bounds: set[int]
-    smallest: bool = False  # the part "smallest" is grounded
+    Sorting them costs about as much again as making them, so the expansion stops
+    when the time it has taken, spent once more, would pass the deadline. The
+    diagnoses of the smallest size are expanded regardless, up to ``KEPT``.
+    """
+    out: list[tuple[str, ...]] = []
+    ordered = sorted(set(chosen), key=len)
+    least = len(ordered[0]) if ordered else 0
+    begin = time.perf_counter()
+    cut = False
+    for picked in ordered:
+        keep = len(picked) == least
+        for n, combination in enumerate(itertools.product(*(classes[k] for k in picked))):
+            if n % CHUNK == 0 and deadline is not None and (not keep or len(out) >= KEPT):
+                now = time.perf_counter()
+                if 2 * now - begin > deadline:
+                    cut = True
+                    break
+            out.append(tuple(sorted(combination)))
+        if cut:
+            break
+    out.sort()
+    out.sort(key=len)  # stable: by name within a size
+    return out, cut
 
 
 class DiagnosisEngine:
@@ -116,22 +236,34 @@ class DiagnosisEngine:
         max_card: int | None = None,
         timeout: float | None = None,
     ) -> None:
-        self.exonerate = exonerate
+        self._exonerate = exonerate
         self.max_card = max_card
         self.timeout = timeout
         self._model = SystemDescription()
         self._observers: frozenset[Observer] = frozenset()
         self._rank: dict[Observer, int] = {}  # position in the model
-        self._node_rank: dict[str, int] = {}
-        self._watchers: dict[str, list[Observer]] = {}  # node -> observers of its streams
         self._observations: dict[Observer, ObservationInfo] = {}
         self._failed: dict[Observer, None] = {}  # observers whose newest observation failed
-        self._changed: set[Observer] = set()  # verdicts changed since the last diagnosis
-        self._cones: dict[Observer, tuple[frozenset[str], frozenset[Observer]]] = {}
+        # with exoneration: the OK topic observers by the streams they clear, and the
+        # number of cleared streams by publisher
+        self._clearing: dict[Stream, set[Observer]] = {}
+        self._cleared: dict[str, int] = {}
+        self._upstream: dict[str, frozenset[str]] = {}  # node -> nodes that can reach it
+        self._cones: dict[Observer, frozenset[str]] = {}  # both kept until the model changes
+        self._streams: dict[Observer, list[Stream]] = {}
         self._known: dict[tuple[str, tuple[str, ...], tuple[str, ...]], Observer] = {}
-        self._grounded: _Grounded | None = None
         if model is not None:
             self.set_model(model)
+
+    @property
+    def exonerate(self) -> bool:
+        """Whether an OK topic observation means that its topics are not abnormal."""
+        return self._exonerate
+
+    @exonerate.setter
+    def exonerate(self, value: bool) -> None:
+        self._exonerate = value
+        self._index_clearing()
 
     # --- the model ----------------------------------------------------------------------
 
@@ -155,21 +287,13 @@ class DiagnosisEngine:
         self._model = model
         self._observers = frozenset(model.observers)
         self._rank = {o: i for i, o in enumerate(model.observers)}
-        self._node_rank = {n.name: i for i, n in enumerate(model.nodes)}
-        watchers: dict[str, list[Observer]] = {}
-        for o in model.observers:
-            if o.type.watches_nodes:
-                watchers.setdefault(o.resource[0], []).append(o)
-                continue
-            for name in {p for t in o.topics for p in model.publishers(t)}:
-                if not o.callerids or name in o.callerids:
-                    watchers.setdefault(name, []).append(o)
-        self._watchers = watchers
         self._observations = {o: v for o, v in self._observations.items() if o in self._observers}
         self._failed = {o: None for o, v in self._observations.items() if v.failed}
+        self._upstream = {}
         self._cones = {}
+        self._streams = {}
+        self._index_clearing()
         self._known = {key: o for o in model.observers for key in o.spellings}
-        self._grounded = None
 
     # --- observations -------------------------------------------------------------------
 
@@ -196,10 +320,40 @@ class DiagnosisEngine:
             return False
         if info.failed:
             self._failed[observer] = None
+            if old is not None and self._exonerate:
+                self._unclear(observer)
         else:
             self._failed.pop(observer, None)
-        self._changed.add(observer)
+            if self._exonerate:
+                self._clear(observer)
         return True
+
+    def _index_clearing(self) -> None:
+        self._clearing = {}
+        self._cleared = {}
+        if self._exonerate:
+            for observer, info in self._observations.items():
+                if not info.failed:
+                    self._clear(observer)
+
+    def _clear(self, observer: Observer) -> None:
+        """Note an OK topic observer: with exoneration, its streams are not abnormal."""
+        for stream in self._watched(observer):
+            by = self._clearing.setdefault(stream, set())
+            if not by:
+                self._cleared[stream[0]] = self._cleared.get(stream[0], 0) + 1
+            by.add(observer)
+
+    def _unclear(self, observer: Observer) -> None:
+        for stream in self._watched(observer):
+            by = self._clearing.get(stream)
+            if by is not None:
+                by.discard(observer)
+                if not by:
+                    del self._clearing[stream]
+                    self._cleared[stream[0]] -= 1
+                    if not self._cleared[stream[0]]:
+                        del self._cleared[stream[0]]
 
     @property
     def observations(self) -> dict[Observer, ObservationInfo]:
@@ -216,207 +370,149 @@ class DiagnosisEngine:
         failed = self.failed()
         if not failed:
             return DiagnosisResult(Status.OK, elapsed=time.perf_counter() - start)
-        grounded = self._region(failed)
-        self._assign(grounded, self._wanted(grounded, self._changed))
-        self._changed.clear()
-        self._bound(grounded, self.max_card)
-        timeout = self.timeout
-        outcome = grounded.asp.solve(
-            timeout=None if timeout is None else timeout * (1 - SMALLEST_SHARE)
+        conflicts = [self._conflict(o) for o in failed]
+        for observer, conflict in zip(failed, conflicts, strict=True):
+            if not conflict:
+                return DiagnosisResult(
+                    Status.INCONSISTENT,
+                    conflicts=self._conflicting(observer),
+                    failed=failed,
+                    elapsed=time.perf_counter() - start,
+                )
+        classes, members, count = classes_of(conflicts)
+        template = POOL.take(count, len(classes), members)
+        try:
+            template.pose(members, self.max_card)
+            timeout = self.timeout
+            chosen, interrupted = template.enumerate(
+                None if timeout is None else timeout * (1 - SMALLEST_SHARE)
+            )
+            if interrupted and timeout is not None:
+                # at least its share, also when the interrupted search overran its own
+                left = timeout - (time.perf_counter() - start)
+                chosen += template.least(max(timeout * SMALLEST_SHARE, left))
+        finally:
+            POOL.give(template)
+        deadline = None if self.timeout is None else start + self.timeout
+        found, cut = expand(chosen, classes, deadline)
+        # With a size bound and nothing found, every diagnosis is larger: there are
+        # some, as every conflict is non-empty.
+        status = Status.TIMEOUT if interrupted or cut else Status.DIAGNOSED
+        return DiagnosisResult(
+            status, tuple(found), failed=failed, elapsed=time.perf_counter() - start
         )
-        answers = list(outcome.answers)
-        if outcome.interrupted and timeout is not None:
-            # at least its share, also when the interrupted search overran its own
-            left = timeout - (time.perf_counter() - start)
-            answers += self._smallest(grounded, max(timeout * SMALLEST_SHARE, left))
-        names = grounded.names
-        found = ordered(
-            [
-                tuple(names[n] for (n,) in answer.get("faulty") if isinstance(n, int))
-                for answer in answers
-            ]
-        )
-        if outcome.interrupted:
-            status = Status.TIMEOUT
-        elif found:
-            status = Status.DIAGNOSED
-        elif self.max_card is not None:  # nothing small enough: is there anything at all?
-            status = {True: Status.DIAGNOSED, False: Status.INCONSISTENT, None: Status.TIMEOUT}[
-                self._consistent(grounded)
-            ]
-        else:
-            status = Status.INCONSISTENT
-        conflicts = self._conflicts(grounded) if status is Status.INCONSISTENT else ()
-        return DiagnosisResult(status, found, conflicts, failed, time.perf_counter() - start)
 
-    def _cone(self, observer: Observer) -> tuple[frozenset[str], frozenset[Observer]]:
-        """The nodes whose faults could reach an observer, and the observers of those
-        nodes (kept until the model changes)."""
-        known = self._cones.get(observer)
+    def _watched(self, observer: Observer) -> list[Stream]:
+        """The streams a topic observer watches (none for a node observer)."""
+        streams = self._streams.get(observer)
+        if streams is None:
+            publishers = self._model.publishers
+            ids = observer.callerids
+            streams = self._streams[observer] = [
+                (p, t) for t in observer.topics for p in publishers(t) if not ids or p in ids
+            ]
+        return streams
+
+    def _conflict(self, observer: Observer) -> frozenset[str]:
+        """The candidates that could explain an observer's failure."""
+        cone = self._cones.get(observer)
+        if cone is None:
+            cone = self._cones[observer] = self._cone(observer)
+        if self._cleared and not cone.isdisjoint(self._cleared):
+            return self._reach(observer, self._clearing)
+        return cone
+
+    def _cone(self, observer: Observer) -> frozenset[str]:
+        """The candidates that could explain an observer's failure with nothing cleared."""
+        if observer.type is ObserverType.COMPONENT:
+            return frozenset(observer.resource)
+        if observer.type is ObserverType.RESOURCES:
+            return self._upstream_of(observer.resource[0])
+        cone = frozenset().union(*(self._upstream_of(p) for p, _ in self._watched(observer)))
+        return cone | {observer.behavior} if observer.behavior else cone
+
+    def _upstream_of(self, name: str) -> frozenset[str]:
+        """A node and every node whose faults can reach its outputs (kept per node; a
+        search stops at nodes already known)."""
+        known = self._upstream.get(name)
         if known is not None:
             return known
         model = self._model
-        nodes: set[str] = set()
-        topics: list[tuple[str, tuple[str, ...]]] = []  # (topic, caller ids)
-        if observer.type.watches_nodes:
-            name = observer.resource[0]
-            nodes.add(name)
-            node = model.node(name)
-            if observer.type is ObserverType.RESOURCES and node is not None:
-                topics += [(t, ()) for t in node.sub_topic]
-        else:
-            topics += [(t, observer.callerids) for t in observer.topics]
-        while topics:
-            topic, callerids = topics.pop()
-            for name in model.publishers(topic):
-                if name not in nodes and (not callerids or name in callerids):
-                    nodes.add(name)
-                    node = model.node(name)
-                    topics += [(t, ()) for t in node.sub_topic] if node else []
-        near = frozenset(o for n in nodes for o in self._watchers.get(n, ()))
-        self._cones[observer] = cone = (frozenset(nodes), near)
+        found: set[str] = {name}
+        stack = [name]
+        while stack:
+            node = model.node(stack.pop())
+            for topic in node.sub_topic if node is not None else ():
+                for p in model.publishers(topic):
+                    if p not in found:
+                        up = self._upstream.get(p)
+                        if up is None:
+                            found.add(p)
+                            stack.append(p)
+                        else:
+                            found |= up
+        self._upstream[name] = cone = frozenset(found)
         return cone
 
-    def _region(self, failed: tuple[Observer, ...]) -> _Grounded:
-        """The grounded region of the failed observations (kept if it still covers them).
+    def _reach(self, observer: Observer, cleared: Container[Stream]) -> frozenset[str]:
+        """The candidates from which abnormal streams can reach what an observer
+        watches (or that it blames), none of them through a cleared stream."""
+        model = self._model
+        blamed: list[str] = []
+        if observer.type.watches_nodes:
+            name = observer.resource[0]
+            blamed.append(name)
+            node = model.node(name)
+            starts = (
+                [(p, t) for t in node.sub_topic for p in model.publishers(t)]
+                if observer.type is ObserverType.RESOURCES and node is not None
+                else []
+            )
+        else:
+            starts = list(self._watched(observer))
+            if observer.behavior:
+                blamed.append(observer.behavior)
+        seen: set[Stream] = set()
+        nodes: dict[str, None] = dict.fromkeys(blamed)
+        stack = starts
+        while stack:
+            stream = stack.pop()
+            if stream in seen or stream in cleared:
+                continue
+            seen.add(stream)
+            name = stream[0]
+            if name not in nodes:
+                nodes[name] = None
+                node = model.node(name)
+                if node is not None:
+                    stack += [(p, t) for t in node.sub_topic for p in model.publishers(t)]
+        # a faulty node makes all its streams abnormal: one that publishes a cleared
+        # stream is not faulty
+        return frozenset(n for n in nodes if not any(s in cleared for s in self._outputs(n)))
 
-        With exoneration, OK observations of the region belong to it too: they clear
-        its streams.
-        """
-        cones = [self._cone(o) for o in failed]
-        nodes = frozenset().union(*(c[0] for c in cones))
-        near = frozenset().union(*(c[1] for c in cones))  # observers of the region
-        observers = set(failed)
-        if self.exonerate:
-            for o in near:
-                info = self._observations.get(o)
-                if info is not None and not info.failed and not o.type.watches_nodes:
-                    observers.add(o)
-        grounded = self._grounded
-        if grounded is not None and nodes <= grounded.nodes and observers <= grounded.index.keys():
-            return grounded
-        # Every observer of the region: a later verdict of one of them re-solves only.
-        observers.update(o for o in near if o in self._observations or self.exonerate)
-        return self._ground(nodes, observers)
+    def _outputs(self, name: str) -> list[Stream]:
+        """The streams a node publishes (none for a behavior)."""
+        node = self._model.node(name)
+        return [(name, t) for t in node.pub_topic] if node is not None else []
 
-    def _ground(self, nodes: frozenset[str], observers: Iterable[Observer]) -> _Grounded:
-        """Ground a region: nodes, and the observers whose verdicts it takes."""
-        index = {o: i for i, o in enumerate(sorted(observers, key=self._rank.__getitem__))}
-        region = SystemDescription(
-            tuple(self._model.nodes[i] for i in sorted(self._node_rank[n] for n in nodes)),
-            tuple(index),
+    def _conflicting(self, observer: Observer) -> tuple[Observer, ...]:
+        """A minimal set of observations that no diagnosis explains together: a failed
+        observer nothing can explain, and the OK observations that clear its paths."""
+        clearing = self._clearing
+        needed = sorted(
+            {
+                o
+                for n in self._cone(observer)
+                for s in self._outputs(n)
+                for o in clearing.get(s, ())
+            },
+            key=self._rank.__getitem__,
         )
-        asp = Asp(OPTIONS)
-        asp.load(PROGRAM)
-        asp.add(model_facts(region, index), source="<model>")
-        asp.ground()
-        # Externals start false: only observations that say otherwise are assigned.
-        self._grounded = _Grounded(
-            asp, nodes, region.candidates, index, [(False, False)] * len(index), set()
-        )
-        self._changed = set(index)  # every observer of a new region is assigned
-        return self._grounded
-
-    def _wanted(
-        self, grounded: _Grounded, observers: Iterable[Observer]
-    ) -> dict[int, tuple[bool, bool]]:
-        """(failed, ok) by number for those of the observers in the region, as the newest
-        observations say."""
-        wanted: dict[int, tuple[bool, bool]] = {}
-        for observer in observers:
-            i = grounded.index.get(observer)
-            if i is not None:
-                info = self._observations.get(observer)
-                failed = info is not None and info.failed
-                wanted[i] = (failed, info is not None and not failed and self.exonerate)
-        return wanted
-
-    @staticmethod
-    def _assign(grounded: _Grounded, wanted: dict[int, tuple[bool, bool]]) -> None:
-        assign = grounded.asp.assign_external
-        for i, value in wanted.items():
-            old = grounded.assigned[i]
-            if old != value:
-                if old[0] != value[0]:
-                    assign(atom("failed", i), value[0])
-                if old[1] != value[1]:
-                    assign(atom("ok", i), value[1])
-                grounded.assigned[i] = value
-
-    @staticmethod
-    def _bound(grounded: _Grounded, max_card: int | None) -> None:
-        if max_card is not None and max_card not in grounded.bounds:
-            grounded.asp.ground([("bound", (max_card,))])
-            grounded.bounds.add(max_card)
-        for k in grounded.bounds:
-            grounded.asp.assign_external(atom("limit", k), k == max_card)
-
-    @staticmethod
-    def _smallest(grounded: _Grounded, timeout: float) -> list[Answer]:
-        """Every diagnosis of the smallest size that can be proven so within ``timeout``."""
-        asp = grounded.asp
-        if not grounded.smallest:
-            asp.ground([("smallest", ())])
-            grounded.smallest = True
-        asp.set("solve.opt_mode", "optN")
-        asp.set("solve.enum_mode", "auto")
-        try:
-            outcome = asp.solve(timeout=timeout, costs=True)
-        finally:
-            asp.set("solve.opt_mode", "ignore")
-            asp.set("solve.enum_mode", "domRec")
-        return [a for a in outcome.answers if a.optimal]
-
-    def _consistent(self, grounded: _Grounded) -> bool | None:
-        """Whether some diagnosis exists, of any size (None: no answer in time)."""
-        self._bound(grounded, None)
-        grounded.asp.set("solve.models", "1")
-        try:
-            return grounded.asp.solve(timeout=self.timeout).satisfiable
-        finally:
-            grounded.asp.set("solve.models", "0")
-            self._bound(grounded, self.max_card)
-
-    def _conflicts(self, grounded: _Grounded) -> tuple[Observer, ...]:
-        """A minimal set of observations that no diagnosis explains together.
-
-        The observations become assumptions: clingo's unsatisfiable core is a first
-        conflict, and dropping each member that is not needed makes it minimal.
-        """
-        wanted = self._wanted(grounded, grounded.index)
-        count = len(wanted)
-        symbols = [atom("failed", i) for i in range(count)] + [atom("ok", i) for i in range(count)]
-        values = [wanted[i][0] for i in range(count)] + [wanted[i][1] for i in range(count)]
-        present = [s for s, value in zip(symbols, values, strict=True) if value]
-        for symbol in symbols:
-            grounded.asp.assign_external(symbol, None)
-        self._bound(grounded, None)
-        grounded.asp.set("solve.models", "1")
-
-        def core_of(chosen: list[clingo.Symbol]) -> list[clingo.Symbol] | None:
-            """The failing part of the chosen observations, or None if they are consistent."""
-            keep = set(chosen)
-            assumptions = [(s, s in keep) for s in symbols]
-            outcome = grounded.asp.solve(assumptions=assumptions, timeout=self.timeout)
-            if outcome.satisfiable is not False:
-                return None
-            core = set(outcome.core)
-            return [s for s in chosen if s in core] or chosen
-
-        try:
-            core = core_of(present) or present
-            i = 0
-            while i < len(core):
-                smaller = core_of(core[:i] + core[i + 1 :])
-                if smaller is None:
-                    i += 1  # needed
-                else:
-                    core = smaller
-        finally:
-            grounded.asp.set("solve.models", "0")
-            for symbol, value in zip(symbols, values, strict=True):
-                grounded.asp.assign_external(symbol, value)
-            self._bound(grounded, self.max_card)
-        observers = list(grounded.index)
-        numbers = sorted({s.arguments[0].number for s in core})
-        return tuple(observers[i] for i in numbers)
+        i = 0
+        while i < len(needed):
+            rest = needed[:i] + needed[i + 1 :]
+            if self._reach(observer, {s for o in rest for s in self._watched(o)}):
+                i += 1  # needed
+            else:
+                needed = rest
+        return tuple(sorted([observer, *needed], key=self._rank.__getitem__))

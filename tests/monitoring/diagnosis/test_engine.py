@@ -219,23 +219,48 @@ def test_update_replaces_a_node_and_set_replaces_the_model() -> None:
     assert [n.name for n in engine.model.nodes] == ["solo"]
 
 
-def test_a_time_bound_returns_timeout_with_what_was_found() -> None:
-    width = 60
-    nodes = [Node(f"s{i}", (), (f"t{i}",)) for i in range(width)]
-    nodes += [Node(f"j{i}", tuple(f"t{k}" for k in range(width)), (f"o{i}",)) for i in range(width)]
-    observers = [Observer.make("hz", [f"o{i}"]) for i in range(width)]
-    engine = DiagnosisEngine(SystemDescription(tuple(nodes), tuple(observers)), timeout=0.0)
+def test_a_problem_too_large_for_a_template_is_solved_on_its_own() -> None:
+    # root feeds 40 topics with one publisher each: 40 conflicts and 41 classes
+    width = 40
+    nodes = [Node("root", (), ("r",))] + [Node(f"a{i}", ("r",), (f"m{i}",)) for i in range(width)]
+    observers = tuple(Observer.make("hz", [f"m{i}"]) for i in range(width))
+    engine = DiagnosisEngine(SystemDescription(tuple(nodes), observers))
     for i in range(width):
-        engine.observe(ObservationInfo("hz", (f"o{i}",), -1))
+        engine.observe(ObservationInfo("hz", (f"m{i}",), -1))
+    result = engine.diagnose()
+    assert result.status is Status.DIAGNOSED
+    assert result.diagnoses == (("root",), tuple(sorted(f"a{i}" for i in range(width))))
+    engine.observe(ObservationInfo("hz", ("m0",), 0, stamp=1.0))
+    engine.max_card = 1
+    assert engine.diagnose().diagnoses == (("root",),)
+
+
+def test_a_time_bound_returns_timeout_with_what_was_found() -> None:
+    # a ring: w_i joins the outputs of u_i and u_i+1, which share the root's topic; the
+    # failure of every w_i is explained by {root}, and by a vast number of choices of
+    # u's and w's around the ring
+    width = 60
+    nodes = [Node("root", (), ("r",))]
+    nodes += [Node(f"u{i}", ("r",), (f"p{i}",)) for i in range(width)]
+    nodes += [Node(f"w{i}", (f"p{i}", f"p{(i + 1) % width}"), (f"q{i}",)) for i in range(width)]
+    observers = [Observer.make("hz", [f"q{i}"]) for i in range(width)]
+    engine = DiagnosisEngine(SystemDescription(tuple(nodes), tuple(observers)), timeout=0.2)
+    for i in range(width):
+        engine.observe(ObservationInfo("hz", (f"q{i}",), -1))
     result = engine.diagnose()
     assert result.status is Status.TIMEOUT
-    assert all(len(d) == 1 for d in result.diagnoses)
+    assert result.diagnoses[0] == ("root",)
+    conflicts = [{"root", f"u{i}", f"u{(i + 1) % width}", f"w{i}"} for i in range(width)]
+    for diagnosis in result.diagnoses[1:100]:
+        assert all(c & set(diagnosis) for c in conflicts)  # explains every failure
+        for name in diagnosis:  # and nothing can be left out
+            assert any(c & set(diagnosis) == {name} for c in conflicts)
 
 
 def test_a_time_bound_keeps_the_smallest_diagnoses_among_very_many() -> None:
-    # root feeds 18 topics with two publishers each: {root} explains every failure, and
-    # so does each of the 2**18 choices of one publisher per topic
-    topics = 18
+    # root feeds 24 topics with two publishers each: {root} explains every failure, and
+    # so does each of the 2**24 choices of one publisher per topic
+    topics = 24
     nodes = [Node("root", (), ("r",))]
     for i in range(topics):
         nodes += [Node(f"a{i}", ("r",), (f"m{i}",)), Node(f"b{i}", ("r",), (f"m{i}",))]
