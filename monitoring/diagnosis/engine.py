@@ -381,18 +381,16 @@ class DiagnosisEngine:
                 )
         classes, members, count = classes_of(conflicts)
         template = POOL.take(count, len(classes), members)
-        try:
-            template.pose(members, self.max_card)
-            timeout = self.timeout
-            chosen, interrupted = template.enumerate(
-                None if timeout is None else timeout * (1 - SMALLEST_SHARE)
-            )
-            if interrupted and timeout is not None:
-                # at least its share, also when the interrupted search overran its own
-                left = timeout - (time.perf_counter() - start)
-                chosen += template.least(max(timeout * SMALLEST_SHARE, left))
-        finally:
-            POOL.give(template)
+        template.pose(members, self.max_card)
+        timeout = self.timeout
+        chosen, interrupted = template.enumerate(
+            None if timeout is None else timeout * (1 - SMALLEST_SHARE)
+        )
+        if interrupted and timeout is not None:
+            # at least its share, also when the interrupted search overran its own
+            left = timeout - (time.perf_counter() - start)
+            chosen += template.least(max(timeout * SMALLEST_SHARE, left))
+        POOL.give(template)  # only after a clean use: a failed one is dropped
         deadline = None if self.timeout is None else start + self.timeout
         found, cut = expand(chosen, classes, deadline)
         # With a size bound and nothing found, every diagnosis is larger: there are
