@@ -36,6 +36,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import IO, Any
 
+import psutil
+
 from executive.goal import GoalSpec
 from executive.partial_order import PartialOrderPlan
 from executive.problem import World
@@ -310,18 +312,8 @@ def _sweep(folder: Path) -> None:
                 if time.time() - stale.stat().st_mtime > ABANDONED:
                     shutil.rmtree(stale, ignore_errors=True)
             continue
-        if not _alive(pid):
+        if not psutil.pid_exists(pid):
             shutil.rmtree(stale, ignore_errors=True)
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # somebody else's process
-        return True
-    return True
 
 
 # --- framing --------------------------------------------------------------------------

@@ -359,14 +359,12 @@ class Asp:
         satisfiable: bool | None = None if result.unknown else bool(result.satisfiable)
         if answers and satisfiable is None:
             satisfiable = True
-        # An interrupt that lands while a model is being read ends the search without
-        # clingo calling it interrupted: a search the alarm stopped is not exhausted.
-        cut = alarm is not None and (alarm.late or (alarm.fired and not result.exhausted))
+        late = alarm is not None and alarm.late
         return Outcome(
             answers=answers,
             satisfiable=satisfiable,
             exhausted=bool(result.exhausted),
-            interrupted=bool(result.interrupted) or cut,
+            interrupted=bool(result.interrupted) or late,
             core=self._core_symbols(core, assumptions) if result.unsatisfiable else [],
         )
 

@@ -244,10 +244,8 @@ class DiagnosisEngine:
         self._rank: dict[Observer, int] = {}  # position in the model
         self._observations: dict[Observer, ObservationInfo] = {}
         self._failed: dict[Observer, None] = {}  # observers whose newest observation failed
-        # with exoneration: the OK topic observers by the streams they clear, and the
-        # number of cleared streams by publisher
+        # with exoneration: the OK topic observers by the streams they clear
         self._clearing: dict[Stream, set[Observer]] = {}
-        self._cleared: dict[str, int] = {}
         self._upstream: dict[str, frozenset[str]] = {}  # node -> nodes that can reach it
         self._cones: dict[Observer, frozenset[str]] = {}  # both kept until the model changes
         self._streams: dict[Observer, list[Stream]] = {}
@@ -330,7 +328,6 @@ class DiagnosisEngine:
 
     def _index_clearing(self) -> None:
         self._clearing = {}
-        self._cleared = {}
         if self._exonerate:
             for observer, info in self._observations.items():
                 if not info.failed:
@@ -339,10 +336,7 @@ class DiagnosisEngine:
     def _clear(self, observer: Observer) -> None:
         """Note an OK topic observer: with exoneration, its streams are not abnormal."""
         for stream in self._watched(observer):
-            by = self._clearing.setdefault(stream, set())
-            if not by:
-                self._cleared[stream[0]] = self._cleared.get(stream[0], 0) + 1
-            by.add(observer)
+            self._clearing.setdefault(stream, set()).add(observer)
 
     def _unclear(self, observer: Observer) -> None:
         for stream in self._watched(observer):
@@ -351,9 +345,6 @@ class DiagnosisEngine:
                 by.discard(observer)
                 if not by:
                     del self._clearing[stream]
-                    self._cleared[stream[0]] -= 1
-                    if not self._cleared[stream[0]]:
-                        del self._cleared[stream[0]]
 
     @property
     def observations(self) -> dict[Observer, ObservationInfo]:
@@ -370,7 +361,8 @@ class DiagnosisEngine:
         failed = self.failed()
         if not failed:
             return DiagnosisResult(Status.OK, elapsed=time.perf_counter() - start)
-        conflicts = [self._conflict(o) for o in failed]
+        cleared = {name for name, _ in self._clearing}  # nodes with a cleared stream
+        conflicts = [self._conflict(o, cleared) for o in failed]
         for observer, conflict in zip(failed, conflicts, strict=True):
             if not conflict:
                 return DiagnosisResult(
@@ -411,12 +403,13 @@ class DiagnosisEngine:
             ]
         return streams
 
-    def _conflict(self, observer: Observer) -> frozenset[str]:
-        """The candidates that could explain an observer's failure."""
+    def _conflict(self, observer: Observer, cleared: set[str]) -> frozenset[str]:
+        """The candidates that could explain an observer's failure, given the nodes
+        that publish a cleared stream."""
         cone = self._cones.get(observer)
         if cone is None:
             cone = self._cones[observer] = self._cone(observer)
-        if self._cleared and not cone.isdisjoint(self._cleared):
+        if not cone.isdisjoint(cleared):
             return self._reach(observer, self._clearing)
         return cone
 
@@ -435,37 +428,28 @@ class DiagnosisEngine:
         known = self._upstream.get(name)
         if known is not None:
             return known
-        model = self._model
         found: set[str] = {name}
         stack = [name]
         while stack:
-            node = model.node(stack.pop())
-            for topic in node.sub_topic if node is not None else ():
-                for p in model.publishers(topic):
-                    if p not in found:
-                        up = self._upstream.get(p)
-                        if up is None:
-                            found.add(p)
-                            stack.append(p)
-                        else:
-                            found |= up
+            for p, _ in self._inputs(stack.pop()):
+                if p not in found:
+                    up = self._upstream.get(p)
+                    if up is None:
+                        found.add(p)
+                        stack.append(p)
+                    else:
+                        found |= up
         self._upstream[name] = cone = frozenset(found)
         return cone
 
     def _reach(self, observer: Observer, cleared: Container[Stream]) -> frozenset[str]:
         """The candidates from which abnormal streams can reach what an observer
         watches (or that it blames), none of them through a cleared stream."""
-        model = self._model
         blamed: list[str] = []
         if observer.type.watches_nodes:
             name = observer.resource[0]
             blamed.append(name)
-            node = model.node(name)
-            starts = (
-                [(p, t) for t in node.sub_topic for p in model.publishers(t)]
-                if observer.type is ObserverType.RESOURCES and node is not None
-                else []
-            )
+            starts = self._inputs(name) if observer.type is ObserverType.RESOURCES else []
         else:
             starts = list(self._watched(observer))
             if observer.behavior:
@@ -481,12 +465,17 @@ class DiagnosisEngine:
             name = stream[0]
             if name not in nodes:
                 nodes[name] = None
-                node = model.node(name)
-                if node is not None:
-                    stack += [(p, t) for t in node.sub_topic for p in model.publishers(t)]
+                stack += self._inputs(name)
         # a faulty node makes all its streams abnormal: one that publishes a cleared
         # stream is not faulty
         return frozenset(n for n in nodes if not any(s in cleared for s in self._outputs(n)))
+
+    def _inputs(self, name: str) -> list[Stream]:
+        """The streams a node subscribes (none for a behavior)."""
+        model = self._model
+        node = model.node(name)
+        subscribed = node.sub_topic if node is not None else ()
+        return [(p, t) for t in subscribed for p in model.publishers(t)]
 
     def _outputs(self, name: str) -> list[Stream]:
         """The streams a node publishes (none for a behavior)."""
