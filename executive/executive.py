@@ -13,14 +13,14 @@ import os
 from pathlib import Path
 from typing import Any
 
-from executive.bus import Bus
-from executive.component_api import ComponentApi
-from executive.high_level import HighLevel
-from executive.launcher import Launcher
-from executive.plan_tasks import PlanTasks
-from executive.protocol import EXECUTIVE_ALIVE
-from executive.service import Context, Service
-from executive.task_executor import TaskExecutor
+from executive.bus.keys import EXECUTIVE_ALIVE
+from executive.bus.service import Context, Service
+from executive.bus.session import Bus
+from executive.planning.high_level import HighLevel
+from executive.runtime.component_api import ComponentApi
+from executive.runtime.launcher import Launcher
+from executive.tasks.executor import TaskExecutor
+from executive.tasks.plan_tasks import PlanTasks
 from knowledge.description import RobotDescription
 from knowledge.knowledge_base import KnowledgeBase
 from monitoring.diagnosis.service import DiagnosisService

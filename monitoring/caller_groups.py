@@ -24,7 +24,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Generic, TypeVar
 
-from executive.bus import check_name
+from executive.bus.session import check_name
 from knowledge.errors import BusError
 from monitoring.config_entry import Entry
 

@@ -28,8 +28,8 @@ from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from typing import Any, ClassVar
 
-from executive.bus import Message
-from executive.protocol import ObservationInfo
+from executive.bus.payloads import ObservationInfo
+from executive.bus.session import Message
 from knowledge.errors import ConfigError
 from knowledge.yamlsource import did_you_mean
 from monitoring.config_entry import Entry

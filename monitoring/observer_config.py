@@ -15,7 +15,7 @@ from typing import Any
 
 import yaml
 
-from executive.protocol import topic
+from executive.bus.keys import topic
 from knowledge.description import ObserverSpec, RobotDescription
 from knowledge.errors import ConfigError
 from knowledge.finding import Finding, Report

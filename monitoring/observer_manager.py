@@ -3,7 +3,7 @@
 It loads the observers of every component of the robot description (ids
 ``<component>/<index>``) and, unlike the thesis' manager, lets observers be added,
 changed, removed, activated and deactivated while it runs, through its methods or
-its bus API (:func:`executive.protocol.observers_api`).
+its bus API (:func:`executive.bus.keys.observers_api`).
 
 An observer observes (is *active*) while it is enabled (:meth:`ObserverManager.activate`,
 the default) and its component's last state from the launcher
@@ -26,9 +26,10 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from executive.bus import Message
-from executive.protocol import OBSERVATIONS, ComponentState, Lifecycle, component, observers_api
-from executive.service import Context, Service
+from executive.bus.keys import OBSERVATIONS, component, observers_api
+from executive.bus.payloads import ComponentState, Lifecycle
+from executive.bus.service import Context, Service
+from executive.bus.session import Message
 from knowledge.description import ObserverSpec
 from knowledge.errors import ConfigError, DuraError
 from knowledge.yamlsource import did_you_mean

@@ -1,7 +1,7 @@
 """The resource monitor (thesis 6.2.4): CPU and memory of each component's process tree.
 
 It learns the components' processes from the launcher's reports on
-``component/*/state`` and publishes a :class:`~executive.protocol.ResourceInfo` on
+``component/*/state`` and publishes a :class:`~executive.bus.payloads.ResourceInfo` on
 ``resources`` at its rate (default 1 Hz). A component whose process vanished (or is a
 zombie) while it should be alive is reported with an ``error``. CPU is measured between
 two samples, so a process's first report shows 0 %.
@@ -18,9 +18,10 @@ from typing import Any
 
 import psutil
 
-from executive.bus import Message
-from executive.protocol import RESOURCES, ComponentState, NodeInfo, ResourceInfo, component
-from executive.service import Context, Service
+from executive.bus.keys import RESOURCES, component
+from executive.bus.payloads import ComponentState, NodeInfo, ResourceInfo
+from executive.bus.service import Context, Service
+from executive.bus.session import Message
 from knowledge.errors import ConfigError, DuraError
 
 log = logging.getLogger("dura.resources")

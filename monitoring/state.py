@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from executive.protocol import NO_STATE_FITS
+from executive.bus.payloads import NO_STATE_FITS
 from monitoring.check import Check, read_check
 from monitoring.config_entry import Entry
 from monitoring.filter import FilterState

@@ -13,7 +13,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from executive.bus import Bus
+from executive.bus.session import Bus
 from knowledge.errors import DuraError
 from knowledge.robot import read_robot
 

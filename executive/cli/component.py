@@ -6,10 +6,11 @@ import argparse
 import time
 from typing import Any
 
+from executive.bus.keys import api
+from executive.bus.payloads import ComponentState, Lifecycle
 from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json, table
-from executive.protocol import ComponentState, Lifecycle, api
-from executive.spawn import describe_exit
+from executive.runtime.spawn import describe_exit
 from knowledge.errors import DuraError
 
 

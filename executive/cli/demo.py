@@ -18,12 +18,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-from executive.bus import Message
+from executive.bus.keys import DIAGNOSES, EVENTS
+from executive.bus.session import Message
 from executive.cli.goal import details
 from executive.cli.output import add_json_flag, print_json, section, table
 from executive.cli.plan import bar
-from executive.harness import RobotProcess
-from executive.protocol import DIAGNOSES, EVENTS
+from executive.testing.harness import RobotProcess
 from knowledge.errors import DuraError
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "usecase" / "robot.yaml"

@@ -10,10 +10,10 @@ import sys
 import time
 from typing import Any
 
-from executive.bus import Bus
+from executive.bus.keys import OBSERVATIONS, observers_api
+from executive.bus.session import Bus
 from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json, table
-from executive.protocol import OBSERVATIONS, observers_api
 from knowledge.errors import BusError
 
 REDRAW = 1.0  # seconds between two tables with --follow

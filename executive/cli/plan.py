@@ -8,13 +8,13 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from executive.bus.keys import api
 from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json, shown, table
-from executive.goal import GoalSpec
-from executive.partial_order import PartialOrderPlan, Step
-from executive.planner import Planner, PlanningTask, PlanResult, engine_names
-from executive.problem import read_world
-from executive.protocol import api
+from executive.planning.goals import GoalSpec
+from executive.planning.partial_order import PartialOrderPlan, Step
+from executive.planning.planner import Planner, PlanningTask, PlanResult, engine_names
+from executive.planning.problem import read_world
 from knowledge.description import DEFAULT_ENGINE
 from knowledge.errors import DuraError
 

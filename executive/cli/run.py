@@ -13,7 +13,7 @@ from typing import Any
 from executive.cli.client import remove_run_file, write_run_file
 from executive.cli.output import add_json_flag, print_json, shown
 from executive.executive import Executive
-from executive.launcher import local_endpoint
+from executive.runtime.launcher import local_endpoint
 from knowledge.errors import DuraError
 from knowledge.robot import load_robot
 

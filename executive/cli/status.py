@@ -9,11 +9,11 @@ import sys
 import time
 from typing import Any
 
-from executive.bus import Message
+from executive.bus.keys import EVENTS, api
+from executive.bus.session import Message
 from executive.cli.client import add_client_options, connect
 from executive.cli.goal import GOAL_HEADERS, details, goal_rows
 from executive.cli.output import add_json_flag, print_json, section, table
-from executive.protocol import EVENTS, api
 
 TIMEOUT = 30.0
 

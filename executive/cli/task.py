@@ -6,10 +6,10 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from executive.bus.keys import api
 from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json, section, table
 from executive.cli.plan import bar
-from executive.protocol import api
 from knowledge.errors import DuraError
 
 TIMEOUT = 30.0

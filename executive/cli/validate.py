@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import Any
 
 from executive.cli.output import add_json_flag, print_json, shown
-from executive.integrity import read_rules as read_integrity_rules
-from executive.problem import read_world
+from executive.planning.integrity import read_rules as read_integrity_rules
+from executive.planning.problem import read_world
 from knowledge.description import RobotDescription
 from knowledge.domain import DomainInfo
 from knowledge.finding import Finding, Report

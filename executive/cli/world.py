@@ -6,9 +6,9 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from executive.bus.keys import api
 from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json, table
-from executive.protocol import api
 
 TIMEOUT = 30.0
 

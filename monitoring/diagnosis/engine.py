@@ -32,7 +32,7 @@ import time
 from collections.abc import Container, Sequence
 from pathlib import Path
 
-from executive.protocol import ObservationInfo
+from executive.bus.payloads import ObservationInfo
 from knowledge.asp import Asp, atom
 from knowledge.errors import ConfigError
 from monitoring.diagnosis.model import (

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import yaml
 
-from executive.protocol import ObservationInfo
+from executive.bus.payloads import ObservationInfo
 from knowledge.errors import ConfigError, DuraError, located
 from knowledge.finding import Report
 from knowledge.yamlsource import Section, compose, describe, line_of

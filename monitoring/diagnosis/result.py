@@ -5,7 +5,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
-from executive.protocol import DiagnosisInfo
+from executive.bus.payloads import DiagnosisInfo
 from monitoring.diagnosis.model import Observer
 
 

@@ -17,8 +17,9 @@ import threading
 import time
 from typing import Any
 
-from executive.protocol import DIAGNOSES, DIAGNOSIS_MODEL, OBSERVATIONS, ObservationInfo
-from executive.service import Context, Service
+from executive.bus.keys import DIAGNOSES, DIAGNOSIS_MODEL, OBSERVATIONS
+from executive.bus.payloads import ObservationInfo
+from executive.bus.service import Context, Service
 from knowledge.errors import BusError, ConfigError, DuraError
 from monitoring.diagnosis.engine import DiagnosisEngine
 from monitoring.diagnosis.model import ModelUpdate, Observer, SystemDescription, UpdateAction

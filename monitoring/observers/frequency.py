@@ -36,8 +36,9 @@ import math
 from collections import deque
 from dataclasses import dataclass, field
 
-from executive.bus import Message
-from executive.protocol import TIMEOUT, topic
+from executive.bus.keys import topic
+from executive.bus.payloads import TIMEOUT
+from executive.bus.session import Message
 from monitoring.caller_groups import CallerGroup, TopicGroups, read_topics
 from monitoring.config_entry import Entry
 from monitoring.filter import Filter, FilterConfig, FilterState, read_filter

@@ -34,8 +34,8 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass
 
-from executive.bus import Message
-from executive.protocol import topic
+from executive.bus.keys import topic
+from executive.bus.session import Message
 from knowledge.errors import BusError
 from knowledge.yamlsource import did_you_mean
 from monitoring.caller_groups import topic_name

@@ -26,8 +26,9 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass
 
-from executive.bus import Message
-from executive.protocol import NOT_AVAILABLE, RESOURCES, NodeInfo
+from executive.bus.keys import RESOURCES
+from executive.bus.payloads import NOT_AVAILABLE, NodeInfo
+from executive.bus.session import Message
 from knowledge.errors import BusError
 from monitoring.config_entry import Entry
 from monitoring.filter import FilterConfig, FilterState, read_filter

@@ -21,8 +21,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from executive.bus import Message
-from executive.protocol import GENERAL_OK, TIMEOUT, topic
+from executive.bus.keys import topic
+from executive.bus.payloads import GENERAL_OK, TIMEOUT
+from executive.bus.session import Message
 from monitoring.caller_groups import TopicGroups, read_topics
 from monitoring.config_entry import Entry
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult

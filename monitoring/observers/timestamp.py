@@ -22,8 +22,9 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass
 
-from executive.bus import Message
-from executive.protocol import GENERAL_ERROR, topic
+from executive.bus.keys import topic
+from executive.bus.payloads import GENERAL_ERROR
+from executive.bus.session import Message
 from knowledge.errors import BusError
 from monitoring.caller_groups import TopicGroups, read_topics
 from monitoring.config_entry import Entry

@@ -29,8 +29,8 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass
 
-from executive.bus import Message
-from executive.protocol import topic
+from executive.bus.keys import topic
+from executive.bus.session import Message
 from monitoring.caller_groups import topic_name
 from monitoring.config_entry import Entry
 from monitoring.filter import FilterConfig, read_filter

@@ -16,7 +16,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any, ClassVar
 
-from executive.bus import Bus
+from executive.bus.session import Bus
 from knowledge.errors import ConfigError
 from knowledge.yamlsource import Section
 

@@ -18,7 +18,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from executive.protocol import DiagnosisInfo, ObservationInfo
+from executive.bus.payloads import DiagnosisInfo, ObservationInfo
 from knowledge.asp import Answer, Asp, atom, facts
 from knowledge.errors import ConfigError
 from monitoring.repair.action import Firing

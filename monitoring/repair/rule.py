@@ -26,7 +26,7 @@ from pathlib import Path
 
 import yaml
 
-from executive.protocol import ObservationInfo
+from executive.bus.payloads import ObservationInfo
 from knowledge.errors import ConfigError, DuraError
 from knowledge.finding import Report
 from knowledge.yamlsource import Section, compose, describe, did_you_mean, line_of

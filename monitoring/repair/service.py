@@ -14,9 +14,10 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-from executive.bus import Message
-from executive.protocol import DIAGNOSES, OBSERVATIONS, DiagnosisInfo, ObservationInfo
-from executive.service import Context, Service
+from executive.bus.keys import DIAGNOSES, OBSERVATIONS
+from executive.bus.payloads import DiagnosisInfo, ObservationInfo
+from executive.bus.service import Context, Service
+from executive.bus.session import Message
 from knowledge.errors import BusError, DuraError
 from monitoring.repair.action import ActionContext
 from monitoring.repair.engine import Fired, RuleEngine

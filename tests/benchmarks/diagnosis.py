@@ -41,7 +41,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from executive.protocol import ObservationInfo
+from executive.bus.payloads import ObservationInfo
 from knowledge.asp import Asp, atom, facts
 from monitoring.diagnosis.engine import DiagnosisEngine
 from monitoring.diagnosis.model import Node, Observer, SystemDescription

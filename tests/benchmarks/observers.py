@@ -27,8 +27,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from executive.bus import Bus, Message
-from executive.service import Context
+from executive.bus.service import Context
+from executive.bus.session import Bus, Message
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.robot import read_robot
 from monitoring.observer_manager import ObserverManager

@@ -19,12 +19,12 @@ from pathlib import Path
 from typing import Any
 
 from executive.cli.output import section, table
-from executive.expression import Signature, parse
-from executive.goal import GoalSpec
-from executive.harness import RobotProcess, robot_variant
-from executive.oversubscription import plan_goals
-from executive.planner import Planner, PlanningTask, PlanResult, engine_names
-from executive.problem import build, read_world
+from executive.planning.expression import Signature, parse
+from executive.planning.goals import GoalSpec
+from executive.planning.oversubscription import plan_goals
+from executive.planning.planner import Planner, PlanningTask, PlanResult, engine_names
+from executive.planning.problem import build, read_world
+from executive.testing.harness import RobotProcess, robot_variant
 from knowledge.domain import parse as parse_domain
 from knowledge.domain import read_domain
 

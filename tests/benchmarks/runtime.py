@@ -24,10 +24,10 @@ from pathlib import Path
 
 import psutil
 
-from executive.bus import Bus, Message
-from executive.protocol import component
+from executive.bus.keys import component
+from executive.bus.session import Bus, Message
 from tests.conftest import ROOT, USECASE, free_endpoint, run_dura, wait_for
-from tests.executive.rig import rig, robot, usecase
+from tests.executive.runtime.rig import rig, robot, usecase
 
 
 def percentiles(samples: list[float]) -> tuple[float, float]:

@@ -24,12 +24,12 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from executive.harness import RobotProcess, robot_variant
-from executive.protocol import topic
-from executive.schedule import ScheduleStatus
-from executive.scheduler import Scheduler
+from executive.bus.keys import topic
+from executive.tasks.schedule import ScheduleStatus
+from executive.tasks.scheduler import Scheduler
+from executive.testing.harness import RobotProcess, robot_variant
 from tests.conftest import USECASE, wait_for
-from tests.executive.scheduling_cases import generate
+from tests.executive.tasks.scheduling_cases import generate
 
 SIZES = (5, 20, 50, 200)
 

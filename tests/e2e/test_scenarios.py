@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 
-from executive.harness import RobotProcess
+from executive.testing.harness import RobotProcess
 from tests.conftest import USECASE, wait_for
 
 pytestmark = pytest.mark.slow

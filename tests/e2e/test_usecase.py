@@ -14,7 +14,7 @@ from typing import Any
 import psutil
 import pytest
 
-from executive.harness import RobotProcess
+from executive.testing.harness import RobotProcess
 from tests.conftest import USECASE, wait_for
 
 pytestmark = pytest.mark.slow

@@ -14,10 +14,11 @@ from pathlib import Path
 import psutil
 import pytest
 
-from executive.bus import Bus
-from executive.protocol import ComponentState, Lifecycle, component, topic
+from executive.bus.keys import component, topic
+from executive.bus.payloads import ComponentState, Lifecycle
+from executive.bus.session import Bus
 from tests.conftest import ROOT, USECASE, run_dura, wait_for
-from tests.executive.rig import Recorder
+from tests.executive.runtime.rig import Recorder
 
 COMPONENTS = (
     "lidar",
@@ -174,7 +175,7 @@ def test_sigkill_of_the_executive_takes_all_its_components_with_it(
         # every child goes: the three components and the planner's worker
         children = psutil.Process(process.pid).children(recursive=True)
         assert components <= {c.pid for c in children}
-        (planner,) = [c for c in children if "executive.planner" in c.cmdline()]
+        (planner,) = [c for c in children if "executive.planning.planner" in c.cmdline()]
         scratch = Path(planner.environ()["TMPDIR"])  # the engines' temporary files
         assert scratch.is_dir()
         process.kill()

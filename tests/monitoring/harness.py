@@ -18,9 +18,10 @@ from typing import Any
 
 import pytest
 
-from executive.bus import Bus, Message
-from executive.protocol import OBSERVATIONS, ComponentState, Lifecycle, component
-from executive.service import Context
+from executive.bus.keys import OBSERVATIONS, component
+from executive.bus.payloads import ComponentState, Lifecycle
+from executive.bus.service import Context
+from executive.bus.session import Bus, Message
 from knowledge.description import RobotDescription
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.robot import read_robot

@@ -19,7 +19,7 @@ import threading
 import time
 from typing import Any
 
-from executive.bus import Bus
+from executive.bus.session import Bus
 
 
 def run_phase(bus: Bus, key: str, phase: dict[str, Any], stop: threading.Event) -> None:

@@ -11,20 +11,14 @@ from pathlib import Path
 import psutil
 import pytest
 
-from executive.bus import Bus
-from executive.protocol import (
-    RESOURCES,
-    ComponentState,
-    Lifecycle,
-    NodeInfo,
-    ResourceInfo,
-    component,
-)
-from executive.service import Context
+from executive.bus.keys import RESOURCES, component
+from executive.bus.payloads import ComponentState, Lifecycle, NodeInfo, ResourceInfo
+from executive.bus.service import Context
+from executive.bus.session import Bus
 from knowledge.errors import ConfigError
 from knowledge.knowledge_base import KnowledgeBase
 from monitoring.resource_monitor import ResourceMonitor
-from tests.executive.rig import USECASE_ROBOT, Recorder, Rig, rig, robot, usecase
+from tests.executive.runtime.rig import USECASE_ROBOT, Recorder, Rig, rig, robot, usecase
 
 # A parent that sleeps and a child that spins: a process tree of two.
 SPINNER = (

@@ -13,8 +13,8 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from executive.bus import Message
-from executive.component import Functionality
+from executive.bus.session import Message
+from executive.sdk.component import Functionality
 from knowledge.errors import BusError
 
 

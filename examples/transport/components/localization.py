@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from executive.bus import Message
-from executive.component import Functionality
+from executive.bus.session import Message
+from executive.sdk.component import Functionality
 
 
 class Localization(Functionality):

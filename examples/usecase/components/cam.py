@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from executive.component import Functionality
-from executive.fault_injection import FaultMode
+from executive.sdk.component import Functionality
+from executive.sdk.fault_injection import FaultMode
 
 WIDTH, HEIGHT = 64, 48
 

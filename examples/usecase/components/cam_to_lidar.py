@@ -6,9 +6,9 @@ The scan keeps the stamp of the image it came from.
 from __future__ import annotations
 
 from components.scan import BEAMS, OUT_OF_RANGE, clip, scan
-from executive.bus import Message
-from executive.component import Functionality
-from executive.fault_injection import FaultMode
+from executive.bus.session import Message
+from executive.sdk.component import Functionality
+from executive.sdk.fault_injection import FaultMode
 
 
 class CamToLidar(Functionality):

@@ -11,9 +11,9 @@ import math
 import time
 from typing import Any
 
-from executive.bus import Message
-from executive.component import Functionality
-from executive.fault_injection import FaultMode
+from executive.bus.session import Message
+from executive.sdk.component import Functionality
+from executive.sdk.fault_injection import FaultMode
 
 OUT_OF_RANGE_SPEED = 1000.0  # m/s: no base drives this fast
 

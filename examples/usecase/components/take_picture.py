@@ -8,8 +8,8 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from executive.bus import Message
-from executive.component import Behavior, GoalFailed
+from executive.bus.session import Message
+from executive.sdk.component import Behavior, GoalFailed
 
 POLL = 0.05
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from executive.protocol import api
+from executive.bus.keys import api
 from knowledge.errors import BusError
 from monitoring.repair.action import Action, ActionContext
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import yaml
 
-from executive.protocol import ObservationInfo
+from executive.bus.payloads import ObservationInfo
 from monitoring.diagnosis.model import Node, Observer, SystemDescription
 
 # (type, resources, observation, caller ids)

@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from itertools import chain, combinations
 
-from executive.protocol import ObservationInfo
+from executive.bus.payloads import ObservationInfo
 from monitoring.diagnosis.model import Observer, ObserverType, SystemDescription
 
 Stream = tuple[str, str]  # (node, topic)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from executive.protocol import ObservationInfo
+from executive.bus.payloads import ObservationInfo
 from knowledge.errors import ConfigError
 from monitoring.diagnosis.engine import DiagnosisEngine
 from monitoring.diagnosis.model import ModelUpdate, Node, Observer, SystemDescription, UpdateAction

@@ -5,7 +5,7 @@ from __future__ import annotations
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from executive.protocol import ObservationInfo
+from executive.bus.payloads import ObservationInfo
 from monitoring.diagnosis.engine import DiagnosisEngine
 from monitoring.diagnosis.model import Node, Observer, SystemDescription
 from monitoring.diagnosis.result import Status

@@ -10,9 +10,10 @@ from typing import Any
 
 import pytest
 
-from executive.bus import Bus, Message
-from executive.protocol import DIAGNOSES, DIAGNOSIS_MODEL, OBSERVATIONS, DiagnosisInfo
-from executive.service import Context
+from executive.bus.keys import DIAGNOSES, DIAGNOSIS_MODEL, OBSERVATIONS
+from executive.bus.payloads import DiagnosisInfo
+from executive.bus.service import Context
+from executive.bus.session import Bus, Message
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.robot import load_robot
 from monitoring.diagnosis.service import DiagnosisService

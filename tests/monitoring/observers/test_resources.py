@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from executive.protocol import NOT_AVAILABLE, RESOURCES, NodeInfo
+from executive.bus.keys import RESOURCES
+from executive.bus.payloads import NOT_AVAILABLE, NodeInfo
 from monitoring.observer_manager import ObserverManager
 from tests.monitoring.harness import Observations, Publish, seen, stream
 

@@ -13,8 +13,8 @@ from typing import Any
 import pytest
 from aiosmtpd.controller import Controller
 
-from executive.bus import Bus
-from executive.protocol import api
+from executive.bus.keys import api
+from executive.bus.session import Bus
 from knowledge.errors import BusError, DuraError
 from monitoring.repair.action import ActionContext, Firing
 from monitoring.repair.rule import Rule, read_rules

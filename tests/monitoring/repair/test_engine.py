@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from executive.protocol import DiagnosisInfo, ObservationInfo
+from executive.bus.payloads import DiagnosisInfo, ObservationInfo
 from knowledge.errors import AspError
 from monitoring.repair.engine import RuleEngine
 from monitoring.repair.rule import read_rules

@@ -8,9 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from executive.bus import Bus
-from executive.protocol import DIAGNOSES, OBSERVATIONS, DiagnosisInfo
-from executive.service import Context
+from executive.bus.keys import DIAGNOSES, OBSERVATIONS
+from executive.bus.payloads import DiagnosisInfo
+from executive.bus.service import Context
+from executive.bus.session import Bus
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.robot import load_robot
 from monitoring.repair.rule import read_rules

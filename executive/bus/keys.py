@@ -1,0 +1,77 @@
+"""Key expressions of the bus, relative to ``dura/<robot>/``, and the environment of a
+component process.
+
+A service that owns a key documents its payload in :mod:`executive.bus.payloads` (data
+it publishes) or declares it in :mod:`executive.bus.api` (requests it serves), so that
+each service can run in its own process, or on another machine, and still understand
+the others.
+"""
+
+from __future__ import annotations
+
+OBSERVATIONS = "observations"  # observation infos from observers
+DIAGNOSES = "diagnoses"  # diagnosis results (diagnosis engine)
+RESOURCES = "resources"  # resource monitor node infos
+EXECUTIVE_ALIVE = "alive/executive"  # liveliness token of the executive process
+EVENTS = "events"  # every KB event, as it is logged
+
+
+def topic(name: str) -> str:
+    """Component data on a named topic."""
+    return f"topic/{name.strip('/')}"
+
+
+def component(name: str, leaf: str) -> str:
+    """``component/<name>/<leaf>``; leaves: cmd, state, result, feedback."""
+    return f"component/{name}/{leaf}"
+
+
+def api(verb: str) -> str:
+    """A request the CLI (or another service) makes of the executive."""
+    return f"executive/api/{verb}"
+
+
+def component_alive(name: str, instance: str = "*") -> str:
+    """The liveliness token a component process declares once it takes commands."""
+    return f"alive/component/{name}/{instance}"
+
+
+# The environment of every component process, set by the launcher and read by the SDK.
+ENV_ROBOT = "DURA_ROBOT"  # the robot's name
+ENV_COMPONENT = "DURA_COMPONENT"  # the component's name
+ENV_ENDPOINT = "DURA_ENDPOINT"  # where the executive's bus listens
+ENV_KIND = "DURA_KIND"  # "functionality" or "behavior"
+ENV_INSTANCE = "DURA_INSTANCE"  # unique per started process; names its liveliness token
+
+
+def observers_api(verb: str) -> str:
+    """A request the observer manager serves: ``monitoring/observers/<verb>``.
+
+    Requests and replies (errors are error replies with the reason):
+
+    - ``list`` ``{}`` -> ``{"observers": [{"id", "type", "component", "enabled", "active",
+      "main_loop_rate", "start_up_time"}]}``
+    - ``add`` ``{"config": {observer entry}, "component": str | null, "name": str | null}``
+      -> ``{"id", "active"}``
+    - ``change`` ``{"id", "config"}`` -> ``{"id", "active"}`` (fresh state, same id)
+    - ``remove`` ``{"id"}`` -> ``{"id"}``
+    - ``activate`` / ``deactivate`` ``{"id"}`` -> ``{"id", "active"}``: an activated
+      observer observes while its component is READY (always, if it has none)
+    - ``latest`` ``{}`` -> ``{"observations": [payloads as on ``observations``]}``: the
+      last observation of every resource of every active observer
+
+    Each payload on ``observations`` is :class:`ObservationInfo` plus ``values`` (the
+    measured values by name, e.g. ``{"frequency": 9.98}``) and ``observer`` (its id).
+    """
+    return f"monitoring/observers/{verb}"
+
+
+# Model updates of the diagnosis engine (request/reply). Request:
+#   {"action": "ADD" | "REMOVE" | "UPDATE" | "SET" | "GET",
+#    "nodes": [{"name", "sub_topic": [...], "pub_topic": [...]}],
+#    "observers": [{"type", "resource": [...], "callerids": [...]}]}
+# ADD adds nodes and observers; REMOVE removes the named nodes and the given observers;
+# UPDATE replaces the named nodes (they must exist) and adds the given observers; SET
+# replaces the whole model; GET changes nothing. Reply: {"ok": true, "model": {...}} or
+# {"ok": false, "error": "<reason>"}; a refused update leaves the model as it was.
+DIAGNOSIS_MODEL = "diagnosis/model"

@@ -1,0 +1,321 @@
+"""The payloads every service agrees on: what is published on the bus keys of
+:mod:`executive.bus.keys`, as typed frozen dataclasses with their JSON forms."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+from typing import Any
+
+
+class Lifecycle(enum.Enum):
+    """Where a component process is in its life (published by the launcher)."""
+
+    STARTING = "starting"  # process started, not yet ready
+    READY = "ready"  # configured and running (functionalities) / waiting for a goal (behaviors)
+    PAUSED = "paused"
+    STOPPING = "stopping"
+    STOPPED = "stopped"  # ended because it was asked to
+    EXITED = "exited"  # ended on its own: finished, crashed or killed (see exit_code, signal)
+    FAILED = "failed"  # could not be started, or not ready within its start-up timeout
+
+    @property
+    def is_alive(self) -> bool:
+        return self in (Lifecycle.STARTING, Lifecycle.READY, Lifecycle.PAUSED, Lifecycle.STOPPING)
+
+
+@dataclass(frozen=True)
+class ComponentState:
+    """The payload of ``component/<name>/state``."""
+
+    component: str
+    state: Lifecycle
+    pid: int | None = None
+    exit_code: int | None = None
+    signal: int | None = None
+    reason: str = ""
+    stamp: float = 0.0
+
+    def to_payload(self) -> dict[str, Any]:
+        return {
+            "component": self.component,
+            "state": self.state.value,
+            "pid": self.pid,
+            "exit_code": self.exit_code,
+            "signal": self.signal,
+            "reason": self.reason,
+            "stamp": self.stamp,
+        }
+
+    @classmethod
+    def from_payload(cls, payload: dict[str, Any]) -> ComponentState:
+        """Read a payload; raises ``KeyError``/``ValueError`` on a malformed one."""
+        return cls(
+            component=str(payload["component"]),
+            state=Lifecycle(payload["state"]),
+            pid=payload.get("pid"),
+            exit_code=payload.get("exit_code"),
+            signal=payload.get("signal"),
+            reason=str(payload.get("reason", "")),
+            stamp=float(payload.get("stamp", 0.0)),
+        )
+
+
+# --- observations (thesis 6.2.1) ---------------------------------------------------------
+
+GENERAL_OK = 0
+GENERAL_ERROR = -1
+NO_STATE_FITS = -2
+NOT_AVAILABLE = -3
+TIMEOUT = -4
+
+
+@dataclass(frozen=True)
+class ObservationInfo:
+    """The payload of ``observations``: what one observer saw of its resources.
+
+    ``resource`` lists the observed topics and/or nodes: one topic or node for most
+    observer types, two topics for timing, two topics and optionally a behavior for
+    movement. ``callerids`` restricts a topic observation to those publishers (empty:
+    all of them). A negative ``observation`` is a fault.
+    """
+
+    type: str
+    resource: tuple[str, ...]
+    observation: int
+    observation_msg: str = ""
+    verbose_observation_msg: str = ""
+    callerids: tuple[str, ...] = ()
+    stamp: float = 0.0
+
+    @property
+    def failed(self) -> bool:
+        return self.observation < 0
+
+    def to_payload(self) -> dict[str, Any]:
+        return {
+            "type": self.type,
+            "resource": list(self.resource),
+            "observation": self.observation,
+            "observation_msg": self.observation_msg,
+            "verbose_observation_msg": self.verbose_observation_msg,
+            "callerids": list(self.callerids),
+            "stamp": self.stamp,
+        }
+
+    @classmethod
+    def from_payload(cls, payload: dict[str, Any]) -> ObservationInfo:
+        """Read a payload; a single resource name is accepted for a list of one.
+
+        Raises ``KeyError``/``ValueError``/``TypeError`` on a malformed payload.
+        """
+        resource = payload["resource"]
+        resources = (resource,) if isinstance(resource, str) else tuple(str(r) for r in resource)
+        return cls(
+            type=str(payload["type"]),
+            resource=resources,
+            observation=int(payload["observation"]),
+            observation_msg=str(payload.get("observation_msg", "")),
+            verbose_observation_msg=str(payload.get("verbose_observation_msg", "")),
+            callerids=tuple(str(c) for c in payload.get("callerids", ())),
+            stamp=float(payload.get("stamp", 0.0)),
+        )
+
+
+# --- resources (thesis 6.2.4) ------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class NodeInfo:
+    """CPU and memory of one component's process tree; ``error`` says it vanished."""
+
+    name: str
+    pid: int
+    hostname: str
+    cpu: float  # percent of one core, summed over the process tree
+    memory: int  # resident bytes, summed over the process tree
+    error: str = ""
+
+    def to_payload(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "pid": self.pid,
+            "hostname": self.hostname,
+            "cpu": self.cpu,
+            "memory": self.memory,
+            "error": self.error,
+        }
+
+    @classmethod
+    def from_payload(cls, payload: dict[str, Any]) -> NodeInfo:
+        return cls(
+            str(payload["name"]),
+            int(payload["pid"]),
+            str(payload["hostname"]),
+            float(payload["cpu"]),
+            int(payload["memory"]),
+            str(payload.get("error", "")),
+        )
+
+
+# The payload of ``resources``: {"stamp": float, "hostname": str, "nodes": [NodeInfo payloads]}
+
+
+@dataclass(frozen=True)
+class ResourceInfo:
+    """The payload of ``resources``, published by the resource monitor at its rate."""
+
+    hostname: str
+    nodes: tuple[NodeInfo, ...]
+    stamp: float = 0.0
+
+    def to_payload(self) -> dict[str, Any]:
+        return {
+            "stamp": self.stamp,
+            "hostname": self.hostname,
+            "nodes": [n.to_payload() for n in self.nodes],
+        }
+
+    @classmethod
+    def from_payload(cls, payload: dict[str, Any]) -> ResourceInfo:
+        return cls(
+            str(payload["hostname"]),
+            tuple(NodeInfo.from_payload(n) for n in payload["nodes"]),
+            float(payload.get("stamp", 0.0)),
+        )
+
+
+class Command(enum.Enum):
+    """The verbs of a request on ``component/<name>/cmd``: ``{"cmd": verb, ...}``.
+
+    Fields per verb: configure ``{"params": {}, "achievements": {}}``; reconfigure
+    ``{"params": {}}``; goal ``{"goal_id": str, "goal": {}}`` (behaviors; the reply
+    comes at once, the result later on ``component/<name>/result``); cancel
+    ``{"goal_id": str}``; inject_fault ``{"fault": "crash" | {"mode": "crash", ...}}``
+    (see :mod:`executive.sdk.fault_injection`). start, pause, resume and stop have no fields. The
+    reply is ``{"phase": Phase value}``; a refused command is an error reply.
+    """
+
+    CONFIGURE = "configure"
+    START = "start"
+    PAUSE = "pause"
+    RESUME = "resume"
+    RECONFIGURE = "reconfigure"
+    STOP = "stop"
+    GOAL = "goal"
+    CANCEL = "cancel"
+    INJECT_FAULT = "inject_fault"
+
+
+class Phase(enum.Enum):
+    """Where a component is in its lifecycle, as the component itself sees it."""
+
+    CREATED = "created"
+    CONFIGURED = "configured"
+    RUNNING = "running"
+    PAUSED = "paused"
+    STOPPED = "stopped"
+
+
+class GoalStatus(enum.Enum):
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    CANCELLED = "cancelled"
+
+
+@dataclass(frozen=True)
+class GoalResult:
+    """The payload of ``component/<name>/result``: how a behavior's goal ended.
+
+    Published by the behavior; the launcher stores it as a return value in the KB.
+    When a behavior process ends with a goal still open, the launcher makes the result
+    itself (FAILED, or CANCELLED if it was asked to stop).
+    """
+
+    component: str
+    goal_id: str
+    status: GoalStatus
+    value: dict[str, Any]
+    reason: str = ""
+    stamp: float = 0.0
+
+    def to_payload(self) -> dict[str, Any]:
+        return {
+            "component": self.component,
+            "goal_id": self.goal_id,
+            "status": self.status.value,
+            "value": self.value,
+            "reason": self.reason,
+            "stamp": self.stamp,
+        }
+
+    @classmethod
+    def from_payload(cls, payload: dict[str, Any]) -> GoalResult:
+        value = payload.get("value") or {}
+        if not isinstance(value, dict):
+            raise ValueError(f"result value must be an object, not {type(value).__name__}")
+        return cls(
+            str(payload["component"]),
+            str(payload["goal_id"]),
+            GoalStatus(payload["status"]),
+            value,
+            str(payload.get("reason", "")),
+            float(payload.get("stamp", 0.0)),
+        )
+
+
+# The payload of ``component/<name>/feedback`` (behaviors, while a goal runs):
+#   {"component": str, "goal_id": str, "feedback": {...}, "stamp": float}
+
+# ``ObservationInfo.type`` is an observer type's canonical name: resources, component,
+# frequency, timeout, timing, timestamp, scores, movement (configurations may also say
+# activated, hz, value, velocity), or a plugin's type.
+
+
+@dataclass(frozen=True)
+class DiagnosisInfo:
+    """The payload of ``diagnoses``: the newest diagnosis result.
+
+    ``status`` is OK (the all-clear), DIAGNOSED, INCONSISTENT or TIMEOUT.
+    ``diagnoses`` lists subset-minimal sets of faulty nodes (or behaviors), each
+    sorted, smallest first. ``conflicts`` and ``failed`` are observers as
+    ``{type, resource, callerids}``: the observations that contradict each other
+    (INCONSISTENT) and those that failed.
+    """
+
+    status: str
+    diagnoses: tuple[tuple[str, ...], ...] = ()
+    conflicts: tuple[dict[str, Any], ...] = ()
+    failed: tuple[dict[str, Any], ...] = ()
+    elapsed: float = 0.0
+    stamp: float = 0.0
+
+    @property
+    def possibly_faulty(self) -> frozenset[str]:
+        """Every name that some diagnosis names."""
+        return frozenset(name for diagnosis in self.diagnoses for name in diagnosis)
+
+    def to_payload(self) -> dict[str, Any]:
+        return {
+            "status": self.status,
+            "diagnoses": [list(d) for d in self.diagnoses],
+            "conflicts": list(self.conflicts),
+            "failed": list(self.failed),
+            "elapsed": self.elapsed,
+            "stamp": self.stamp,
+        }
+
+    @classmethod
+    def from_payload(cls, payload: dict[str, Any]) -> DiagnosisInfo:
+        """Read a payload; raises ``KeyError``/``ValueError``/``TypeError`` if malformed."""
+        diagnoses = payload["diagnoses"]
+        if not isinstance(diagnoses, list):
+            raise TypeError("'diagnoses' must be a list")
+        return cls(
+            status=str(payload["status"]),
+            diagnoses=tuple(tuple(str(n) for n in d) for d in diagnoses),
+            conflicts=tuple(dict(c) for c in payload.get("conflicts", ())),
+            failed=tuple(dict(f) for f in payload.get("failed", ())),
+            elapsed=float(payload.get("elapsed", 0.0)),
+            stamp=float(payload.get("stamp", 0.0)),
+        )

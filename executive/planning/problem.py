@@ -1,0 +1,283 @@
+"""Build unified-planning problems from the knowledge base, and read worlds from PDDL.
+
+A planning problem is the robot's domain, the knowledge base's objects and facts
+(predicates and numeric functions) and the open goals. Expressions cross between
+dura's ground expressions (:mod:`executive.planning.expression`) and UP's ``FNode`` here, in
+both directions, and nowhere else.
+
+Deadlines: UP's timed goals say a goal holds *at* an instant, and Kairos (the default
+engine) does not accept them. A deadline means "reached by then", so it is compiled
+into what every temporal engine here accepts: a timed initial literal closes a window
+at the deadline, and an instantaneous bookkeeping action ``dura_reach_goal_<id>``,
+possible only while the window is open and the goal holds, marks the goal reached.
+The goal must also hold at the end, like every goal.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Mapping, Sequence
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from executive.planning.expression import (
+    FALSE,
+    TRUE,
+    And,
+    Arith,
+    Atom,
+    Compare,
+    Const,
+    Expression,
+    Not,
+    Or,
+    Value,
+    conjunction,
+)
+from executive.planning.goals import GoalSpec
+from knowledge.domain import parse_problem
+from knowledge.errors import DomainError, located
+from knowledge.knowledge_base import KnowledgeBase
+from knowledge.records import Fact
+
+if TYPE_CHECKING:
+    from unified_planning.model import FNode, Problem
+
+    from knowledge.description import RobotDescription
+
+BOOKKEEPING = "dura_"  # prefix of the fluents and actions compiled for deadlines
+REACH_GOAL = "dura_reach_goal_"
+
+
+@dataclass(frozen=True)
+class World:
+    """The objects (name → type) and facts a problem starts from."""
+
+    objects: Mapping[str, str] = field(default_factory=dict)
+    facts: tuple[Fact, ...] = ()
+
+
+# --- dura expressions -> UP ----------------------------------------------------------
+
+
+def to_fnode(expression: Expression, problem: Problem) -> FNode:
+    """A ground expression as a UP expression of ``problem``."""
+    em = problem.environment.expression_manager
+    e = expression
+    if isinstance(e, Const):
+        if isinstance(e.value, bool):
+            return em.Bool(e.value)
+        return em.Real(Fraction(str(e.value)))
+    if isinstance(e, (Atom, Value)):
+        fluent = problem.fluent(e.name)
+        return em.FluentExp(fluent, [em.ObjectExp(problem.object(a)) for a in e.args])
+    if isinstance(e, Not):
+        return em.Not(to_fnode(e.arg, problem))
+    if isinstance(e, And):
+        return em.And(*(to_fnode(a, problem) for a in e.args))
+    if isinstance(e, Or):
+        return em.Or(*(to_fnode(a, problem) for a in e.args))
+    if isinstance(e, Compare):
+        left, right = to_fnode(e.left, problem), to_fnode(e.right, problem)
+        ops = {"<": em.LT, "<=": em.LE, ">": em.GT, ">=": em.GE, "=": em.Equals}
+        return ops[e.op](left, right)
+    if isinstance(e, Arith):
+        args = [to_fnode(a, problem) for a in e.args]
+        if e.op == "-" and len(args) == 1:
+            return em.Minus(em.Real(Fraction(0)), args[0])
+        combine = {"+": em.Plus, "-": em.Minus, "*": em.Times, "/": em.Div}[e.op]
+        out = args[0]
+        for a in args[1:]:
+            out = combine(out, a)
+        return out
+    raise TypeError(f"not an expression: {e!r}")
+
+
+# --- UP -> dura expressions ----------------------------------------------------------
+
+
+def from_fnode(node: FNode, problem: Problem, env: Mapping[str, str] | None = None) -> Expression:
+    """A UP expression as a ground expression; ``env`` binds parameters and variables.
+
+    Quantifiers are expanded over the problem's objects.
+
+    Raises:
+        DomainError: the expression uses something dura cannot evaluate.
+    """
+    env = env or {}
+    n = node
+    if n.is_bool_constant():
+        return TRUE if n.bool_constant_value() else FALSE
+    if n.is_int_constant() or n.is_real_constant():
+        return Const(float(n.constant_value()))
+    if n.is_fluent_exp():
+        args = tuple(_object_name(a, env) for a in n.args)
+        fluent = n.fluent()
+        return Atom(fluent.name, args) if fluent.type.is_bool_type() else Value(fluent.name, args)
+    if n.is_not():
+        inner = from_fnode(n.arg(0), problem, env)
+        return Const(not inner.value) if isinstance(inner, Const) else Not(inner)
+    if n.is_and():
+        return conjunction(from_fnode(a, problem, env) for a in n.args)
+    if n.is_or():
+        return Or(tuple(from_fnode(a, problem, env) for a in n.args))
+    if n.is_implies():
+        a, b = (from_fnode(x, problem, env) for x in n.args)
+        return Or((Not(a), b))
+    if n.is_iff():
+        a, b = (from_fnode(x, problem, env) for x in n.args)
+        return Or((And((a, b)), And((Not(a), Not(b)))))
+    if n.is_exists() or n.is_forall():
+        parts = [
+            from_fnode(n.arg(0), problem, {**env, **binding})
+            for binding in bindings(n.variables(), problem)
+        ]
+        return conjunction(parts) if n.is_forall() else Or(tuple(parts))
+    if (
+        n.is_equals()
+        and not n.arg(0).type.is_bool_type()
+        and (n.arg(0).type.is_user_type() or n.arg(1).type.is_user_type())
+    ):
+        return Const(_object_name(n.arg(0), env) == _object_name(n.arg(1), env))
+    comparisons = {"is_lt": "<", "is_le": "<=", "is_equals": "="}
+    for test, op in comparisons.items():
+        if getattr(n, test)():
+            return Compare(
+                op, from_fnode(n.arg(0), problem, env), from_fnode(n.arg(1), problem, env)
+            )
+    arithmetic = {"is_plus": "+", "is_minus": "-", "is_times": "*", "is_div": "/"}
+    for test, op in arithmetic.items():
+        if getattr(n, test)():
+            return Arith(op, tuple(from_fnode(a, problem, env) for a in n.args))
+    raise DomainError(f"dura cannot evaluate '{n}' in the knowledge base")
+
+
+def _object_name(node: FNode, env: Mapping[str, str]) -> str:
+    if node.is_object_exp():
+        return str(node.object().name)
+    if node.is_parameter_exp():
+        return env[node.parameter().name]
+    if node.is_variable_exp():
+        return env[node.variable().name]
+    raise DomainError(f"dura cannot evaluate '{node}': expected an object")
+
+
+def bindings(variables: Sequence[Any], problem: Problem) -> list[dict[str, str]]:
+    out: list[dict[str, str]] = [{}]
+    for v in variables:
+        names = [o.name for o in problem.objects(v.type)]
+        out = [{**b, v.name: name} for b in out for name in names]
+    return out
+
+
+# --- problems ------------------------------------------------------------------------
+
+
+def build(
+    domain: Problem,
+    world: World,
+    goals: Sequence[GoalSpec],
+    blocked: Collection[str] = (),
+) -> Problem:
+    """A problem: the domain (a UP problem without objects), a world and goals, without
+    the ``blocked`` actions.
+
+    Raises:
+        DomainError: an object, fact or goal does not fit the domain.
+    """
+    from unified_planning.model import Fluent, GlobalStartTiming, InstantaneousAction, Object
+
+    problem = domain.clone()
+    if blocked:
+        kept = [a for a in problem.actions if a.name not in blocked]
+        problem.clear_actions()
+        problem.add_actions(kept)
+    em = problem.environment.expression_manager
+    for name, type_name in world.objects.items():
+        if problem.has_object(name):
+            continue
+        if not problem.has_type(type_name):
+            raise DomainError(f"object '{name}' has unknown type '{type_name}'")
+        problem.add_object(Object(name, problem.user_type(type_name)))
+    for fact in world.facts:
+        if not problem.has_fluent(fact.name):
+            raise DomainError(f"fact {fact}: unknown predicate or function '{fact.name}'")
+        try:
+            atom = to_fnode(Atom(fact.name, fact.args), problem)
+            value = (
+                em.Bool(fact.value)
+                if isinstance(fact.value, bool)
+                else em.Real(Fraction(str(fact.value)))
+            )
+            problem.set_initial_value(atom, value)
+        except Exception as e:  # UP raises its own errors for unknown objects and types
+            raise DomainError(f"fact {fact}: {e}") from e
+    for goal in goals:
+        target = to_fnode(goal.expression, problem)
+        problem.add_goal(target)
+        if goal.deadline is None:
+            continue
+        window = Fluent(f"{BOOKKEEPING}before_deadline_{goal.id}", environment=problem.environment)
+        reached = Fluent(f"{BOOKKEEPING}reached_{goal.id}", environment=problem.environment)
+        problem.add_fluent(window, default_initial_value=False)
+        problem.add_fluent(reached, default_initial_value=False)
+        problem.set_initial_value(window(), True)
+        problem.add_timed_effect(
+            GlobalStartTiming(Fraction(str(round(goal.deadline, 3)))), window(), False
+        )
+        reach = InstantaneousAction(f"{REACH_GOAL}{goal.id}", _env=problem.environment)
+        reach.add_precondition(target)
+        reach.add_precondition(window())
+        reach.add_effect(reached(), True)
+        problem.add_action(reach)
+        problem.add_goal(reached())
+    return problem
+
+
+def world_of(problem: Problem, domain: Problem | None = None) -> World:
+    """The objects and explicit initial facts of a parsed problem (domain constants left out)."""
+    constants = {o.name for o in domain.all_objects} if domain is not None else set()
+    objects = {o.name: str(o.type) for o in problem.all_objects if o.name not in constants}
+    facts: list[Fact] = []
+    for atom, value in problem.explicit_initial_values.items():
+        args = tuple(str(a.object().name) for a in atom.args)
+        if value.is_bool_constant():
+            if value.bool_constant_value():
+                facts.append(Fact(atom.fluent().name, args, True))
+        else:
+            facts.append(Fact(atom.fluent().name, args, float(value.constant_value())))
+    return World(objects, tuple(sorted(facts, key=lambda f: (f.name, f.args))))
+
+
+def read_world(domain: Path, problem_file: Path) -> tuple[World, Expression]:
+    """The world and the goal of a PDDL problem file.
+
+    Raises:
+        DomainError: the file cannot be read or does not fit the domain (``file:line``).
+    """
+    from knowledge.domain import parse
+
+    try:
+        text = problem_file.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise DomainError(located(problem_file, None, f"cannot read: {e}")) from e
+    problem = parse_problem(domain, text, str(problem_file))
+    goal = conjunction(from_fnode(g, problem) for g in problem.goals)
+    return world_of(problem, parse(domain)), goal
+
+
+def seed_world(kb: KnowledgeBase, robot: RobotDescription) -> bool:
+    """Load the robot's ``problem:`` file into a knowledge base that has no world yet.
+
+    Returns whether it loaded anything. The problem's goal is not submitted.
+    """
+    if robot.problem is None or kb.objects() or kb.facts():
+        return False
+    world, _ = read_world(robot.domain, robot.problem)
+    with kb.transaction():
+        for name, type_name in world.objects.items():
+            kb.add_object(name, type_name)
+        kb.update_facts(add=world.facts)
+        kb.log_event("WORLD_SEEDED", str(robot.problem), {"objects": len(world.objects)})
+    return True

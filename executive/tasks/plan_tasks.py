@@ -1,0 +1,78 @@
+"""Plan steps as tasks: the plan executer's runner on the task executor.
+
+A step of action ``a`` runs the task the robot description maps ``a`` to: its behavior,
+with a goal whose fields are filled in from the step's objects (``move_to(dock, lab)``
+→ ``{start: dock, target: lab}``), for the planned duration. The task executor reports
+back; a task the scheduler cancels fails the step with the reason, and the planner
+replans.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from typing import Any
+
+from executive.planning.partial_order import Step
+from executive.planning.plan_executer import RunningTask, StepReport, TaskRunner
+from executive.tasks.executor import Phase, TaskExecutor, TaskHandle
+from knowledge.description import RobotDescription
+from knowledge.errors import DuraError
+
+
+def behavior_goal(robot: RobotDescription, step: Step) -> dict[str, Any]:
+    """The goal a step's behavior gets: each field from a parameter or a constant."""
+    bindings = step.bindings
+    return {name: arg.resolve(bindings) for name, arg in robot.tasks[step.action].goal.items()}
+
+
+class _StepTask(RunningTask):
+    def __init__(self, handle: TaskHandle, interruptible: bool) -> None:
+        self.handle = handle
+        self.interruptible = interruptible
+
+    def pause(self) -> None:
+        with contextlib.suppress(DuraError):  # it ended meanwhile: its report follows
+            self.handle.pause()
+
+    def resume(self) -> None:
+        with contextlib.suppress(DuraError):
+            self.handle.resume()
+
+    def cancel(self) -> None:
+        self.handle.cancel("the plan no longer needs it")
+
+
+class PlanTasks(TaskRunner):
+    """Runs plan steps on the task executor."""
+
+    def __init__(self, tasks: TaskExecutor, robot: RobotDescription) -> None:
+        self.tasks = tasks
+        self.robot = robot
+
+    def run(self, step: Step, plan_id: int, report: StepReport) -> RunningTask:
+        spec = self.robot.tasks[step.action]
+        behavior = self.robot.behaviors[spec.behavior]
+        seen: set[Phase] = set()
+
+        def changed(handle: TaskHandle) -> None:
+            phase = handle.phase
+            if phase is Phase.RUNNING and Phase.RUNNING not in seen:
+                report.started()
+            elif phase is Phase.SUCCEEDED:
+                report.succeeded(handle.result)
+            elif phase is Phase.FAILED:
+                report.failed(handle.reason)
+            elif phase is Phase.CANCELLED and "the plan no longer needs it" not in handle.reason:
+                report.failed(f"cancelled: {handle.reason}")
+            seen.add(phase)
+
+        handle = self.tasks.start_task(
+            behavior.name,
+            behavior_goal(self.robot, step),
+            name=step.label,
+            duration=step.duration,
+            listener=changed,
+            plan_id=plan_id,
+            step=step.index,
+        )
+        return _StepTask(handle, behavior.interruptible)

@@ -1,0 +1,262 @@
+"""A robot run by a real ``dura run`` process, driven over the bus: for tests and the demo.
+
+:class:`RobotProcess` starts the executive of a robot description in a folder of its
+own (knowledge base, logs, free loopback endpoint), waits until it answers, and offers
+what a test of a domain needs: submit goals, wait for their outcome, inject faults into
+components, read the event log and the facts. It can also kill the executive (SIGKILL)
+and start it again on the same knowledge base, to test recovery.
+
+The pytest plugin :mod:`executive.testing` hands it to tests as the ``dura_robot``
+fixture.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from executive.bus.keys import api, component
+from executive.bus.payloads import Command
+from executive.bus.session import Bus
+from knowledge.errors import BusError, DuraError
+from knowledge.records import GoalState
+from knowledge.robot import load_robot
+
+START_TIMEOUT = 60.0  # seconds for the executive to answer after it was started
+
+
+def free_endpoint() -> str:
+    """A loopback TCP endpoint nobody listens on (yet)."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return f"tcp/127.0.0.1:{s.getsockname()[1]}"
+
+
+def robot_variant(description: Path, folder: Path, changes: Mapping[str, Any]) -> Path:
+    """Write a copy of a robot description into ``folder`` with ``changes`` merged in.
+
+    ``changes`` is nested like the YAML, e.g. ``{"behaviors": {"move_to": {"max_restarts":
+    0}}}``; a ``None`` value removes a key. The files beside the original (components,
+    problem, integrity rules) are linked into ``folder`` and the domain path is made
+    absolute, so the copy runs like the original. Returns the copy's path.
+    """
+    description = Path(description).resolve()
+    folder = Path(folder).resolve()
+    folder.mkdir(parents=True, exist_ok=True)
+    data = yaml.safe_load(description.read_text(encoding="utf-8"))
+    data["domain"] = str((description.parent / data["domain"]).resolve())
+    _merge(data, changes)
+    for entry in description.parent.iterdir():
+        target = folder / entry.name
+        if entry != description and not target.exists() and not entry.name.startswith("."):
+            target.symlink_to(entry)
+    copy = folder / description.name
+    copy.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+    return copy
+
+
+def _merge(into: dict[str, Any], changes: Mapping[str, Any]) -> None:
+    for key, value in changes.items():
+        if value is None:
+            into.pop(key, None)
+        elif isinstance(value, Mapping) and isinstance(into.get(key), dict):
+            _merge(into[key], value)
+        else:
+            into[key] = value
+
+
+class GoalEnded(AssertionError):
+    """A goal ended other than expected, or did not end in time (a test failure)."""
+
+
+class RobotProcess:
+    """The executive of one robot, as a child process (see the module docstring).
+
+    Args:
+        description: the robot description (YAML).
+        folder: where the knowledge base, the logs and the executive's output go.
+        endpoint: where the executive listens (default: a free loopback port).
+    """
+
+    def __init__(self, description: Path, folder: Path, endpoint: str | None = None) -> None:
+        self.description = Path(description).resolve()
+        self.robot = load_robot(self.description)
+        self.folder = Path(folder)
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.endpoint = endpoint or free_endpoint()
+        self.kb_path = self.folder / f"{self.robot.name}.db"
+        self.output = self.folder / "executive.log"
+        self._process: subprocess.Popen[bytes] | None = None
+        self._bus: Bus | None = None
+
+    # --- lifecycle -----------------------------------------------------------------------
+
+    def __enter__(self) -> RobotProcess:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def start(self, timeout: float = START_TIMEOUT) -> None:
+        """Start the executive and wait until its bus API answers."""
+        if self._process is not None:
+            raise DuraError(f"the executive of '{self.robot.name}' runs already")
+        argv = [sys.executable, "-m", "executive.cli", "run", str(self.description)]
+        argv += ["--endpoint", self.endpoint, "--db", str(self.kb_path)]
+        argv += ["--log-dir", str(self.folder / "logs"), "--grace", "1"]
+        with self.output.open("ab") as out:
+            self._process = subprocess.Popen(
+                argv, cwd=self.folder, stdout=out, stderr=subprocess.STDOUT, env=os.environ.copy()
+            )
+        deadline = time.monotonic() + timeout
+        while True:
+            if self._process.poll() is not None:
+                code = self._process.returncode
+                self._close()
+                raise DuraError(f"the executive exited with {code} at start:\n{self.log_tail()}")
+            try:
+                if self._bus is None:
+                    self._bus = Bus(self.robot.name, name="harness", endpoint=self.endpoint)
+                self.request("status", timeout=2.0)
+                return
+            except BusError:
+                if time.monotonic() > deadline:
+                    self.stop()
+                    raise DuraError(
+                        f"the executive did not answer within {timeout:g} s:\n{self.log_tail()}"
+                    ) from None
+                time.sleep(0.1)
+
+    def stop(self, timeout: float = 30.0) -> int | None:
+        """Stop the executive as Ctrl-C does (SIGTERM); returns its exit code."""
+        process = self._process
+        if process is None:
+            return None
+        if process.poll() is None:
+            process.send_signal(signal.SIGTERM)
+            try:
+                process.wait(timeout)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+        self._close()
+        return process.returncode
+
+    def kill(self) -> None:
+        """SIGKILL the executive, as a crash would; its components end by themselves."""
+        process = self._process
+        if process is not None:
+            process.kill()
+            process.wait()
+        self._close()
+
+    def _close(self) -> None:
+        if self._bus is not None:
+            self._bus.close()
+        self._bus, self._process = None, None
+
+    @property
+    def running(self) -> bool:
+        return self._process is not None and self._process.poll() is None
+
+    def log_tail(self, lines: int = 20) -> str:
+        with contextlib.suppress(OSError):
+            return "\n".join(self.output.read_text(errors="replace").splitlines()[-lines:])
+        return ""
+
+    # --- the bus API ---------------------------------------------------------------------
+
+    @property
+    def bus(self) -> Bus:
+        if self._bus is None:
+            raise DuraError(f"the executive of '{self.robot.name}' does not run")
+        return self._bus
+
+    def request(
+        self, verb: str, payload: Mapping[str, Any] | None = None, timeout: float = 30.0
+    ) -> dict[str, Any]:
+        """Ask the executive (``executive/api/<verb>``); raises BusError on an error reply."""
+        return self.bus.request(api(verb), dict(payload or {}), timeout=timeout)
+
+    def submit_goal(
+        self, expression: str, *, priority: int = 0, deadline: float | None = None
+    ) -> int:
+        """Submit a goal; returns its id. Raises BusError if the executive refuses it."""
+        payload: dict[str, Any] = {"expression": expression, "priority": priority}
+        if deadline is not None:
+            payload["deadline"] = deadline
+        return int(self.request("goal/add", payload)["goal"]["id"])
+
+    def goal(self, goal_id: int) -> dict[str, Any]:
+        goal: dict[str, Any] = self.request("goal/show", {"id": goal_id})["goal"]
+        return goal
+
+    def goals(self) -> list[dict[str, Any]]:
+        goals: list[dict[str, Any]] = self.request("goal/list")["goals"]
+        return goals
+
+    def wait_for(
+        self, goal_id: int, state: str | GoalState = GoalState.ACHIEVED, timeout: float = 60.0
+    ) -> dict[str, Any]:
+        """Wait until a goal is in ``state``; returns the goal.
+
+        Raises:
+            GoalEnded: the goal ended in another state, or ``timeout`` passed (the
+                message has the goal's state and reason and the latest events).
+        """
+        wanted = GoalState(state)
+        deadline = time.monotonic() + timeout
+        while True:
+            goal = self.goal(goal_id)
+            now = GoalState(goal["state"])
+            if now is wanted:
+                return goal
+            if not now.is_open or time.monotonic() > deadline:
+                why = f": {goal['reason']}" if goal["reason"] else ""
+                happened = "\n".join(
+                    f"  {e['kind']} {e['subject']} {e['data']}" for e in self.events()[-15:]
+                )
+                raise GoalEnded(
+                    f"goal {goal_id} {goal['expression']} is {now.value}{why}, not "
+                    f"{wanted.value}; the latest events:\n{happened}"
+                )
+            time.sleep(0.05)
+
+    def cancel_goal(self, goal_id: int) -> None:
+        self.request("goal/cancel", {"id": goal_id})
+
+    def inject_fault(self, name: str, mode: str, **options: Any) -> None:
+        """Make a running component misbehave (see :mod:`executive.sdk.fault_injection`)."""
+        fault = {"mode": mode, **options}
+        self.bus.request(
+            component(name, "cmd"), {"cmd": Command.INJECT_FAULT.value, "fault": fault}
+        )
+
+    def events(self, kind: str | None = None, limit: int = 10_000) -> list[dict[str, Any]]:
+        """The event log, oldest first (only events of ``kind`` if given)."""
+        payload: dict[str, Any] = {"limit": limit}
+        if kind is not None:
+            payload["kind"] = kind
+        events: list[dict[str, Any]] = self.request("events", payload)["events"]
+        return events
+
+    def facts(self, pattern: str = "") -> list[str]:
+        """The true facts and values as text, e.g. ``(robot_at dock)``."""
+        return [f["text"] for f in self.request("state/get", {"pattern": pattern})["facts"]]
+
+    def set_fact(self, fact: str) -> None:
+        self.request("state/set", {"fact": fact})
+
+    def status(self) -> dict[str, Any]:
+        return self.request("status")

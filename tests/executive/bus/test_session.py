@@ -1,0 +1,149 @@
+"""The bus between two real processes: pub/sub with caller ids, request/reply, errors."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+
+import pytest
+import zenoh
+
+from executive.bus.session import Bus, Message, check_name, session_config
+from knowledge.errors import BusError
+from tests.conftest import ROOT, wait_for
+
+
+@pytest.fixture
+def executive_bus(endpoint: str) -> Iterator[Bus]:
+    with Bus("testbot", name="executive", endpoint=endpoint, listen=True) as bus:
+        yield bus
+
+
+@pytest.fixture
+def peer(executive_bus: Bus) -> Iterator[subprocess.Popen[str]]:
+    process = subprocess.Popen(
+        [sys.executable, "-m", "tests.executive.bus.bus_peer", "testbot", executive_bus.endpoint],
+        stdout=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+    )
+    assert process.stdout is not None
+    assert process.stdout.readline().strip() == "ready"
+    # Its queryables reach the router a moment after it says so: wait until they answer.
+    assert wait_for(lambda: _answers(executive_bus), 10.0)
+    yield process
+    try:
+        executive_bus.request("test/stop", timeout=2)
+    except BusError:
+        process.kill()
+    process.wait(10)
+    process.stdout.close()
+
+
+def _answers(bus: Bus) -> bool:
+    try:
+        bus.request("test/echo", timeout=0.5)
+    except BusError:
+        return False
+    return True
+
+
+def test_a_request_to_another_process_gets_its_reply(executive_bus: Bus, peer: object) -> None:
+    reply = executive_bus.request("test/echo", {"x": [1, 2]})
+    assert reply == {"echo": {"x": [1, 2]}, "from": "peer"}
+
+
+def test_an_error_in_the_other_process_comes_back_as_its_message(
+    executive_bus: Bus, peer: object
+) -> None:
+    with pytest.raises(BusError, match=r"^refused: because$"):
+        executive_bus.request("test/echo", {"fail": "because"})
+
+
+def test_messages_from_another_process_carry_its_caller_id_and_stamps(
+    executive_bus: Bus, peer: object
+) -> None:
+    got: list[Message] = []
+    executive_bus.subscribe("topic/chatter", got.append)
+    # A new subscription reaches the publisher a moment later: wait until one arrives.
+    assert wait_for(lambda: executive_bus.request("test/chatter", {"count": 1}) and got, 10.0)
+    assert executive_bus.request("test/chatter", {"count": 50, "run": "main"}) == {"sent": 50}
+    assert wait_for(lambda: len([m for m in got if m.payload["run"] == "main"]) == 50)
+    main = [m for m in got if m.payload["run"] == "main"]
+    assert [m.payload["i"] for m in main] == list(range(50))
+    first = main[0]
+    assert first.caller_id == "peer" and first.key == "topic/chatter"
+    assert first.stamp is not None and first.sent is not None
+    assert abs(first.sent - first.stamp) < 1.0 and first.received >= first.stamp
+
+
+def test_a_malformed_payload_is_dropped_and_the_subscriber_lives_on(
+    executive_bus: Bus, endpoint: str
+) -> None:
+    got: list[Message] = []
+    executive_bus.subscribe("topic/data", got.append)
+    with zenoh.open(session_config(connect=(endpoint,))) as raw:
+        for payload in (b"not json", b"[1, 2]", b'{"ok": 1}'):
+            raw.put("dura/testbot/topic/data", payload)
+        assert wait_for(lambda: len(got) == 1)
+    time.sleep(0.1)
+    assert [m.payload for m in got] == [{"ok": 1}]
+
+
+def test_a_failing_handler_does_not_stop_the_subscription(
+    executive_bus: Bus, endpoint: str
+) -> None:
+    got: list[int] = []
+
+    def handler(message: Message) -> None:
+        if message.payload["i"] == 0:
+            raise RuntimeError("boom")
+        got.append(message.payload["i"])
+
+    executive_bus.subscribe("topic/x", handler)
+    with Bus("testbot", name="other", endpoint=endpoint) as other:
+        other.publish("topic/x", {"i": 0})
+        other.publish("topic/x", {"i": 1})
+        assert wait_for(lambda: got == [1])
+
+
+def test_a_request_nobody_serves_times_out_with_a_clear_error(executive_bus: Bus) -> None:
+    with pytest.raises(BusError, match=r"no answer on dura/testbot/nobody within 0.3 s"):
+        executive_bus.request("nobody", timeout=0.3)
+
+
+def test_connecting_without_an_executive_fails_at_once(endpoint: str) -> None:
+    started = time.monotonic()
+    with pytest.raises(BusError, match=f"no executive for robot 'testbot' at {endpoint}"):
+        Bus("testbot", endpoint=endpoint)
+    assert time.monotonic() - started < 5
+
+
+def test_a_second_executive_cannot_listen_on_the_same_endpoint(executive_bus: Bus) -> None:
+    with pytest.raises(BusError, match="is an executive already running"):
+        Bus("testbot", endpoint=executive_bus.endpoint, listen=True)
+
+
+def test_liveliness_tells_when_a_process_vanishes(executive_bus: Bus, endpoint: str) -> None:
+    changes: list[tuple[str, bool]] = []
+    lock = threading.Lock()
+
+    def on_change(key: str, alive: bool) -> None:
+        with lock:
+            changes.append((key, alive))
+
+    executive_bus.watch_alive("alive/**", on_change)
+    other = Bus("testbot", name="lidar", endpoint=endpoint)
+    other.declare_alive("alive/lidar")
+    assert wait_for(lambda: ("alive/lidar", True) in changes)
+    other.close()
+    assert wait_for(lambda: ("alive/lidar", False) in changes)
+
+
+@pytest.mark.parametrize("name", ["a*b", "x y", "", "a$b", "a//b"])
+def test_names_that_are_not_valid_keys_are_refused(name: str) -> None:
+    with pytest.raises(BusError, match="invalid"):
+        check_name(name)

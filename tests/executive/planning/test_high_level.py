@@ -1,0 +1,190 @@
+"""The high level as a service: goals, plans, state and events over the bus and the CLI.
+
+A real bus, knowledge base and Kairos worker; the scripted runner stands in for the
+task executor (tested on its own), so these tests are about the goal interface.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from executive.bus.keys import EVENTS
+from executive.bus.service import Context
+from executive.bus.session import Bus
+from executive.planning.high_level import HighLevel
+from knowledge.knowledge_base import KnowledgeBase
+from knowledge.records import Fact, GoalState
+from knowledge.robot import load_robot
+from tests.conftest import USECASE, run_dura, wait_for
+from tests.executive.planning.scripted_runner import ScriptedRunner
+
+Run = Callable[..., subprocess.CompletedProcess[str]]
+
+
+@dataclass
+class Robot:
+    kb: KnowledgeBase
+    bus: Bus
+    runner: ScriptedRunner
+    high: HighLevel
+    dura: Run
+
+
+@pytest.fixture
+def robot(tmp_path: Path, endpoint: str) -> Iterator[Robot]:
+    description = load_robot(USECASE)
+    runner = ScriptedRunner(delay=0.05)
+    with (
+        Bus(description.name, name="executive", endpoint=endpoint, listen=True) as bus,
+        KnowledgeBase(tmp_path / "kb.db") as kb,
+    ):
+        high = HighLevel(Context(description, bus, kb), runner)
+        high.start()
+        try:
+
+            def dura(*args: str) -> subprocess.CompletedProcess[str]:
+                return run_dura(*args, "--robot", str(USECASE), "--endpoint", endpoint)
+
+            yield Robot(kb, bus, runner, high, dura)
+        finally:
+            high.stop()
+
+
+def state_of(robot: Robot, goal_id: int) -> GoalState:
+    return robot.kb.goal(goal_id).state
+
+
+def test_goals_submitted_through_the_cli_are_planned_executed_and_achieved(
+    robot: Robot,
+) -> None:
+    heard: list[dict[str, object]] = []
+    robot.bus.subscribe(EVENTS, lambda m: heard.append(m.payload))
+    done = robot.dura("goal", "add", "(picture_taken lab)", "--priority", "2", "--json")
+    assert done.returncode == 0, done.stderr
+    goal = json.loads(done.stdout)
+    assert (goal["expression"], goal["priority"], goal["source"]) == (
+        "(picture_taken lab)",
+        2,
+        "user",
+    )
+    assert wait_for(lambda: state_of(robot, goal["id"]) is GoalState.ACHIEVED, 60)
+    assert robot.runner.labels() == ["move_to(dock, lab)", "take_picture(lab)"]
+    listed = json.loads(robot.dura("goal", "list", "--json").stdout)["goals"]
+    assert [(g["id"], g["state"]) for g in listed] == [(goal["id"], "achieved")]
+    shown = robot.dura("goal", "show", str(goal["id"]))
+    assert "state achieved" in shown.stdout and "GOAL_ACHIEVED" in shown.stdout
+    kinds = [e["kind"] for e in heard]
+    for kind in ("GOAL_ADDED", "PLAN_START", "DISPATCH", "START", "END", "GOAL_ACHIEVED"):
+        assert kind in kinds
+    trace = robot.dura("events", "-n", "100")
+    assert "DISPATCH" in trace.stdout and "take_picture(lab)" in trace.stdout
+
+
+def test_a_goal_naming_an_unknown_object_is_refused_in_one_line_and_not_stored(
+    robot: Robot,
+) -> None:
+    done = robot.dura("goal", "add", "(picture_taken lob)")
+    assert done.returncode == 1
+    assert done.stderr.startswith("dura: goal '(picture_taken lob)': unknown object 'lob'")
+    assert len(done.stderr.splitlines()) == 1
+    assert robot.kb.goals() == []
+
+
+def test_the_plan_is_shown_as_a_timeline_with_the_state_of_each_step(robot: Robot) -> None:
+    robot.runner.held.add("take_picture")
+    goal = json.loads(robot.dura("goal", "add", "(picture_taken office)", "--json").stdout)
+    robot.runner.wait_for("take_picture(office)")
+    shown = robot.dura("plan", "show")
+    assert shown.returncode == 0, shown.stderr
+    lines = shown.stdout.splitlines()
+    assert lines[0].startswith("plan 1: executing, by kairos, for goals 1")
+    assert lines[1].split()[:6] == ["#", "START", "DURATION", "STEP", "STATE", "TIMELINE"]
+    assert "take_picture(office)" in shown.stdout and "running" in shown.stdout
+    status = json.loads(robot.dura("status", "--json").stdout)
+    assert [g["id"] for g in status["goals"]] == [goal["id"]]
+    assert status["plan"]["id"] == 1
+    robot.dura("goal", "cancel", str(goal["id"]))
+    assert state_of(robot, goal["id"]) is GoalState.CANCELLED
+
+
+def test_facts_and_objects_are_read_and_changed_through_the_cli(robot: Robot) -> None:
+    shown = robot.dura("state", "get", "(robot_at *)")
+    assert shown.stdout.splitlines()[1].split() == ["(robot_at", "dock)", "true"]
+    assert robot.dura("object", "add", "hall", "place").returncode == 0
+    assert robot.kb.objects()["hall"] == "place"
+    assert robot.dura("state", "set", "(photographable hall)").returncode == 0
+    assert robot.dura("state", "set", "(= (travel_time dock hall) 2)").returncode == 0
+    values = json.loads(robot.dura("state", "get", "travel_time", "--json").stdout)["facts"]
+    assert {"name": "travel_time", "args": ["dock", "hall"], "value": 2.0} in [
+        {k: f[k] for k in ("name", "args", "value")} for f in values
+    ]
+    assert robot.dura("state", "unset", "(photographable hall)").returncode == 0
+    assert all(f.name != "photographable" or f.args != ("hall",) for f in robot.kb.facts())
+    wrong = robot.dura("state", "set", "(robot_at nowhere)")
+    assert wrong.returncode == 1 and "unknown object 'nowhere'" in wrong.stderr
+    wrong = robot.dura("object", "add", "shelf", "furniture")
+    assert wrong.returncode == 1 and "unknown type 'furniture'" in wrong.stderr
+    assert "shelf" not in robot.kb.objects()
+
+
+def test_a_failed_task_is_replanned_and_the_goal_still_achieved(robot: Robot) -> None:
+    robot.runner.fail_once["move_to(dock, lab)"] = "the base stalled"
+    goal = json.loads(robot.dura("goal", "add", "(robot_at lab)", "--json").stdout)
+    assert wait_for(lambda: state_of(robot, goal["id"]) is GoalState.ACHIEVED, 60)
+    kinds = [e.kind for e in robot.kb.events()]
+    assert "FAIL" in kinds and "REPLAN" in kinds
+
+
+def test_an_integrity_goal_is_posted_when_lidar_becomes_permanently_faulty(
+    robot: Robot,
+) -> None:
+    robot.kb.update_facts(add=[Fact("robot_at", ("lab",))], remove=[Fact("robot_at", ("dock",))])
+    robot.kb.register_component("lidar", 1.0)
+    robot.kb.mark_permanent_fault("lidar", "three faults")
+    assert wait_for(lambda: any(g.source == "integrity" for g in robot.kb.goals()), 30)
+    goal = next(g for g in robot.kb.goals() if g.source == "integrity")
+    assert (goal.expression, goal.priority) == ("(robot_at dock)", 10)
+    assert wait_for(lambda: state_of(robot, goal.id) is GoalState.ACHIEVED, 60)
+
+
+def test_events_follow_prints_new_events_as_they_happen(robot: Robot, endpoint: str) -> None:
+    follower = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "executive.cli",
+            "events",
+            "--follow",
+            "-n",
+            "0",
+            "--robot",
+            str(USECASE),
+            "--endpoint",
+            endpoint,
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert follower.stdout is not None
+        time.sleep(2.0)  # let it subscribe
+        robot.dura("goal", "add", "(picture_taken lab)")
+        line = follower.stdout.readline()
+        assert "GOAL_ADDED" in line and "goal 1" in line
+    finally:
+        follower.terminate()
+        follower.wait(10)
+
+
+def test_without_an_executive_goal_commands_say_so(endpoint: str) -> None:
+    done = run_dura("goal", "list", "--robot", str(USECASE), "--endpoint", endpoint)
+    assert done.returncode == 1
+    assert done.stderr.startswith(f"dura: no executive for robot 'usecase' at {endpoint}")

@@ -1,0 +1,228 @@
+"""The plan executer with a scripted task runner, a real knowledge base and real plans."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+
+import pytest
+
+from executive.planning.expression import Atom, Const
+from executive.planning.goals import GoalSpec, submit
+from executive.planning.partial_order import Effect, PartialOrderPlan, Step
+from executive.planning.plan_executer import ExecutionLimits, PlanExecuter
+from executive.planning.planner import Planner, PlanningTask
+from executive.planning.problem import World
+from knowledge.knowledge_base import KnowledgeBase
+from knowledge.records import Fact, GoalState, PlanState
+from tests.executive.planning.planning_cases import (
+    USECASE_DOMAIN,
+    expr,
+    kairos_fixture,  # noqa: F401 (a fixture)
+    usecase_domain,
+    usecase_kb_fixture,  # noqa: F401 (a fixture)
+)
+from tests.executive.planning.scripted_runner import ScriptedRunner
+
+TASKS = ("move_to", "take_picture")
+
+
+def eventually(check: Callable[[], bool], timeout: float = 20.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not check():
+        if time.monotonic() > deadline:
+            raise AssertionError("condition not met in time")
+        time.sleep(0.01)
+
+
+class Run:
+    """An executer on the use-case KB, with the replan requests it made."""
+
+    def __init__(self, kb: KnowledgeBase, runner: ScriptedRunner, **options: object) -> None:
+        self.kb = kb
+        self.runner = runner
+        self.replans: list[str] = []
+        tasks = options.pop("tasks", TASKS)
+        self.executer = PlanExecuter(kb, runner, tasks, self.replans.append, **options)  # type: ignore[arg-type]
+        self.executer.start()
+
+    def plan(self, kairos: Planner, *goals: str) -> tuple[PartialOrderPlan, int, list[GoalSpec]]:
+        domain = usecase_domain()
+        specs = [GoalSpec(submit(self.kb, domain, g).id, expr(g)) for g in goals]
+        world = World(self.kb.objects(), tuple(self.executer.planning_facts()))
+        result = kairos.solve(PlanningTask(USECASE_DOMAIN, world, tuple(specs)))
+        assert result.plan is not None, result.log
+        stored = self.kb.store_plan(
+            result.plan.records(), engine="kairos", goal_ids=[g.id for g in specs]
+        )
+        return result.plan, stored.id, specs
+
+    def execute(self, kairos: Planner, *goals: str) -> tuple[PartialOrderPlan, int, list[GoalSpec]]:
+        """Plan for goals and run the plan."""
+        plan, plan_id, specs = self.plan(kairos, *goals)
+        self.executer.execute(plan, plan_id, specs)
+        return plan, plan_id, specs
+
+    def kinds(self) -> list[tuple[str, str]]:
+        return [
+            (e.kind, e.subject)
+            for e in self.kb.events()
+            if e.kind in ("DISPATCH", "START", "END", "FAIL", "CANCEL", "REPLAN")
+        ]
+
+
+@pytest.fixture
+def run(usecase_kb: KnowledgeBase) -> Iterator[Callable[..., Run]]:
+    made: list[Run] = []
+
+    def make(runner: ScriptedRunner | None = None, **options: object) -> Run:
+        r = Run(usecase_kb, runner or ScriptedRunner(), **options)
+        made.append(r)
+        return r
+
+    yield make
+    for r in made:
+        r.executer.stop()
+
+
+def test_steps_run_in_order_their_effects_change_the_facts_and_the_goals_are_achieved(
+    run: Callable[..., Run], kairos: Planner
+) -> None:
+    r = run()
+    plan, plan_id, _goals = r.execute(kairos, "(picture_taken lab)", "(robot_at office)")
+    eventually(lambda: r.kb.plan(plan_id).state is PlanState.SUCCEEDED)
+    assert [g.state for g in r.kb.goals()] == [GoalState.ACHIEVED, GoalState.ACHIEVED]
+    facts = r.kb.facts()
+    assert Fact("picture_taken", ("lab",)) in facts
+    assert Fact("robot_at", ("office",)) in facts
+    assert Fact("robot_at", ("dock",)) not in facts
+    kinds = r.kinds()
+    labels = [s.label for s in plan.steps]
+    assert kinds == [(k, label) for label in labels for k in ("DISPATCH", "START", "END")]
+    assert r.replans == []
+    assert [e.kind for e in r.kb.events(kind="PLAN_START")] == ["PLAN_START"]
+
+
+def test_a_failed_step_asks_for_a_new_plan_with_the_reason(
+    run: Callable[..., Run], kairos: Planner
+) -> None:
+    r = run(ScriptedRunner(fail={"take_picture(lab)": "the camera is faulty"}))
+    _plan, plan_id, goals = r.execute(kairos, "(picture_taken lab)")
+    eventually(lambda: bool(r.replans))
+    assert r.replans == ["step take_picture(lab) failed: the camera is faulty"]
+    plan_record = r.kb.plan(plan_id)
+    assert plan_record.state is PlanState.FAILED
+    assert ("FAIL", "take_picture(lab)") in r.kinds()
+    assert r.kb.goal(goals[0].id).state is GoalState.EXECUTING
+
+
+def test_a_running_step_whose_over_all_condition_breaks_fails(
+    run: Callable[..., Run], kairos: Planner
+) -> None:
+    runner = ScriptedRunner(held={"move_to"})
+    r = run(runner)
+    _plan, _plan_id, _goals = r.execute(kairos, "(robot_at lab)")
+    task = runner.wait_for("move_to(dock, lab)")
+    r.kb.unset_fact(Fact("connected", ("dock", "lab")))
+    r.executer.facts_changed()
+    eventually(lambda: bool(r.replans))
+    assert r.replans == ["over-all condition (connected dock lab) no longer holds"]
+    assert task.calls == ["cancel"]
+
+
+def test_a_step_running_past_its_duration_and_the_margin_times_out(
+    run: Callable[..., Run],
+) -> None:
+    runner = ScriptedRunner(held={"move_to"})
+    r = run(runner, limits=ExecutionLimits(margin=0.2, relative=0.0))
+    step = Step(0, "move_to", ("dock", "lab"), ("from", "to"), 0.0, 0.1,
+                at_start=Atom("robot_at", ("dock",)))  # fmt: skip
+    plan_id = r.kb.store_plan(PartialOrderPlan((step,)).records()).id
+    r.executer.execute(PartialOrderPlan((step,)), plan_id, [])
+    eventually(lambda: bool(r.replans))
+    assert r.replans == [
+        "step move_to(dock, lab) timed out: still running after 0.3 s (expected 0.1 s)"
+    ]
+    assert runner.wait_for("move_to(dock, lab)").calls == ["cancel"]
+
+
+def test_pausing_pauses_interruptible_tasks_and_waits_for_critical_ones(
+    run: Callable[..., Run], kairos: Planner
+) -> None:
+    runner = ScriptedRunner(held={"move_to", "take_picture"}, critical={"take_picture"})
+    r = run(runner)
+    _, plan_id, _ = r.execute(kairos, "(robot_at lab)")
+    move = runner.wait_for("move_to(dock, lab)")
+    assert r.executer.pause(timeout=10)
+    assert move.calls == ["pause"]
+    status = r.executer.status()
+    assert (status["plan"], status["paused"]) == (plan_id, True)
+    assert [s["state"] for s in status["steps"]] == ["paused"]
+    # the planner sees the robot where the paused step started
+    assert Fact("robot_at", ("dock",)) in r.executer.planning_facts()
+    assert Fact("robot_at", ("dock",)) not in r.kb.facts()
+    r.executer.resume()
+    assert move.calls == ["pause", "resume"]
+    move.end(None)
+    eventually(lambda: r.kb.plan(plan_id).state is PlanState.SUCCEEDED)
+
+    _plan, plan_id, _goals = r.execute(kairos, "(picture_taken lab)")
+    picture = runner.wait_for("take_picture(lab)")
+    assert not r.executer.pause(timeout=0.3)  # a critical task is not interrupted
+    assert picture.calls == []
+    picture.end(None)
+    assert r.executer.pause(timeout=10)
+    assert r.kb.plan(plan_id).state is PlanState.SUCCEEDED
+
+
+def test_a_new_plan_continues_a_paused_task_that_is_its_first_step_and_cancels_the_rest(
+    run: Callable[..., Run], kairos: Planner
+) -> None:
+    runner = ScriptedRunner(held={"move_to"})
+    r = run(runner)
+    _plan, _plan_id, _goals = r.execute(kairos, "(robot_at lab)")
+    move = runner.wait_for("move_to(dock, lab)")
+    assert r.executer.pause(timeout=10)
+    # replanned for the same goal: the same first step continues
+    _plan2, plan2_id, _goals2 = r.execute(kairos, "(robot_at lab)")
+    assert move.calls == ["pause", "resume"]
+    move.end(None)
+    eventually(lambda: r.kb.plan(plan2_id).state is PlanState.SUCCEEDED)
+    assert len(runner.tasks) == 1
+
+    # now a plan that starts elsewhere: the paused step is cancelled and undone
+    plan3, _plan3_id, _goals3 = r.execute(kairos, "(robot_at office)")
+    first = runner.wait_for(plan3.steps[0].label)
+    assert r.executer.pause(timeout=10)
+    plan4 = PartialOrderPlan(())
+    r.executer.execute(plan4, r.kb.store_plan(()).id, [])
+    assert first.calls == ["pause", "cancel"]
+    assert Fact("robot_at", ("lab",)) in r.kb.facts()  # its at-start effect was undone
+    assert ("CANCEL", plan3.steps[0].label) in r.kinds()
+
+
+def test_an_action_without_a_task_completes_at_once_with_its_effects(
+    run: Callable[..., Run],
+) -> None:
+    r = run(tasks=())
+    step = Step(0, "move_to", ("dock", "lab"), ("from", "to"), 0.0, 4.0,
+                at_start=Atom("robot_at", ("dock",)),
+                start_effects=(Effect("robot_at", ("dock",), Const(False)),),
+                end_effects=(Effect("robot_at", ("lab",), Const(True)),))  # fmt: skip
+    plan_id = r.kb.store_plan(PartialOrderPlan((step,)).records()).id
+    r.executer.execute(PartialOrderPlan((step,)), plan_id, [])
+    eventually(lambda: r.kb.plan(plan_id).state is PlanState.SUCCEEDED)
+    assert r.runner.tasks == []
+    assert Fact("robot_at", ("lab",)) in r.kb.facts()
+
+
+def test_a_step_that_cannot_start_makes_the_plan_fail(
+    run: Callable[..., Run], kairos: Planner
+) -> None:
+    r = run()
+    plan, plan_id, goals = r.plan(kairos, "(robot_at lab)")
+    r.kb.update_facts(remove=[Fact("robot_at", ("dock",))], add=[Fact("robot_at", ("office",))])
+    r.executer.execute(plan, plan_id, goals)
+    eventually(lambda: bool(r.replans))
+    assert r.replans == ["step move_to(dock, lab) cannot start: (robot_at dock) does not hold"]
+    assert r.runner.tasks == []
