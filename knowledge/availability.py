@@ -14,7 +14,7 @@ from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass
 from functools import cached_property
 
-from knowledge.description import Functionality, RobotDescription
+from knowledge.description import FunctionalitySpec, RobotDescription
 
 
 @dataclass(frozen=True)
@@ -24,12 +24,14 @@ class Availability:
     Build it with :meth:`of`.
     """
 
-    functionalities: Mapping[str, Functionality]
+    functionalities: Mapping[str, FunctionalitySpec]
     faulty: frozenset[str]
     usable: frozenset[str]
 
     @classmethod
-    def of(cls, functionalities: Iterable[Functionality], faulty: Collection[str]) -> Availability:
+    def of(
+        cls, functionalities: Iterable[FunctionalitySpec], faulty: Collection[str]
+    ) -> Availability:
         """Decide usability as a least fixpoint, so a cycle of requirements never runs."""
         by_name = {f.name: f for f in functionalities}
         usable: set[str] = set()
@@ -47,7 +49,7 @@ class Availability:
             changed = bool(fresh)
         return cls(by_name, frozenset(faulty) & by_name.keys(), frozenset(usable))
 
-    def providers(self, capability: str) -> list[Functionality]:
+    def providers(self, capability: str) -> list[FunctionalitySpec]:
         """The functionalities that provide a capability, usable or not, best rated first."""
         found = [f for f in self.functionalities.values() if capability in f.provides]
         return sorted(found, key=lambda f: (-f.rating, f.name))

@@ -47,7 +47,7 @@ class ObserverSpec:
 
 
 @dataclass(frozen=True)
-class Component:
+class ComponentSpec:
     """What functionalities and behaviors have in common."""
 
     name: str
@@ -71,7 +71,7 @@ class Component:
 
 
 @dataclass(frozen=True)
-class Functionality(Component):
+class FunctionalitySpec(ComponentSpec):
     """A continuously running component that provides capabilities."""
 
     provides: tuple[str, ...] = ()
@@ -85,7 +85,7 @@ class Functionality(Component):
 
 
 @dataclass(frozen=True)
-class Behavior(Component):
+class BehaviorSpec(ComponentSpec):
     """A component that executes one goal and returns a result."""
 
     interruptible: bool = True
@@ -132,8 +132,8 @@ class RobotDescription:
     name: str
     path: Path
     domain: Path
-    functionalities: Mapping[str, Functionality] = field(default_factory=dict)
-    behaviors: Mapping[str, Behavior] = field(default_factory=dict)
+    functionalities: Mapping[str, FunctionalitySpec] = field(default_factory=dict)
+    behaviors: Mapping[str, BehaviorSpec] = field(default_factory=dict)
     tasks: Mapping[str, TaskSpec] = field(default_factory=dict)
     problem: Path | None = None
     rules: tuple[Path, ...] = ()
@@ -143,13 +143,13 @@ class RobotDescription:
     knowledge_base: Path | None = None
 
     @property
-    def components(self) -> dict[str, Component]:
+    def components(self) -> dict[str, ComponentSpec]:
         """Every component by name, functionalities first."""
-        out: dict[str, Component] = dict(self.functionalities)
+        out: dict[str, ComponentSpec] = dict(self.functionalities)
         out.update(self.behaviors)
         return out
 
-    def component(self, name: str) -> Component:
+    def component(self, name: str) -> ComponentSpec:
         return self.components[name]
 
     @property
@@ -157,7 +157,7 @@ class RobotDescription:
         """Every capability some functionality provides, sorted."""
         return sorted({c for f in self.functionalities.values() for c in f.provides})
 
-    def providers(self, capability: str) -> list[Functionality]:
+    def providers(self, capability: str) -> list[FunctionalitySpec]:
         """The functionalities that provide a capability, highest rating first."""
         found = [f for f in self.functionalities.values() if capability in f.provides]
         return sorted(found, key=lambda f: (-f.rating, f.name))

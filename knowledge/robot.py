@@ -15,8 +15,8 @@ import yaml
 
 from knowledge.description import (
     DEFAULT_ENDPOINT,
-    Behavior,
-    Functionality,
+    BehaviorSpec,
+    FunctionalitySpec,
     GoalArg,
     ObserverSpec,
     PlannerSpec,
@@ -81,11 +81,13 @@ def _common(s: Section, report: Report) -> dict[str, Any]:
     }
 
 
-def _functionality(name: str, node: yaml.Node, line: int, report: Report) -> Functionality | None:
+def _functionality(
+    name: str, node: yaml.Node, line: int, report: Report
+) -> FunctionalitySpec | None:
     s = Section(node, f"functionality '{name}'", report, line)
     if not s.valid:
         return None
-    f = Functionality(
+    f = FunctionalitySpec(
         name=name,
         provides=s.texts("provides"),
         shareable=s.flag("shareable", True),
@@ -97,11 +99,11 @@ def _functionality(name: str, node: yaml.Node, line: int, report: Report) -> Fun
     return f
 
 
-def _behavior(name: str, node: yaml.Node, line: int, report: Report) -> Behavior | None:
+def _behavior(name: str, node: yaml.Node, line: int, report: Report) -> BehaviorSpec | None:
     s = Section(node, f"behavior '{name}'", report, line)
     if not s.valid:
         return None
-    b = Behavior(
+    b = BehaviorSpec(
         name=name,
         interruptible=s.flag("interruptible", True),
         reconfigurable=s.flag("reconfigurable", True),

@@ -23,7 +23,7 @@ from monitoring.filter import FilterState
 
 
 @dataclass(frozen=True)
-class State:
+class ObserverState:
     name: str
     number: int
     checks: Mapping[str, Check]  # measured quantity -> check
@@ -47,7 +47,7 @@ class Verdict:
 
 
 def classify(
-    states: tuple[State, ...], measured: Mapping[str, FilterState], note: str = ""
+    states: tuple[ObserverState, ...], measured: Mapping[str, FilterState], note: str = ""
 ) -> Verdict:
     """The first state the measurement fits; ``note`` follows the measured values."""
     shown = ", ".join(f"{q} {s.value:.6g}" for q, s in measured.items()) + note
@@ -66,7 +66,7 @@ def read_states(
     *,
     aliases: Mapping[str, str] | None = None,
     every: bool = False,
-) -> tuple[State, ...]:
+) -> tuple[ObserverState, ...]:
     """The ``states`` of an observed resource.
 
     Args:
@@ -76,7 +76,7 @@ def read_states(
         every: each state must check every quantity (else: at least one).
     """
     aliases = aliases or {}
-    out: list[State] = []
+    out: list[ObserverState] = []
     names: set[str] = set()
     for entry in owner.entries("states", f"state {{n}} of {owner.what}", required=True):
         if not entry.valid:
@@ -105,7 +105,7 @@ def read_states(
             entry.error("state", f"{entry.what}: state '{name}' is defined twice")
         if name is not None and number is not None:
             names.add(name)
-            out.append(State(name, number, checks))
+            out.append(ObserverState(name, number, checks))
     return tuple(out)
 
 

@@ -193,7 +193,7 @@ class Command(enum.Enum):
     comes at once, the result later on ``component/<name>/result``); cancel
     ``{"goal_id": str}``; inject_fault ``{"fault": "crash" | {"mode": "crash", ...}}``
     (see :mod:`executive.sdk.fault_injection`). start, pause, resume and stop have no fields. The
-    reply is ``{"phase": Phase value}``; a refused command is an error reply.
+    reply is ``{"phase": ComponentPhase value}``; a refused command is an error reply.
     """
 
     CONFIGURE = "configure"
@@ -207,7 +207,7 @@ class Command(enum.Enum):
     INJECT_FAULT = "inject_fault"
 
 
-class Phase(enum.Enum):
+class ComponentPhase(enum.Enum):
     """Where a component is in its lifecycle, as the component itself sees it."""
 
     CREATED = "created"

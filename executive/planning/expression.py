@@ -158,7 +158,7 @@ def atoms(expression: Expression) -> frozenset[tuple[str, tuple[str, ...]]]:
 # --- evaluation ----------------------------------------------------------------------
 
 
-class State:
+class WorldState:
     """The facts of the knowledge base, for evaluating expressions (closed world)."""
 
     def __init__(self, facts: Iterable[Fact] = ()) -> None:

@@ -20,7 +20,7 @@ from collections import Counter, defaultdict
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
-from executive.planning.expression import Signature, State
+from executive.planning.expression import Signature, WorldState
 from executive.planning.goals import specs
 from executive.planning.oversubscription import plan_goals
 from executive.planning.plan_executer import PlanExecuter
@@ -152,7 +152,7 @@ class GoalPlanner:
                 failed[goal_id] = why
             else:
                 unreachable[goal_id] = why
-        state = State(facts)
+        state = WorldState(facts)
         achieved = tuple(g.id for g in usable if state.holds(g.expression))
         todo = []
         for g in usable:

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from executive.planning.expression import Expression, Signature, State, parse
+from executive.planning.expression import Expression, Signature, WorldState, parse
 from executive.planning.goals import normalized, submit
 from knowledge.description import RobotDescription
 from knowledge.domain import DomainInfo
@@ -174,7 +174,7 @@ class IntegrityGoals:
         found = payload.get("diagnoses") or []
         self.diagnoses = tuple(frozenset(str(n) for n in d) for d in found if isinstance(d, list))
 
-    def _holds(self, rule: IntegrityRule, state: State, faulty: set[str]) -> bool:
+    def _holds(self, rule: IntegrityRule, state: WorldState, faulty: set[str]) -> bool:
         if rule.trigger == "permanent_fault":
             return rule.subject in faulty
         if rule.trigger == "diagnosis":
@@ -190,7 +190,7 @@ class IntegrityGoals:
     def check(self, now: float | None = None) -> list[Goal]:
         """Post the goals of the rules that fire now; returns them."""
         now = time.time() if now is None else now
-        state = State(self.kb.facts())
+        state = WorldState(self.kb.facts())
         faulty = {c.name for c in self.kb.components() if c.permanent_fault}
         open_goals = {g.expression for g in self.kb.open_goals()}
         posted: list[Goal] = []

@@ -12,7 +12,7 @@ import enum
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from executive.planning.expression import TRUE, Const, Expression, State, Value
+from executive.planning.expression import TRUE, Const, Expression, Value, WorldState
 from knowledge.records import Fact, PlanStep
 
 
@@ -41,7 +41,7 @@ class Effect:
     kind: EffectKind = EffectKind.ASSIGN
     condition: Expression = TRUE
 
-    def fact(self, state: State) -> Fact | None:
+    def fact(self, state: WorldState) -> Fact | None:
         """The fact this effect sets in a state; ``None`` if its condition is false or
         its value is unknown."""
         if not state.holds(self.condition):
@@ -67,7 +67,7 @@ class Effect:
         return text if self.condition == TRUE else f"(when {self.condition} {text})"
 
 
-def apply(effects: Iterable[Effect], state: State) -> tuple[list[Fact], list[Fact]]:
+def apply(effects: Iterable[Effect], state: WorldState) -> tuple[list[Fact], list[Fact]]:
     """The facts to add and to remove for effects happening together in a state."""
     add: list[Fact] = []
     remove: list[Fact] = []

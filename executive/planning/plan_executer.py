@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 from executive.bus.worker import Worker
-from executive.planning.expression import State, atoms
+from executive.planning.expression import WorldState, atoms
 from executive.planning.goals import GoalSpec
 from executive.planning.partial_order import Effect, PartialOrderPlan, Step, Timepoint, apply
 from knowledge.knowledge_base import KnowledgeBase
@@ -103,7 +103,7 @@ class StepReport:
         self._post("failed", reason)
 
 
-class RunningTask(ABC):
+class StepTask(ABC):
     """A step the runner is carrying out."""
 
     interruptible: bool = True
@@ -124,7 +124,7 @@ class TaskRunner(ABC):
     """Carries out plan steps: the task executor, or a scripted runner in unit tests."""
 
     @abstractmethod
-    def run(self, step: Step, plan_id: int, report: StepReport) -> RunningTask:
+    def run(self, step: Step, plan_id: int, report: StepReport) -> StepTask:
         """Start carrying out a step and return at once; report through ``report``."""
 
 
@@ -163,7 +163,7 @@ class _Run:
 
     step: Step
     state: StepState = StepState.PENDING
-    task: RunningTask | None = None
+    task: StepTask | None = None
     report: StepReport | None = None
     started: bool = False  # at-start effects applied
     was: StepState = StepState.PENDING  # the state before a pause
@@ -293,8 +293,8 @@ class PlanExecuter:
         else:
             self.kb.log_event(kind, f"plan {self._plan_id}", data)
 
-    def _state(self) -> State:
-        return State(self.kb.facts())
+    def _state(self) -> WorldState:
+        return WorldState(self.kb.facts())
 
     def _execute(self, plan: PartialOrderPlan, plan_id: int, goals: Sequence[GoalSpec]) -> None:
         old = [r for r in self._runs.values() if r.state.active]
@@ -592,7 +592,7 @@ class PlanExecuter:
 
     # --- goals ---------------------------------------------------------------------------
 
-    def _check_goals(self, state: State) -> None:
+    def _check_goals(self, state: WorldState) -> None:
         """A goal is achieved when it holds and no unfinished step may change what it
         mentions; a goal with a deadline that holds in time is remembered as in time."""
         pending = [r for r in self._runs.values() if r.state is StepState.PENDING or r.state.active]

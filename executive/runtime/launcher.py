@@ -42,7 +42,7 @@ from executive.bus.payloads import (
 from executive.bus.session import Bus, Message
 from executive.runtime.logfile import LogFile, tail
 from executive.runtime.spawn import command, describe_exit, exit_status, signal_group, spawn
-from knowledge.description import Component, Kind, RobotDescription
+from knowledge.description import ComponentSpec, Kind, RobotDescription
 from knowledge.errors import BusError, ComponentError, DuraError
 from knowledge.knowledge_base import KnowledgeBase
 
@@ -159,7 +159,7 @@ class _Process:
 class _Slot:
     """One component of the robot and what the launcher knows of it."""
 
-    spec: Component
+    spec: ComponentSpec
     state: ComponentState
     process: _Process | None = None
     lock: threading.Lock = field(default_factory=threading.Lock)  # one lifecycle op at a time

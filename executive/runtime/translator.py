@@ -158,6 +158,6 @@ def main(argv: Sequence[str] | None = None) -> None:
 
 if __name__ == "__main__":
     # Run the module proper: plug-ins subclass its Translator, not this __main__ copy's.
-    from executive.runtime import translator
+    import importlib
 
-    translator.main()
+    importlib.import_module("executive.runtime.translator").main()

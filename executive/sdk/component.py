@@ -38,7 +38,7 @@ from concurrent.futures import Future
 from typing import Any, ClassVar, TypeVar
 
 from executive.bus import keys
-from executive.bus.payloads import Command, GoalResult, GoalStatus, Phase
+from executive.bus.payloads import Command, ComponentPhase, GoalResult, GoalStatus
 from executive.bus.session import Bus, Message
 from executive.sdk.fault_injection import Fault, FaultInjector
 from knowledge.description import Kind
@@ -84,7 +84,7 @@ class Component:
         self.achievements: dict[str, Any] = {}
         self.log = logging.getLogger(f"dura.component.{name}")
         self.faults = FaultInjector(on_hang=self._hang)
-        self._phase = Phase.CREATED
+        self._phase = ComponentPhase.CREATED
         self._hung = False
         self._changed = threading.Condition()
         self._jobs: queue.SimpleQueue[Callable[[], None]] = queue.SimpleQueue()
@@ -115,16 +115,16 @@ class Component:
     # --- helpers ----------------------------------------------------------------------
 
     @property
-    def phase(self) -> Phase:
+    def phase(self) -> ComponentPhase:
         return self._phase
 
     @property
     def running(self) -> bool:
-        return self._phase is Phase.RUNNING and not self._hung
+        return self._phase is ComponentPhase.RUNNING and not self._hung
 
     @property
     def ended(self) -> bool:
-        return self._phase is Phase.STOPPED
+        return self._phase is ComponentPhase.STOPPED
 
     def param(self, key: str, default: T) -> T:
         """A parameter, of the type of its default (an int is accepted for a float).
@@ -223,43 +223,45 @@ class Component:
 
     # --- lifecycle --------------------------------------------------------------------
 
-    def _set_phase(self, phase: Phase) -> None:
+    def _set_phase(self, phase: ComponentPhase) -> None:
         with self._changed:
             self._phase = phase
             self._changed.notify_all()
 
-    def _expect(self, verb: str, *phases: Phase) -> None:
+    def _expect(self, verb: str, *phases: ComponentPhase) -> None:
         if self._phase not in phases:
             raise ComponentError(f"cannot {verb} '{self.name}': it is {self._phase.value}")
 
     def configure(self, params: dict[str, Any], achievements: dict[str, Any]) -> None:
-        self._expect("configure", Phase.CREATED, Phase.CONFIGURED)
+        self._expect("configure", ComponentPhase.CREATED, ComponentPhase.CONFIGURED)
         self.params = dict(params)
         self.achievements = dict(achievements)
         fault = self.params.get("fault")
         self._start_fault = Fault.parse(fault) if fault is not None else None
         self.on_configure(self.params, achievements)
-        self._set_phase(Phase.CONFIGURED)
+        self._set_phase(ComponentPhase.CONFIGURED)
 
     def start(self) -> None:
-        self._expect("start", Phase.CONFIGURED)
+        self._expect("start", ComponentPhase.CONFIGURED)
         self.on_start()
-        self._set_phase(Phase.RUNNING)
+        self._set_phase(ComponentPhase.RUNNING)
         if self._start_fault is not None:
             self.faults.inject(self._start_fault)
 
     def pause(self) -> None:
-        self._expect("pause", Phase.RUNNING)
-        self._set_phase(Phase.PAUSED)
+        self._expect("pause", ComponentPhase.RUNNING)
+        self._set_phase(ComponentPhase.PAUSED)
         self.on_pause()
 
     def resume(self) -> None:
-        self._expect("resume", Phase.PAUSED)
+        self._expect("resume", ComponentPhase.PAUSED)
         self.on_resume()
-        self._set_phase(Phase.RUNNING)
+        self._set_phase(ComponentPhase.RUNNING)
 
     def reconfigure(self, params: dict[str, Any]) -> None:
-        self._expect("reconfigure", Phase.CONFIGURED, Phase.RUNNING, Phase.PAUSED)
+        self._expect(
+            "reconfigure", ComponentPhase.CONFIGURED, ComponentPhase.RUNNING, ComponentPhase.PAUSED
+        )
         self.params.update(params)
         self.on_reconfigure(params)
 
@@ -267,8 +269,8 @@ class Component:
         """Stop for good: loops end, the process exits with code 0."""
         if self.ended:
             return
-        started = self._phase in (Phase.RUNNING, Phase.PAUSED)
-        self._set_phase(Phase.STOPPED)
+        started = self._phase in (ComponentPhase.RUNNING, ComponentPhase.PAUSED)
+        self._set_phase(ComponentPhase.STOPPED)
         if started:
             try:
                 self.on_stop()
@@ -347,7 +349,7 @@ class Component:
         self.log.exception("unhandled exception in %s: '%s' ends", where, self.name)
 
         def end() -> None:
-            self._set_phase(Phase.STOPPED)
+            self._set_phase(ComponentPhase.STOPPED)
             self._exit_code = 1
 
         self._jobs.put(end)

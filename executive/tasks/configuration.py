@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import networkx as nx
 
-from knowledge.description import Functionality
+from knowledge.description import FunctionalitySpec
 
 
 @dataclass(frozen=True)
@@ -69,7 +69,7 @@ class SystemConfiguration:
         return SystemConfiguration({t: p for t, p in self.tasks.items() if t != task})
 
     def transition(
-        self, target: SystemConfiguration, functionalities: Iterable[Functionality]
+        self, target: SystemConfiguration, functionalities: Iterable[FunctionalitySpec]
     ) -> Transition:
         """The steps from this configuration to ``target``.
 
@@ -88,7 +88,7 @@ class SystemConfiguration:
 def _order(
     configuration: SystemConfiguration,
     names: frozenset[str],
-    functionalities: Iterable[Functionality],
+    functionalities: Iterable[FunctionalitySpec],
 ) -> tuple[str, ...]:
     """Names in dependency order (providers first, ties by name)."""
     requires = {f.name: f.requires for f in functionalities}

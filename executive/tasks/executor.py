@@ -39,7 +39,7 @@ from executive.bus.service import Context, Service
 from executive.bus.worker import Worker
 from executive.runtime.launcher import GoalHandle, Launcher
 from executive.tasks.configuration import SystemConfiguration
-from executive.tasks.faults import Faults, RunningTask, TaskAction
+from executive.tasks.faults import Faults, TaskAction, TaskUsage
 from executive.tasks.schedule import Request
 from executive.tasks.scheduler import Scheduler
 from knowledge.description import Kind
@@ -53,7 +53,7 @@ NOW = 0.15  # a task scheduled to start within this many seconds starts now
 MODEL_TIMEOUT = 1.0  # seconds to wait for the diagnosis engine's answer
 
 
-class Phase(enum.Enum):
+class TaskPhase(enum.Enum):
     """Where a task is, as the executor sees it."""
 
     WAITING = "waiting"  # asked for its configuration
@@ -67,23 +67,28 @@ class Phase(enum.Enum):
 
     @property
     def final(self) -> bool:
-        return self in (Phase.SUCCEEDED, Phase.FAILED, Phase.CANCELLED)
+        return self in (TaskPhase.SUCCEEDED, TaskPhase.FAILED, TaskPhase.CANCELLED)
 
     @property
     def holds(self) -> bool:
         """It holds a configuration."""
-        return self in (Phase.STARTING, Phase.RUNNING, Phase.PAUSED, Phase.REPAIRING)
+        return self in (
+            TaskPhase.STARTING,
+            TaskPhase.RUNNING,
+            TaskPhase.PAUSED,
+            TaskPhase.REPAIRING,
+        )
 
 
 KB_STATE = {
-    Phase.WAITING: TaskState.PENDING,
-    Phase.STARTING: TaskState.SCHEDULED,
-    Phase.RUNNING: TaskState.RUNNING,
-    Phase.PAUSED: TaskState.PAUSED,
-    Phase.REPAIRING: TaskState.RUNNING,
-    Phase.SUCCEEDED: TaskState.SUCCEEDED,
-    Phase.FAILED: TaskState.FAILED,
-    Phase.CANCELLED: TaskState.CANCELLED,
+    TaskPhase.WAITING: TaskState.PENDING,
+    TaskPhase.STARTING: TaskState.SCHEDULED,
+    TaskPhase.RUNNING: TaskState.RUNNING,
+    TaskPhase.PAUSED: TaskState.PAUSED,
+    TaskPhase.REPAIRING: TaskState.RUNNING,
+    TaskPhase.SUCCEEDED: TaskState.SUCCEEDED,
+    TaskPhase.FAILED: TaskState.FAILED,
+    TaskPhase.CANCELLED: TaskState.CANCELLED,
 }
 
 Listener = Callable[["TaskHandle"], None]
@@ -100,7 +105,7 @@ class _Task:
     deadline: float | None  # epoch seconds
     together: tuple[str, ...]
     listener: Listener | None
-    phase: Phase = Phase.WAITING
+    phase: TaskPhase = TaskPhase.WAITING
     providers: dict[str, str] = field(default_factory=dict)
     handle: GoalHandle | None = None
     attempt: int = 0  # goals sent; a result of an older one is ignored
@@ -112,8 +117,8 @@ class _Task:
     start_at: float | None = None  # scheduled start (epoch), while waiting
     repair: TaskAction = TaskAction.RESTART  # how it goes on after a repair
 
-    def running_task(self) -> RunningTask:
-        return RunningTask(self.id, self.behavior, frozenset(self.providers.values()))
+    def running_task(self) -> TaskUsage:
+        return TaskUsage(self.id, self.behavior, frozenset(self.providers.values()))
 
 
 class TaskHandle:
@@ -128,7 +133,7 @@ class TaskHandle:
         return self._task.id
 
     @property
-    def phase(self) -> Phase:
+    def phase(self) -> TaskPhase:
         return self._task.phase
 
     @property
@@ -221,7 +226,7 @@ class TaskExecutor(Service):
             self._timer.cancel()
         for task in list(self._tasks.values()):
             if not task.phase.final:
-                self._end(task, Phase.CANCELLED, "the executive stops", reschedule=False)
+                self._end(task, TaskPhase.CANCELLED, "the executive stops", reschedule=False)
         self._apply_configuration("the executive stops")
 
     # --- the API -------------------------------------------------------------------------
@@ -315,7 +320,7 @@ class TaskExecutor(Service):
             self._timer.cancel()
             self._timer = None
         now = time.time()
-        live = [t for t in self._tasks.values() if t.phase.holds or t.phase is Phase.WAITING]
+        live = [t for t in self._tasks.values() if t.phase.holds or t.phase is TaskPhase.WAITING]
         if not live:
             self._apply_configuration(why)
             return
@@ -340,7 +345,9 @@ class TaskExecutor(Service):
         result = scheduler.schedule(requests, faulty=self.faults.faulty())
         for task_id, reason in result.cancelled.items():
             task = self._tasks[task_id]
-            self._end(task, Phase.FAILED, f"cancelled by the scheduler: {reason}", reschedule=False)
+            self._end(
+                task, TaskPhase.FAILED, f"cancelled by the scheduler: {reason}", reschedule=False
+            )
         later: list[float] = []
         for task_id, assignment in result.assignments.items():
             task = self._tasks[task_id]
@@ -354,15 +361,15 @@ class TaskExecutor(Service):
             elif assignment.start <= NOW:
                 task.providers = providers
                 task.start_at = None
-                self._set_phase(task, Phase.STARTING)
+                self._set_phase(task, TaskPhase.STARTING)
                 self._event("TASK_SCHEDULED", task, providers=providers)
             else:
                 task.start_at = now + assignment.start
                 later.append(assignment.start)
         self._apply_configuration(why)
-        for task in [t for t in self._tasks.values() if t.phase is Phase.STARTING]:
+        for task in [t for t in self._tasks.values() if t.phase is TaskPhase.STARTING]:
             self._launch_behavior(task)
-        for task in [t for t in self._tasks.values() if t.phase is Phase.REPAIRING]:
+        for task in [t for t in self._tasks.values() if t.phase is TaskPhase.REPAIRING]:
             self._continue(task)
         if later:
             self._timer = threading.Timer(
@@ -416,7 +423,7 @@ class TaskExecutor(Service):
 
     def _launch_behavior(self, task: _Task) -> None:
         """Start the task's behavior on its (ready) configuration and send it the goal."""
-        if task.phase is not Phase.STARTING:
+        if task.phase is not TaskPhase.STARTING:
             return  # started meanwhile (a nested schedule), or ended
         if not all(
             self.launcher.state(f).state is Lifecycle.READY for f in task.providers.values()
@@ -437,20 +444,20 @@ class TaskExecutor(Service):
         handle.add_done_callback(lambda r: self._post(lambda: self._on_result(task, attempt, r)))
         if task.began is None:
             task.began = time.time()
-        self._set_phase(task, Phase.PAUSED if task.paused_by_user else Phase.RUNNING)
+        self._set_phase(task, TaskPhase.PAUSED if task.paused_by_user else TaskPhase.RUNNING)
         if task.paused_by_user:
             with contextlib.suppress(ComponentError):
                 self.launcher.pause(task.behavior)
         self._event("TASK_STARTED", task, providers=task.providers, attempt=attempt)
 
     def _on_result(self, task: _Task, attempt: int, result: GoalResult) -> None:
-        if attempt != task.attempt or task.phase.final or task.phase is Phase.REPAIRING:
+        if attempt != task.attempt or task.phase.final or task.phase is TaskPhase.REPAIRING:
             return  # an older goal, or one we cancelled ourselves
         if result.status is GoalStatus.SUCCEEDED:
             task.result = dict(result.value)
-            self._end(task, Phase.SUCCEEDED, "")
+            self._end(task, TaskPhase.SUCCEEDED, "")
         elif result.status is GoalStatus.CANCELLED:
-            self._end(task, Phase.CANCELLED, result.reason or "the behavior cancelled it")
+            self._end(task, TaskPhase.CANCELLED, result.reason or "the behavior cancelled it")
         else:
             self._behavior_failed(task, result.reason or "the behavior failed")
 
@@ -460,11 +467,11 @@ class TaskExecutor(Service):
         self._event("REPAIR", task, component=task.behavior, action=action.value)
         if action is TaskAction.RESTART:
             self._stop_behavior(task, "restarting after a failure")
-            self._set_phase(task, Phase.STARTING)
+            self._set_phase(task, TaskPhase.STARTING)
             self._event("TASK_RESTARTED", task, reason=reason)
             self._launch_behavior(task)
         else:
-            self._end(task, Phase.FAILED, reason)
+            self._end(task, TaskPhase.FAILED, reason)
 
     def _stop_behavior(self, task: _Task, reason: str) -> None:
         task.attempt += 1  # whatever the old goal says now is stale
@@ -474,7 +481,7 @@ class TaskExecutor(Service):
         task.handle = None
         self._stop_component(task.behavior, reason)
 
-    def _end(self, task: _Task, phase: Phase, reason: str, *, reschedule: bool = True) -> None:
+    def _end(self, task: _Task, phase: TaskPhase, reason: str, *, reschedule: bool = True) -> None:
         """End a task; then (unless the caller goes on scheduling) schedule the others
         before the configuration changes, so that what they share keeps running."""
         if task.phase.final:
@@ -499,24 +506,24 @@ class TaskExecutor(Service):
         if not self.robot.behaviors[task.behavior].interruptible:
             raise DuraError(f"task {task.id} ({task.behavior}) is not interruptible")
         task.paused_by_user = True
-        if task.phase is Phase.RUNNING:
+        if task.phase is TaskPhase.RUNNING:
             self.launcher.pause(task.behavior)
-            self._set_phase(task, Phase.PAUSED)
+            self._set_phase(task, TaskPhase.PAUSED)
             self._event("TASK_PAUSED", task)
 
     def _resume(self, task: _Task) -> None:
         if task.phase.final:
             raise DuraError(f"task {task.id} has ended ({task.phase.value})")
         task.paused_by_user = False
-        if task.phase is Phase.PAUSED:
+        if task.phase is TaskPhase.PAUSED:
             self.launcher.resume(task.behavior)
-            self._set_phase(task, Phase.RUNNING)
+            self._set_phase(task, TaskPhase.RUNNING)
             self._event("TASK_RESUMED", task)
 
     def _cancel(self, task_id: str, reason: str) -> None:
         task = self._tasks.get(str(task_id))
         if task is not None:
-            self._end(task, Phase.CANCELLED, reason)
+            self._end(task, TaskPhase.CANCELLED, reason)
 
     # --- faults ----------------------------------------------------------------------------
 
@@ -546,7 +553,7 @@ class TaskExecutor(Service):
             if permanent:
                 self.faults.fault(name, reason, permanent=True)
                 for task in hit:
-                    self._end(task, Phase.FAILED, f"{name} is permanently faulty: {reason}")
+                    self._end(task, TaskPhase.FAILED, f"{name} is permanently faulty: {reason}")
             elif hit:
                 self._behavior_failed(hit[0], reason)
             else:
@@ -562,14 +569,14 @@ class TaskExecutor(Service):
         )  # fmt: skip
         for task_id, action in decision.tasks.items():
             task = self._tasks[task_id]
-            if action is TaskAction.PAUSE and task.phase is Phase.RUNNING:
+            if action is TaskAction.PAUSE and task.phase is TaskPhase.RUNNING:
                 with contextlib.suppress(ComponentError):
                     self.launcher.pause(task.behavior)
                 self._event("TASK_PAUSED", task, reason=f"{name} is being repaired")
             elif action is TaskAction.RESTART:
                 self._stop_behavior(task, f"{name} is being repaired")
             task.repair = action
-            self._set_phase(task, Phase.REPAIRING)
+            self._set_phase(task, TaskPhase.REPAIRING)
         if decision.restart:
             alive = self.launcher.state(name).state.is_alive
             if name in self._configuration.functionalities or (restart and alive):
@@ -593,7 +600,7 @@ class TaskExecutor(Service):
 
     def _continue(self, task: _Task) -> None:
         """A task whose configuration was repaired goes on: resume or start its behavior."""
-        if task.phase is not Phase.REPAIRING:
+        if task.phase is not TaskPhase.REPAIRING:
             return
         if not all(
             self.launcher.state(f).state is Lifecycle.READY for f in task.providers.values()
@@ -604,10 +611,10 @@ class TaskExecutor(Service):
             and self.launcher.state(task.behavior).state is Lifecycle.PAUSED
         ):
             self.launcher.resume(task.behavior)
-            self._set_phase(task, Phase.RUNNING)
+            self._set_phase(task, TaskPhase.RUNNING)
             self._event("TASK_RESUMED", task, reason="configuration repaired")
             return
-        self._set_phase(task, Phase.STARTING)
+        self._set_phase(task, TaskPhase.STARTING)
         self._event("TASK_RESTARTED", task, reason="configuration repaired")
         self._launch_behavior(task)
 
@@ -620,7 +627,7 @@ class TaskExecutor(Service):
     # --- bookkeeping -----------------------------------------------------------------------
 
     def _set_phase(
-        self, task: _Task, phase: Phase, *, reason: str = "", result: Any = None
+        self, task: _Task, phase: TaskPhase, *, reason: str = "", result: Any = None
     ) -> None:
         task.phase = phase
         with contextlib.suppress(KnowledgeError):

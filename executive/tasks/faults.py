@@ -24,7 +24,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 from knowledge.availability import Availability
-from knowledge.description import Component, Functionality, Kind, RobotDescription
+from knowledge.description import ComponentSpec, FunctionalitySpec, Kind, RobotDescription
 from knowledge.errors import KnowledgeError
 from knowledge.knowledge_base import KnowledgeBase
 
@@ -36,7 +36,7 @@ class TaskAction(enum.Enum):
 
 
 @dataclass(frozen=True)
-class RunningTask:
+class TaskUsage:
     """What fault handling needs to know of a running task."""
 
     id: str
@@ -97,7 +97,7 @@ class Faults:
         """The permanently faulty components."""
         return frozenset(c.name for c in self.kb.components() if c.permanent_fault)
 
-    def functionalities(self) -> list[Functionality]:
+    def functionalities(self) -> list[FunctionalitySpec]:
         """The robot's functionalities with the ratings the knowledge base holds."""
         ratings = {c.name: c.rating for c in self.kb.components()}
         return [
@@ -112,7 +112,7 @@ class Faults:
         self,
         name: str,
         reason: str,
-        running: Iterable[RunningTask] = (),
+        running: Iterable[TaskUsage] = (),
         *,
         permanent: bool = False,
     ) -> FaultDecision:
@@ -130,12 +130,12 @@ class Faults:
         component = self._component(name)
         before = self.availability()
         with self.kb.transaction():
-            limit = component.max_faults if isinstance(component, Functionality) else None
+            limit = component.max_faults if isinstance(component, FunctionalitySpec) else None
             record = self.kb.record_fault(name, reason, max_faults=limit)
             if permanent and not record.permanent_fault:
                 record = self.kb.mark_permanent_fault(name, reason)
         decision = FaultDecision(name, component.kind, record.fault_count, record.permanent_fault)
-        if isinstance(component, Functionality):
+        if isinstance(component, FunctionalitySpec):
             return self._functionality_fault(decision, before, running)
         return self._behavior_fault(decision, running)
 
@@ -150,13 +150,13 @@ class Faults:
         """Forget a task's behavior restarts (it ended)."""
         self._restarts.pop(task_id, None)
 
-    def _component(self, name: str) -> Component:
+    def _component(self, name: str) -> ComponentSpec:
         if name not in self.robot.components:
             raise KnowledgeError(f"robot '{self.robot.name}' has no component '{name}'")
         return self.robot.components[name]
 
     def _functionality_fault(
-        self, decision: FaultDecision, before: Availability, running: Iterable[RunningTask]
+        self, decision: FaultDecision, before: Availability, running: Iterable[TaskUsage]
     ) -> FaultDecision:
         """Tasks on the functionality, or on anything it took down, repair their configurations."""
         after = self.availability()
@@ -172,7 +172,7 @@ class Faults:
         return dataclasses.replace(decision, unusable=unusable, tasks=tasks)
 
     def _behavior_fault(
-        self, decision: FaultDecision, running: Iterable[RunningTask]
+        self, decision: FaultDecision, running: Iterable[TaskUsage]
     ) -> FaultDecision:
         """The task running the behavior restarts it, up to ``max_restarts`` times."""
         behavior = self.robot.behaviors[decision.component]

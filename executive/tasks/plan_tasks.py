@@ -13,8 +13,8 @@ import contextlib
 from typing import Any
 
 from executive.planning.partial_order import Step
-from executive.planning.plan_executer import RunningTask, StepReport, TaskRunner
-from executive.tasks.executor import Phase, TaskExecutor, TaskHandle
+from executive.planning.plan_executer import StepReport, StepTask, TaskRunner
+from executive.tasks.executor import TaskExecutor, TaskHandle, TaskPhase
 from knowledge.description import RobotDescription
 from knowledge.errors import DuraError
 
@@ -25,7 +25,7 @@ def behavior_goal(robot: RobotDescription, step: Step) -> dict[str, Any]:
     return {name: arg.resolve(bindings) for name, arg in robot.tasks[step.action].goal.items()}
 
 
-class _StepTask(RunningTask):
+class _StepTask(StepTask):
     def __init__(self, handle: TaskHandle, interruptible: bool) -> None:
         self.handle = handle
         self.interruptible = interruptible
@@ -49,20 +49,22 @@ class PlanTasks(TaskRunner):
         self.tasks = tasks
         self.robot = robot
 
-    def run(self, step: Step, plan_id: int, report: StepReport) -> RunningTask:
+    def run(self, step: Step, plan_id: int, report: StepReport) -> StepTask:
         spec = self.robot.tasks[step.action]
         behavior = self.robot.behaviors[spec.behavior]
-        seen: set[Phase] = set()
+        seen: set[TaskPhase] = set()
 
         def changed(handle: TaskHandle) -> None:
             phase = handle.phase
-            if phase is Phase.RUNNING and Phase.RUNNING not in seen:
+            if phase is TaskPhase.RUNNING and TaskPhase.RUNNING not in seen:
                 report.started()
-            elif phase is Phase.SUCCEEDED:
+            elif phase is TaskPhase.SUCCEEDED:
                 report.succeeded(handle.result)
-            elif phase is Phase.FAILED:
+            elif phase is TaskPhase.FAILED:
                 report.failed(handle.reason)
-            elif phase is Phase.CANCELLED and "the plan no longer needs it" not in handle.reason:
+            elif (
+                phase is TaskPhase.CANCELLED and "the plan no longer needs it" not in handle.reason
+            ):
                 report.failed(f"cancelled: {handle.reason}")
             seen.add(phase)
 

@@ -26,7 +26,7 @@ from executive.tasks.cancellation import explain, precheck
 from executive.tasks.schedule import Assignment, Request, ScheduleResult, ScheduleStatus
 from knowledge.asp import Answer, Asp, atom
 from knowledge.availability import Availability
-from knowledge.description import Functionality
+from knowledge.description import FunctionalitySpec
 
 PROGRAM = Path(__file__).with_name("schedule.lp")
 # Core-guided optimisation proves optimality fast; the domain heuristic (schedule
@@ -65,7 +65,7 @@ class Scheduler:
 
     def __init__(
         self,
-        functionalities: Iterable[Functionality],
+        functionalities: Iterable[FunctionalitySpec],
         *,
         time_limit: float = 1.0,
         resolution: float = 0.1,

@@ -36,8 +36,8 @@ from executive.bus.payloads import ObservationInfo
 from knowledge.asp import Asp, atom
 from knowledge.errors import ConfigError
 from monitoring.diagnosis.model import (
+    ModelObserver,
     ModelUpdate,
-    Observer,
     ObserverType,
     SystemDescription,
 )
@@ -240,16 +240,16 @@ class DiagnosisEngine:
         self.max_card = max_card
         self.timeout = timeout
         self._model = SystemDescription()
-        self._observers: frozenset[Observer] = frozenset()
-        self._rank: dict[Observer, int] = {}  # position in the model
-        self._observations: dict[Observer, ObservationInfo] = {}
-        self._failed: dict[Observer, None] = {}  # observers whose newest observation failed
+        self._observers: frozenset[ModelObserver] = frozenset()
+        self._rank: dict[ModelObserver, int] = {}  # position in the model
+        self._observations: dict[ModelObserver, ObservationInfo] = {}
+        self._failed: dict[ModelObserver, None] = {}  # observers whose newest observation failed
         # with exoneration: the OK topic observers by the streams they clear
-        self._clearing: dict[Stream, set[Observer]] = {}
+        self._clearing: dict[Stream, set[ModelObserver]] = {}
         self._upstream: dict[str, frozenset[str]] = {}  # node -> nodes that can reach it
-        self._cones: dict[Observer, frozenset[str]] = {}  # both kept until the model changes
-        self._streams: dict[Observer, list[Stream]] = {}
-        self._known: dict[tuple[str, tuple[str, ...], tuple[str, ...]], Observer] = {}
+        self._cones: dict[ModelObserver, frozenset[str]] = {}  # both kept until the model changes
+        self._streams: dict[ModelObserver, list[Stream]] = {}
+        self._known: dict[tuple[str, tuple[str, ...], tuple[str, ...]], ModelObserver] = {}
         if model is not None:
             self.set_model(model)
 
@@ -307,7 +307,7 @@ class DiagnosisEngine:
         key = (info.type, info.resource, info.callerids)
         observer = self._known.get(key)
         if observer is None:  # not spelled as usual: unknown, or caller ids in another order
-            observer = Observer.make(*key)
+            observer = ModelObserver.make(*key)
             if observer not in self._observers:
                 raise ConfigError(f"observation of {observer}: no such observer in the model")
         old = self._observations.get(observer)
@@ -333,12 +333,12 @@ class DiagnosisEngine:
                 if not info.failed:
                     self._clear(observer)
 
-    def _clear(self, observer: Observer) -> None:
+    def _clear(self, observer: ModelObserver) -> None:
         """Note an OK topic observer: with exoneration, its streams are not abnormal."""
         for stream in self._watched(observer):
             self._clearing.setdefault(stream, set()).add(observer)
 
-    def _unclear(self, observer: Observer) -> None:
+    def _unclear(self, observer: ModelObserver) -> None:
         for stream in self._watched(observer):
             by = self._clearing.get(stream)
             if by is not None:
@@ -347,10 +347,10 @@ class DiagnosisEngine:
                     del self._clearing[stream]
 
     @property
-    def observations(self) -> dict[Observer, ObservationInfo]:
+    def observations(self) -> dict[ModelObserver, ObservationInfo]:
         return dict(self._observations)
 
-    def failed(self) -> tuple[Observer, ...]:
+    def failed(self) -> tuple[ModelObserver, ...]:
         return tuple(self._failed)
 
     # --- diagnosis ----------------------------------------------------------------------
@@ -392,7 +392,7 @@ class DiagnosisEngine:
             status, tuple(found), failed=failed, elapsed=time.perf_counter() - start
         )
 
-    def _watched(self, observer: Observer) -> list[Stream]:
+    def _watched(self, observer: ModelObserver) -> list[Stream]:
         """The streams a topic observer watches (none for a node observer)."""
         streams = self._streams.get(observer)
         if streams is None:
@@ -403,7 +403,7 @@ class DiagnosisEngine:
             ]
         return streams
 
-    def _conflict(self, observer: Observer, cleared: set[str]) -> frozenset[str]:
+    def _conflict(self, observer: ModelObserver, cleared: set[str]) -> frozenset[str]:
         """The candidates that could explain an observer's failure, given the nodes
         that publish a cleared stream."""
         cone = self._cones.get(observer)
@@ -413,7 +413,7 @@ class DiagnosisEngine:
             return self._reach(observer, self._clearing)
         return cone
 
-    def _cone(self, observer: Observer) -> frozenset[str]:
+    def _cone(self, observer: ModelObserver) -> frozenset[str]:
         """The candidates that could explain an observer's failure with nothing cleared."""
         if observer.type is ObserverType.COMPONENT:
             return frozenset(observer.resource)
@@ -442,7 +442,7 @@ class DiagnosisEngine:
         self._upstream[name] = cone = frozenset(found)
         return cone
 
-    def _reach(self, observer: Observer, cleared: Container[Stream]) -> frozenset[str]:
+    def _reach(self, observer: ModelObserver, cleared: Container[Stream]) -> frozenset[str]:
         """The candidates from which abnormal streams can reach what an observer
         watches (or that it blames), none of them through a cleared stream."""
         blamed: list[str] = []
@@ -482,7 +482,7 @@ class DiagnosisEngine:
         node = self._model.node(name)
         return [(name, t) for t in node.pub_topic] if node is not None else []
 
-    def _conflicting(self, observer: Observer) -> tuple[Observer, ...]:
+    def _conflicting(self, observer: ModelObserver) -> tuple[ModelObserver, ...]:
         """A minimal set of observations that no diagnosis explains together: a failed
         observer nothing can explain, and the OK observations that clear its paths."""
         clearing = self._clearing

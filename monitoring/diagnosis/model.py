@@ -102,7 +102,7 @@ class Node:
 
 
 @dataclass(frozen=True)
-class Observer:
+class ModelObserver:
     """An observer as the diagnosis sees it: a type and the resources it watches.
 
     ``resource`` is one topic (frequency, timeout, timestamp, scores), one node
@@ -135,7 +135,7 @@ class Observer:
     @classmethod
     def make(
         cls, type_name: str, resource: Sequence[str], callerids: Iterable[str] = ()
-    ) -> Observer:
+    ) -> ModelObserver:
         """An observer in canonical form (alias resolved, default behavior, sorted caller ids).
 
         Raises:
@@ -199,7 +199,7 @@ class ModelUpdate:
 
     action: UpdateAction
     nodes: tuple[Node, ...] = ()
-    observers: tuple[Observer, ...] = ()
+    observers: tuple[ModelObserver, ...] = ()
 
     def to_payload(self) -> dict[str, Any]:
         return {
@@ -252,12 +252,12 @@ def node_from(entry: Mapping[str, Any]) -> Node:
     )
 
 
-def observer_from(entry: Mapping[str, Any]) -> Observer:
+def observer_from(entry: Mapping[str, Any]) -> ModelObserver:
     """An observer from ``{type, resource, callerids}``."""
     kind = entry.get("type")
     if not isinstance(kind, str):
         raise ConfigError(f"an observer needs a type, not {kind!r}")
-    return Observer.make(kind, _names(entry, "resource"), _names(entry, "callerids"))
+    return ModelObserver.make(kind, _names(entry, "resource"), _names(entry, "callerids"))
 
 
 @dataclass(frozen=True)
@@ -265,7 +265,7 @@ class SystemDescription:
     """Nodes and observers; topics are whatever the nodes name."""
 
     nodes: tuple[Node, ...] = ()
-    observers: tuple[Observer, ...] = ()
+    observers: tuple[ModelObserver, ...] = ()
     _by_name: Mapping[str, Node] = field(init=False, repr=False, compare=False)
     _publishers: Mapping[str, tuple[str, ...]] = field(init=False, repr=False, compare=False)
     _topics: frozenset[str] = field(init=False, repr=False, compare=False)
@@ -295,7 +295,7 @@ class SystemDescription:
         out.update(dict.fromkeys(o.behavior for o in self.observers if o.behavior))
         return tuple(out)
 
-    def problem(self, observer: Observer) -> str | None:
+    def problem(self, observer: ModelObserver) -> str | None:
         """Why an observer does not fit these nodes, or ``None`` if it does."""
         if observer.type.watches_nodes:
             name = observer.resource[0]
@@ -316,15 +316,15 @@ class SystemDescription:
                 return f"observer {observer} names caller id '{caller}' that publishes none of its topics"
         return None
 
-    def problems(self) -> list[tuple[Node | Observer, str]]:
+    def problems(self) -> list[tuple[Node | ModelObserver, str]]:
         """Everything wrong with this description, each with what it is about."""
-        out: list[tuple[Node | Observer, str]] = []
+        out: list[tuple[Node | ModelObserver, str]] = []
         seen: set[str] = set()
         for node in self.nodes:
             if node.name in seen:
                 out.append((node, f"node '{node.name}' is already in the model"))
             seen.add(node.name)
-        observers: set[Observer] = set()
+        observers: set[ModelObserver] = set()
         for observer in self.observers:
             if observer in observers:
                 out.append((observer, f"observer {observer} is already in the model"))

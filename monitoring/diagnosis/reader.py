@@ -19,7 +19,7 @@ from executive.bus.payloads import ObservationInfo
 from knowledge.errors import ConfigError, DuraError, located
 from knowledge.finding import Report
 from knowledge.yamlsource import Section, compose, describe, line_of
-from monitoring.diagnosis.model import Node, Observer, SystemDescription, check_name
+from monitoring.diagnosis.model import ModelObserver, Node, SystemDescription, check_name
 
 
 def _raise_first(report: Report) -> None:
@@ -92,7 +92,7 @@ def read_model(path: Path) -> SystemDescription:
         nodes.append(node)
     _raise_first(report)
     model = SystemDescription(tuple(nodes))
-    observers: list[Observer] = []
+    observers: list[ModelObserver] = []
     key = "observations" if top.has("observations") and not top.has("observers") else "observers"
     for item in top.sequence(key):
         entry = Section(item, "observer", report)
@@ -100,7 +100,7 @@ def read_model(path: Path) -> SystemDescription:
             continue
         for kind, resources, callerids in _observer_entries(entry):
             try:
-                observer = Observer.make(kind, resources, callerids)
+                observer = ModelObserver.make(kind, resources, callerids)
             except DuraError as e:
                 report.error(entry.line, str(e))
                 continue
@@ -137,7 +137,7 @@ def read_observations(path: Path, model: SystemDescription) -> list[ObservationI
         message = entry.text("observation_msg", "") or ""
         entry.close()
         try:
-            observer = Observer.make(kind, resources, callerids)
+            observer = ModelObserver.make(kind, resources, callerids)
         except DuraError as e:
             report.error(entry.line, str(e))
             continue

@@ -6,7 +6,7 @@ import enum
 from dataclasses import dataclass
 
 from executive.bus.payloads import DiagnosisInfo
-from monitoring.diagnosis.model import Observer
+from monitoring.diagnosis.model import ModelObserver
 
 
 class Status(enum.Enum):
@@ -28,8 +28,8 @@ class DiagnosisResult:
 
     status: Status
     diagnoses: tuple[tuple[str, ...], ...] = ()
-    conflicts: tuple[Observer, ...] = ()
-    failed: tuple[Observer, ...] = ()
+    conflicts: tuple[ModelObserver, ...] = ()
+    failed: tuple[ModelObserver, ...] = ()
     elapsed: float = 0.0
 
     def to_info(self, stamp: float = 0.0) -> DiagnosisInfo:

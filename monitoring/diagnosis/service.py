@@ -22,7 +22,7 @@ from executive.bus.payloads import ObservationInfo
 from executive.bus.service import Context, Service
 from knowledge.errors import BusError, ConfigError, DuraError
 from monitoring.diagnosis.engine import DiagnosisEngine
-from monitoring.diagnosis.model import ModelUpdate, Observer, SystemDescription, UpdateAction
+from monitoring.diagnosis.model import ModelObserver, ModelUpdate, SystemDescription, UpdateAction
 from monitoring.diagnosis.result import DiagnosisResult, Status
 
 log = logging.getLogger("dura.diagnosis")
@@ -123,7 +123,7 @@ class DiagnosisService(Service):
         """Add the observer that made an observation to the model, if it fits the model's
         nodes (observers describe themselves by their observations); whether it did."""
         try:
-            observer = Observer.make(info.type, info.resource, info.callerids)
+            observer = ModelObserver.make(info.type, info.resource, info.callerids)
         except ConfigError:
             return False
         if self.engine.model.problem(observer) is not None:

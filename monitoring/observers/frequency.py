@@ -43,7 +43,7 @@ from monitoring.caller_groups import CallerGroup, TopicGroups, read_topics
 from monitoring.config_entry import Entry
 from monitoring.filter import Filter, FilterConfig, FilterState, read_filter
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
-from monitoring.state import State, Verdict, classify, read_states
+from monitoring.state import ObserverState, Verdict, classify, read_states
 
 _SHORTEST = 1e-9  # a period of two messages received at once
 
@@ -51,7 +51,7 @@ _SHORTEST = 1e-9  # a period of two messages received at once
 @dataclass(frozen=True)
 class FrequencySettings:
     filter: FilterConfig
-    states: tuple[State, ...]
+    states: tuple[ObserverState, ...]
     timeout: float | None = None
 
 

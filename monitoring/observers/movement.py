@@ -43,7 +43,7 @@ from monitoring.config_entry import Entry
 from monitoring.field_path import read_number
 from monitoring.filter import Filter, FilterConfig, FilterState, read_filter
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
-from monitoring.state import State, classify, read_states
+from monitoring.state import ObserverState, classify, read_states
 
 AXES = ("x", "y", "z", "rot_x", "rot_y", "rot_z")
 
@@ -74,7 +74,7 @@ class Correlation:
     source_a: Source
     source_b: Source
     filters: dict[str, FilterConfig]  # compared axis -> filter
-    states: tuple[State, ...]
+    states: tuple[ObserverState, ...]
     behavior: str | None = None
     max_delay: float = 0.5
 

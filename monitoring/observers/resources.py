@@ -33,7 +33,7 @@ from knowledge.errors import BusError
 from monitoring.config_entry import Entry
 from monitoring.filter import FilterConfig, FilterState, read_filter
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
-from monitoring.state import State, Verdict, classify, read_states
+from monitoring.state import ObserverState, Verdict, classify, read_states
 
 NO_FILTER = FilterConfig("nofilter")
 
@@ -43,7 +43,7 @@ class WatchedNode:
     name: str
     cpu_filter: FilterConfig
     mem_filter: FilterConfig
-    states: tuple[State, ...]
+    states: tuple[ObserverState, ...]
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -32,7 +32,7 @@ from monitoring.config_entry import Entry
 from monitoring.field_path import read_number
 from monitoring.filter import Filter, FilterConfig, read_filter
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
-from monitoring.state import State, Verdict, classify, read_states
+from monitoring.state import ObserverState, Verdict, classify, read_states
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,7 @@ class ScoredTopic:
     field: str
     callerids: tuple[str, ...]
     filter: FilterConfig
-    states: tuple[State, ...]
+    states: tuple[ObserverState, ...]
 
 
 @dataclass(frozen=True, kw_only=True)

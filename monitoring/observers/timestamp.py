@@ -30,13 +30,13 @@ from monitoring.caller_groups import TopicGroups, read_topics
 from monitoring.config_entry import Entry
 from monitoring.filter import Filter, FilterConfig, read_filter
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
-from monitoring.state import State, Verdict, classify, read_states
+from monitoring.state import ObserverState, Verdict, classify, read_states
 
 
 @dataclass(frozen=True)
 class TimestampSettings:
     filter: FilterConfig
-    states: tuple[State, ...]
+    states: tuple[ObserverState, ...]
 
 
 @dataclass(frozen=True, kw_only=True)

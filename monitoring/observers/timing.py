@@ -35,7 +35,7 @@ from monitoring.caller_groups import topic_name
 from monitoring.config_entry import Entry
 from monitoring.filter import FilterConfig, read_filter
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
-from monitoring.state import State, classify, read_states
+from monitoring.state import ObserverState, classify, read_states
 
 
 @dataclass(frozen=True)
@@ -46,7 +46,7 @@ class TopicPair:
     callerids_b: tuple[str, ...]
     single_shot_mode: bool
     filter: FilterConfig
-    states: tuple[State, ...]
+    states: tuple[ObserverState, ...]
 
     @property
     def callerids(self) -> tuple[str, ...]:

@@ -44,7 +44,7 @@ from dataclasses import dataclass
 from executive.bus.payloads import ObservationInfo
 from knowledge.asp import Asp, atom, facts
 from monitoring.diagnosis.engine import DiagnosisEngine
-from monitoring.diagnosis.model import Node, Observer, SystemDescription
+from monitoring.diagnosis.model import ModelObserver, Node, SystemDescription
 from monitoring.diagnosis.result import DiagnosisResult, Status
 
 LAYERS = 6
@@ -96,7 +96,9 @@ def inject(name: str, nodes: list[Node], faults: int, seed: int) -> Instance:
         ):
             abnormal.update(node.pub_topic)
     topics = [t for n in nodes for t in n.pub_topic]
-    model = SystemDescription(tuple(nodes), tuple(Observer.make("frequency", [t]) for t in topics))
+    model = SystemDescription(
+        tuple(nodes), tuple(ModelObserver.make("frequency", [t]) for t in topics)
+    )
     observations = [
         ObservationInfo("frequency", (t,), -1 if t in abnormal else 0, stamp=1.0) for t in topics
     ]
@@ -286,7 +288,7 @@ def fan(topics: int) -> Instance:
     for i in range(topics):
         nodes += [Node(f"a{i}", ("r",), (f"m{i}",)), Node(f"b{i}", ("r",), (f"m{i}",))]
     model = SystemDescription(
-        tuple(nodes), tuple(Observer.make("frequency", [f"m{i}"]) for i in range(topics))
+        tuple(nodes), tuple(ModelObserver.make("frequency", [f"m{i}"]) for i in range(topics))
     )
     failed = [ObservationInfo("frequency", (f"m{i}",), -1) for i in range(topics)]
     return Instance(f"fan {topics}", model, failed, ("root",))

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from knowledge.description import Behavior, Functionality, GoalArg, Kind
+from knowledge.description import BehaviorSpec, FunctionalitySpec, GoalArg, Kind
 from knowledge.errors import ConfigError
 from knowledge.robot import load_robot, read_robot
 
@@ -48,8 +48,8 @@ def test_components_are_typed_and_frozen(usecase_path: Path) -> None:
     robot = load_robot(usecase_path)
     lidar = robot.component("lidar")
     move_to = robot.component("move_to")
-    assert isinstance(lidar, Functionality) and lidar.kind is Kind.FUNCTIONALITY
-    assert isinstance(move_to, Behavior) and move_to.kind is Kind.BEHAVIOR
+    assert isinstance(lidar, FunctionalitySpec) and lidar.kind is Kind.FUNCTIONALITY
+    assert isinstance(move_to, BehaviorSpec) and move_to.kind is Kind.BEHAVIOR
     assert lidar.command == ("python", "-m", "components.lidar")
     assert lidar.params == {"rate": 10.0}
     assert lidar.max_faults == 3

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from executive.sdk.component import Behavior, GoalFailed
+from executive.sdk import Behavior, GoalFailed
 
 
 class DriveTo(Behavior):

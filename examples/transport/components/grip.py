@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from executive.sdk.component import Behavior, GoalFailed
+from executive.sdk import Behavior, GoalFailed
 
 
 class GripAction(Behavior):

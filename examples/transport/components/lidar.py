@@ -5,7 +5,7 @@ from __future__ import annotations
 import random
 from typing import Any
 
-from executive.sdk.component import Functionality
+from executive.sdk import Functionality
 
 
 class Lidar(Functionality):

@@ -8,8 +8,7 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from executive.bus.session import Message
-from executive.sdk.component import Functionality
+from executive.sdk import Functionality, Message
 
 
 class LiftLink(Functionality):

@@ -5,8 +5,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from executive.sdk.component import Functionality
-from executive.sdk.fault_injection import FaultMode
+from executive.sdk import FaultMode, Functionality
 
 WIDTH, HEIGHT = 64, 48
 

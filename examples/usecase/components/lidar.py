@@ -6,8 +6,7 @@ import math
 from typing import Any
 
 from components.scan import BEAMS, OUT_OF_RANGE, scan
-from executive.sdk.component import Functionality
-from executive.sdk.fault_injection import FaultMode
+from executive.sdk import FaultMode, Functionality
 
 
 class Lidar(Functionality):

@@ -6,9 +6,7 @@ The filtered scan keeps the stamp of the scan it came from.
 from __future__ import annotations
 
 from components.scan import BEAMS, OUT_OF_RANGE, clip, scan
-from executive.bus.session import Message
-from executive.sdk.component import Functionality
-from executive.sdk.fault_injection import FaultMode
+from executive.sdk import FaultMode, Functionality, Message
 
 
 def median3(values: list[float]) -> list[float]:

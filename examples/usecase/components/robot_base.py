@@ -11,9 +11,7 @@ import math
 import time
 from typing import Any
 
-from executive.bus.session import Message
-from executive.sdk.component import Functionality
-from executive.sdk.fault_injection import FaultMode
+from executive.sdk import FaultMode, Functionality, Message
 
 OUT_OF_RANGE_SPEED = 1000.0  # m/s: no base drives this fast
 

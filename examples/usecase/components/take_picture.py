@@ -8,8 +8,7 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from executive.bus.session import Message
-from executive.sdk.component import Behavior, GoalFailed
+from executive.sdk import Behavior, GoalFailed, Message
 
 POLL = 0.05
 

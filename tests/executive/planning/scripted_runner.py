@@ -14,11 +14,11 @@ from collections.abc import Collection, Mapping
 from dataclasses import dataclass, field
 
 from executive.planning.partial_order import Step
-from executive.planning.plan_executer import RunningTask, StepReport, TaskRunner
+from executive.planning.plan_executer import StepReport, StepTask, TaskRunner
 
 
 @dataclass
-class ScriptedTask(RunningTask):
+class ScriptedTask(StepTask):
     step: Step
     report: StepReport
     interruptible: bool = True
@@ -76,7 +76,7 @@ class ScriptedRunner(TaskRunner):
         self.tasks: list[ScriptedTask] = []
         self.changed = threading.Condition()
 
-    def run(self, step: Step, plan_id: int, report: StepReport) -> RunningTask:
+    def run(self, step: Step, plan_id: int, report: StepReport) -> StepTask:
         task = ScriptedTask(step, report, interruptible=step.action not in self.critical)
         with self.changed:
             self.tasks.append(task)

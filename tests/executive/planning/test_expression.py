@@ -10,8 +10,8 @@ from executive.planning.expression import (
     Atom,
     Compare,
     Const,
-    State,
     Value,
+    WorldState,
     atoms,
     parse,
     parse_fact,
@@ -58,9 +58,9 @@ def test_quantifiers_expand_over_the_objects_of_their_type() -> None:
         for p in ("dock", "lab", "office")
         for name in ("photographable", "picture_taken")
     }
-    state = State([Fact("photographable", ("lab",)), Fact("picture_taken", ("lab",))])
+    state = WorldState([Fact("photographable", ("lab",)), Fact("picture_taken", ("lab",))])
     assert state.holds(goal)
-    assert not State([Fact("photographable", ("lab",))]).holds(goal)
+    assert not WorldState([Fact("photographable", ("lab",))]).holds(goal)
 
 
 def test_numeric_comparisons_read_the_facts_and_an_unknown_number_is_false() -> None:
@@ -68,8 +68,8 @@ def test_numeric_comparisons_read_the_facts_and_an_unknown_number_is_false() -> 
     travel = Arith("+", (Value("travel_time", ("dock", "lab")), Const(1.0)))
     assert goal == And((Atom("robot_at", ("dock",)), Compare("<", travel, Const(6.0))))
     facts = [Fact("robot_at", ("dock",)), Fact("travel_time", ("dock", "lab"), 4.0)]
-    assert State(facts).holds(goal)
-    assert not State(facts[:1]).holds(goal)
+    assert WorldState(facts).holds(goal)
+    assert not WorldState(facts[:1]).holds(goal)
 
 
 def test_facts_are_read_as_atoms_negations_and_numbers() -> None:

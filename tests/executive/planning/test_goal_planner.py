@@ -9,7 +9,7 @@ import pytest
 from executive.planning.goal_planner import GoalPlanner
 from executive.planning.goals import submit
 from executive.planning.partial_order import Step
-from executive.planning.plan_executer import PlanExecuter, RunningTask, StepReport
+from executive.planning.plan_executer import PlanExecuter, StepReport, StepTask
 from executive.planning.planner import Planner
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Goal, GoalState
@@ -205,7 +205,7 @@ def test_a_cancelled_goal_is_no_longer_pursued(executive: Callable[..., Executiv
 class AlwaysFailing(ScriptedRunner):
     """Every take_picture fails (the camera is broken for good)."""
 
-    def run(self, step: Step, plan_id: int, report: StepReport) -> RunningTask:
+    def run(self, step: Step, plan_id: int, report: StepReport) -> StepTask:
         if step.action == "take_picture":
             self.fail_once[step.label] = "the camera is broken"
         return super().run(step, plan_id, report)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import itertools
 
-from executive.planning.expression import Atom, State
+from executive.planning.expression import Atom, WorldState
 from executive.planning.goals import GoalSpec
 from executive.planning.partial_order import Precedence, Timepoint, apply
 from executive.planning.planner import Planner, PlanningTask
@@ -40,7 +40,7 @@ def test_steps_carry_their_ground_conditions_and_effects(kairos: Planner) -> Non
     assert move.at_start == Atom("robot_at", ("dock",))
     assert move.over_all == Atom("connected", ("dock", "lab"))
     assert move.duration == 4.0
-    state = State([Fact("robot_at", ("dock",))])
+    state = WorldState([Fact("robot_at", ("dock",))])
     add, remove = apply(move.start_effects, state)
     assert (add, remove) == ([], [Fact("robot_at", ("dock",), False)])
     assert apply(move.end_effects, state) == ([Fact("robot_at", ("lab",))], [])

@@ -17,7 +17,7 @@ from executive.bus.keys import EXECUTIVE_ALIVE, component
 from executive.bus.payloads import ComponentState
 from executive.bus.session import Bus, Message
 from executive.runtime.launcher import Launcher
-from knowledge.description import Behavior, Component, Functionality, RobotDescription
+from knowledge.description import BehaviorSpec, ComponentSpec, FunctionalitySpec, RobotDescription
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.robot import read_robot
 from tests.conftest import USECASE, wait_for
@@ -27,26 +27,26 @@ assert _read is not None
 USECASE_ROBOT: RobotDescription = _read
 
 
-def usecase(name: str, **changes: Any) -> Component:
+def usecase(name: str, **changes: Any) -> ComponentSpec:
     """A use-case component, with changed fields (``params=...``)."""
     return dataclasses.replace(USECASE_ROBOT.components[name], **changes)
 
 
 def scripted(
     name: str, module: str, *args: str, behavior: bool = False, **fields: Any
-) -> Component:
+) -> ComponentSpec:
     """A component running ``python -m module args...`` (``tests.*`` needs PYTHONPATH)."""
-    kind = Behavior if behavior else Functionality
+    kind = BehaviorSpec if behavior else FunctionalitySpec
     return kind(name=name, command=("python", "-m", module, *args), **fields)
 
 
-def robot(*components: Component, name: str = "testbot") -> RobotDescription:
+def robot(*components: ComponentSpec, name: str = "testbot") -> RobotDescription:
     """A robot of these components, run in the use case's folder (so they import)."""
     return dataclasses.replace(
         USECASE_ROBOT,
         name=name,
-        functionalities={c.name: c for c in components if isinstance(c, Functionality)},
-        behaviors={c.name: c for c in components if isinstance(c, Behavior)},
+        functionalities={c.name: c for c in components if isinstance(c, FunctionalitySpec)},
+        behaviors={c.name: c for c in components if isinstance(c, BehaviorSpec)},
         tasks={},
     )
 

@@ -15,7 +15,7 @@ import pytest
 
 from executive.bus.keys import topic
 from executive.bus.payloads import ComponentState, GoalStatus, Lifecycle
-from knowledge.description import Functionality
+from knowledge.description import FunctionalitySpec
 from knowledge.errors import ComponentError
 from tests.conftest import wait_for
 from tests.executive.runtime.rig import Recorder, Rig, rig, robot, scripted, states, usecase
@@ -87,7 +87,7 @@ def test_a_crash_fault_is_reported_with_its_exit_code(endpoint: str, tmp_path: P
 def test_a_component_that_never_gets_ready_fails_at_its_startup_timeout(
     endpoint: str, tmp_path: Path
 ) -> None:
-    silent = Functionality(
+    silent = FunctionalitySpec(
         name="silent", command=("python", "-c", "import time; time.sleep(60)"), startup_timeout=0.5
     )
     with rig(robot(silent), endpoint, tmp_path, grace=0.5) as r:

@@ -10,14 +10,14 @@ import psutil
 from executive.bus.payloads import GoalStatus, Lifecycle
 from executive.runtime.translator import load
 from executive.runtime.translators.process import ProcessTranslator
-from knowledge.description import Component
+from knowledge.description import ComponentSpec
 from tests.conftest import wait_for
 from tests.executive.runtime.rig import rig, robot, scripted
 
 PLAIN = ("--", "python", "-m", "tests.executive.runtime.plain_program")
 
 
-def translated(name: str, *args: str, behavior: bool = False) -> Component:
+def translated(name: str, *args: str, behavior: bool = False) -> ComponentSpec:
     return scripted(
         name, "executive.runtime.translator", "process", *PLAIN, *args, behavior=behavior
     )

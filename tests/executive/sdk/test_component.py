@@ -16,13 +16,13 @@ from executive.bus.keys import component, topic
 from executive.bus.payloads import Lifecycle
 from executive.bus.session import Bus
 from executive.sdk.fault_injection import Fault, FaultMode
-from knowledge.description import Component
+from knowledge.description import ComponentSpec
 from knowledge.errors import BusError, ComponentError
 from tests.conftest import ROOT, USECASE, wait_for
 from tests.executive.runtime.rig import Recorder, rig, robot, scripted, usecase
 
 
-def probe(**params: object) -> Component:
+def probe(**params: object) -> ComponentSpec:
     return scripted("probe", "tests.executive.runtime.probe", params=params)
 
 

@@ -9,14 +9,14 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from executive.tasks.schedule import Request
-from knowledge.description import Behavior, Functionality, RobotDescription
+from knowledge.description import BehaviorSpec, FunctionalitySpec, RobotDescription
 from knowledge.robot import load_robot
 from tests.conftest import USECASE
 
 
 @dataclass(frozen=True)
 class Problem:
-    functionalities: tuple[Functionality, ...]
+    functionalities: tuple[FunctionalitySpec, ...]
     requests: tuple[Request, ...]
     faulty: frozenset[str] = field(default_factory=frozenset)
 
@@ -27,14 +27,14 @@ def usecase_robot() -> RobotDescription:
     return load_robot(USECASE)
 
 
-def usecase() -> tuple[dict[str, Functionality], dict[str, Behavior]]:
+def usecase() -> tuple[dict[str, FunctionalitySpec], dict[str, BehaviorSpec]]:
     """The thesis use case's functionalities and behaviors, by name."""
     robot = usecase_robot()
     return dict(robot.functionalities), dict(robot.behaviors)
 
 
 def request(
-    behavior: Behavior, request_id: str, duration: float = 10.0, **constraints: Any
+    behavior: BehaviorSpec, request_id: str, duration: float = 10.0, **constraints: Any
 ) -> Request:
     """A request for a behavior's capabilities."""
     return Request(request_id, behavior.name, behavior.requires, duration, **constraints)
@@ -47,8 +47,8 @@ def functionality(
     *,
     shareable: bool = True,
     rating: float = 1.0,
-) -> Functionality:
-    return Functionality(
+) -> FunctionalitySpec:
+    return FunctionalitySpec(
         name=name,
         command=(),
         provides=tuple(provides),
@@ -68,7 +68,7 @@ def generate(size: int, seed: int) -> Problem:
     """
     rng = random.Random(seed)
     capabilities = [f"c{i}" for i in range(max(6, size // 2))]
-    functionalities: list[Functionality] = []
+    functionalities: list[FunctionalitySpec] = []
     for i, capability in enumerate(capabilities):
         for j in range(rng.randint(1, 3)):
             requires = (rng.choice(capabilities[:i]),) if i and rng.random() < 0.4 else ()
@@ -124,7 +124,7 @@ def generate(size: int, seed: int) -> Problem:
 
 def _configuration(
     needs: Sequence[str],
-    functionalities: Sequence[Functionality],
+    functionalities: Sequence[FunctionalitySpec],
     faulty: frozenset[str],
     held: set[str],
 ) -> Mapping[str, str] | None:

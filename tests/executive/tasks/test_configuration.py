@@ -1,7 +1,7 @@
 from __future__ import annotations
 
 from executive.tasks.configuration import SystemConfiguration, Transition
-from knowledge.description import Functionality
+from knowledge.description import FunctionalitySpec
 from tests.executive.tasks.scheduling_cases import usecase
 
 LIDAR = {"obstacle_scan": "lidar_filter", "laser_scan": "lidar", "base": "robot_base"}
@@ -9,7 +9,7 @@ CAM = {"obstacle_scan": "cam_to_lidar", "camera": "cam", "base": "robot_base"}
 PICTURE = {"camera": "cam"}
 
 
-def functionalities() -> list[Functionality]:
+def functionalities() -> list[FunctionalitySpec]:
     return list(usecase()[0].values())
 
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from executive.tasks.faults import Faults, RunningTask, TaskAction
+from executive.tasks.faults import Faults, TaskAction, TaskUsage
 from knowledge.description import Kind, RobotDescription
 from knowledge.errors import KnowledgeError
 from knowledge.knowledge_base import KnowledgeBase
@@ -27,8 +27,8 @@ def kb(tmp_path: Path) -> Iterator[KnowledgeBase]:
         yield kb
 
 
-def move_to(functionalities: frozenset[str] = LIDAR) -> RunningTask:
-    return RunningTask("1", "move_to", functionalities)
+def move_to(functionalities: frozenset[str] = LIDAR) -> TaskUsage:
+    return TaskUsage("1", "move_to", functionalities)
 
 
 def test_a_functionality_below_max_faults_is_restarted_and_its_task_restarts_its_behavior(
@@ -58,7 +58,7 @@ def test_the_third_fault_makes_lidar_and_lidar_filter_permanently_faulty(
     robot: RobotDescription, kb: KnowledgeBase
 ) -> None:
     faults = Faults(robot, kb)
-    others = RunningTask("2", "take_picture", frozenset({"cam"}))
+    others = TaskUsage("2", "take_picture", frozenset({"cam"}))
     decisions = [faults.fault("lidar", "restart requested", [move_to(), others]) for _ in range(3)]
     assert [(d.count, d.permanent) for d in decisions] == [(1, False), (2, False), (3, True)]
     last = decisions[-1]
@@ -78,7 +78,7 @@ def test_a_task_on_a_functionality_that_lost_its_base_is_hit_too(
     robot: RobotDescription, kb: KnowledgeBase
 ) -> None:
     faults = Faults(robot, kb)
-    on_filter = RunningTask("3", "move_to", frozenset({"lidar_filter"}))
+    on_filter = TaskUsage("3", "move_to", frozenset({"lidar_filter"}))
     decision = faults.fault("lidar", "diagnosed faulty", [on_filter], permanent=True)
     assert decision.permanent
     assert decision.count == 1
@@ -115,10 +115,10 @@ def test_a_failing_behavior_restarts_up_to_max_restarts_then_its_task_fails(
     robot: RobotDescription, kb: KnowledgeBase
 ) -> None:
     faults = Faults(robot, kb)
-    task = RunningTask("7", "take_picture", frozenset({"cam"}))  # max_restarts: 2
+    task = TaskUsage("7", "take_picture", frozenset({"cam"}))  # max_restarts: 2
     actions = [faults.fault("take_picture", "exited 1", [task]).tasks["7"] for _ in range(3)]
     assert actions == [TaskAction.RESTART, TaskAction.RESTART, TaskAction.FAIL]
-    decision = faults.fault("take_picture", "exited 1", [RunningTask("8", "take_picture")])
+    decision = faults.fault("take_picture", "exited 1", [TaskUsage("8", "take_picture")])
     assert decision.tasks == {"8": TaskAction.RESTART}  # a new task starts counting afresh
     assert not decision.restart
     assert not decision.permanent  # behaviors count faults but never become faulty by count
@@ -129,7 +129,7 @@ def test_restarts_of_a_finished_task_are_forgotten(
     robot: RobotDescription, kb: KnowledgeBase
 ) -> None:
     faults = Faults(robot, kb)
-    task = RunningTask("7", "take_picture")
+    task = TaskUsage("7", "take_picture")
     faults.fault("take_picture", "exited 1", [task])
     faults.fault("take_picture", "exited 1", [task])
     faults.finished("7")

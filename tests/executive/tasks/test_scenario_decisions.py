@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from executive.tasks.configuration import SystemConfiguration, Transition
-from executive.tasks.faults import Faults, RunningTask, TaskAction
+from executive.tasks.faults import Faults, TaskAction, TaskUsage
 from executive.tasks.schedule import Request
 from executive.tasks.scheduler import Scheduler
 from knowledge.description import RobotDescription
@@ -52,7 +52,7 @@ def test_scenario_1_lidar_faulted_three_times_without_an_alternative_cancels_mov
     robot = without(usecase, "cam", "cam_to_lidar")
     faults = Faults(robot, kb)
     (providers,) = schedule(faults, [request(robot, "1", "move_to")]).values()
-    running = RunningTask("1", "move_to", frozenset(providers.values()))
+    running = TaskUsage("1", "move_to", frozenset(providers.values()))
     first, second, third = (faults.fault("lidar", "user restart", [running]) for _ in range(3))
     for decision in (first, second):
         assert decision.restart  # restart lidar; move_to is stopped and started again
@@ -76,7 +76,7 @@ def test_scenario_2_after_the_third_fault_move_to_switches_to_cam_and_cam_to_lid
     assert SystemConfiguration().transition(configuration, usecase.functionalities.values()) == (
         Transition(start=("lidar", "lidar_filter", "robot_base"))
     )
-    running = RunningTask("1", "move_to", configuration.functionalities)
+    running = TaskUsage("1", "move_to", configuration.functionalities)
     *_, third = (faults.fault("lidar", "user restart", [running]) for _ in range(3))
     assert third.reschedule
     assert third.tasks == {"1": TaskAction.RESTART}
@@ -116,8 +116,8 @@ def test_scenario_4_cam_runs_while_move_to_or_take_picture_needs_it(
     configuration = SystemConfiguration(before)
     assert configuration.users["cam"] == {"2"}
     tasks = [
-        RunningTask("1", "move_to", frozenset(before["1"].values())),
-        RunningTask("2", "take_picture", frozenset(before["2"].values())),
+        TaskUsage("1", "move_to", frozenset(before["1"].values())),
+        TaskUsage("2", "take_picture", frozenset(before["2"].values())),
     ]
     *_, third = (faults.fault("lidar", "user restart", tasks) for _ in range(3))
     assert third.tasks == {"1": TaskAction.RESTART}  # take_picture keeps running

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from executive.tasks.schedule import Request, ScheduleResult, ScheduleStatus
 from executive.tasks.scheduler import Scheduler
 from knowledge.availability import Availability
-from knowledge.description import Functionality
+from knowledge.description import FunctionalitySpec
 from tests.executive.tasks.scheduling_cases import functionality, generate, request, usecase
 
 LIDAR = {"obstacle_scan": "lidar_filter", "laser_scan": "lidar", "base": "robot_base"}
@@ -39,7 +39,7 @@ def take_picture(request_id: str, **constraints: Any) -> Request:
 
 
 def assert_valid(
-    functionalities: Collection[Functionality],
+    functionalities: Collection[FunctionalitySpec],
     requests: Sequence[Request],
     faulty: Collection[str],
     result: ScheduleResult,

@@ -13,7 +13,7 @@ from pathlib import Path
 import yaml
 
 from executive.bus.payloads import ObservationInfo
-from monitoring.diagnosis.model import Node, Observer, SystemDescription
+from monitoring.diagnosis.model import ModelObserver, Node, SystemDescription
 
 # (type, resources, observation, caller ids)
 Obs = tuple[str, tuple[str, ...], int, tuple[str, ...]]
@@ -45,7 +45,7 @@ class Case:
     def model(self) -> SystemDescription:
         return SystemDescription(
             tuple(Node(n, sub, pub) for n, sub, pub in self.nodes),
-            tuple(Observer.make(t, r, c) for t, r, c in self.observers),
+            tuple(ModelObserver.make(t, r, c) for t, r, c in self.observers),
         )
 
     @property

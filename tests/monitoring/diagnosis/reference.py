@@ -15,7 +15,7 @@ from collections.abc import Iterable
 from itertools import chain, combinations
 
 from executive.bus.payloads import ObservationInfo
-from monitoring.diagnosis.model import Observer, ObserverType, SystemDescription
+from monitoring.diagnosis.model import ModelObserver, ObserverType, SystemDescription
 
 Stream = tuple[str, str]  # (node, topic)
 
@@ -27,7 +27,7 @@ def _subsets(items: list[str]) -> Iterable[frozenset[str]]:
     )
 
 
-def _watched(model: SystemDescription, observer: Observer) -> set[Stream]:
+def _watched(model: SystemDescription, observer: ModelObserver) -> set[Stream]:
     out: set[Stream] = set()
     for topic in observer.topics:
         for node in model.publishers(topic):
@@ -55,7 +55,7 @@ def _well_founded(
 
 def _explained(
     model: SystemDescription,
-    observer: Observer,
+    observer: ModelObserver,
     faulty: frozenset[str],
     abnormal: frozenset[Stream],
 ) -> bool:
@@ -73,7 +73,7 @@ def _explained(
 
 def consistent(
     model: SystemDescription,
-    observations: dict[Observer, ObservationInfo],
+    observations: dict[ModelObserver, ObservationInfo],
     faulty: frozenset[str],
     *,
     exonerate: bool,
@@ -101,7 +101,7 @@ def consistent(
 
 
 def diagnoses(
-    model: SystemDescription, observations: dict[Observer, ObservationInfo], *, exonerate: bool
+    model: SystemDescription, observations: dict[ModelObserver, ObservationInfo], *, exonerate: bool
 ) -> set[frozenset[str]]:
     """Every subset-minimal consistent set of faulty candidates."""
     good = [

@@ -7,7 +7,13 @@ import pytest
 from executive.bus.payloads import ObservationInfo
 from knowledge.errors import ConfigError
 from monitoring.diagnosis.engine import DiagnosisEngine
-from monitoring.diagnosis.model import ModelUpdate, Node, Observer, SystemDescription, UpdateAction
+from monitoring.diagnosis.model import (
+    ModelObserver,
+    ModelUpdate,
+    Node,
+    SystemDescription,
+    UpdateAction,
+)
 from monitoring.diagnosis.result import Status
 from tests.monitoring.diagnosis.cases import CASES, THESIS_NODES, Case
 from tests.monitoring.diagnosis.reference import diagnoses as reference
@@ -92,7 +98,7 @@ def test_the_model_grows_as_the_thesis_example_starts_its_nodes() -> None:
             ModelUpdate(
                 UpdateAction.ADD,
                 (Node(name, sub, pub),),
-                tuple(Observer.make(t, r) for t, r in observers),
+                tuple(ModelObserver.make(t, r) for t, r in observers),
             )
         )
     assert [n.name for n in engine.model.nodes] == ["N1", "N2", "N3", "N4"]
@@ -103,11 +109,11 @@ def test_the_model_grows_as_the_thesis_example_starts_its_nodes() -> None:
 def test_removing_a_node_with_its_observers_restores_the_earlier_model() -> None:
     engine = DiagnosisEngine()
     before = SystemDescription(
-        (Node("N1", (), ("m1",)), Node("N2", (), ("m2",))), (Observer.make("hz", ["m1"]),)
+        (Node("N1", (), ("m1",)), Node("N2", (), ("m2",))), (ModelObserver.make("hz", ["m1"]),)
     )
     engine.set_model(before)
     n3 = ModelUpdate(
-        UpdateAction.ADD, (Node("N3", ("m1", "m2"), ("m3",)),), (Observer.make("hz", ["m3"]),)
+        UpdateAction.ADD, (Node("N3", ("m1", "m2"), ("m3",)),), (ModelObserver.make("hz", ["m3"]),)
     )
     engine.update(n3)
     engine.update(ModelUpdate(UpdateAction.REMOVE, n3.nodes, n3.observers))
@@ -121,7 +127,7 @@ def test_observations_of_a_removed_observer_are_forgotten() -> None:
         ModelUpdate(
             UpdateAction.REMOVE,
             (Node("N4"),),
-            (Observer.make("component", ["N4"]), Observer.make("hz", ["m4"])),
+            (ModelObserver.make("component", ["N4"]), ModelObserver.make("hz", ["m4"])),
         )
     )
     assert engine.diagnose().status is Status.OK
@@ -136,26 +142,31 @@ def test_observations_of_a_removed_observer_are_forgotten() -> None:
             ModelUpdate(UpdateAction.ADD, (Node("N1", (), ("m1",)),)),
             "node 'N1' is already in the model",
         ),
-        (ModelUpdate(UpdateAction.ADD, (), (Observer.make("hz", ["m9"]),)), "unknown topic 'm9'"),
         (
-            ModelUpdate(UpdateAction.ADD, (Node("N5", ("q",), ()),), (Observer.make("hz", ["q"]),)),
+            ModelUpdate(UpdateAction.ADD, (), (ModelObserver.make("hz", ["m9"]),)),
+            "unknown topic 'm9'",
+        ),
+        (
+            ModelUpdate(
+                UpdateAction.ADD, (Node("N5", ("q",), ()),), (ModelObserver.make("hz", ["q"]),)
+            ),
             "topic 'q' that no node publishes",
         ),
         (
-            ModelUpdate(UpdateAction.ADD, (), (Observer.make("component", ["N7"]),)),
+            ModelUpdate(UpdateAction.ADD, (), (ModelObserver.make("component", ["N7"]),)),
             "unknown node 'N7'",
         ),
         (
-            ModelUpdate(UpdateAction.ADD, (), (Observer.make("hz", ["m1"]),)),
+            ModelUpdate(UpdateAction.ADD, (), (ModelObserver.make("hz", ["m1"]),)),
             r"frequency\[m1\] is already",
         ),
         (ModelUpdate(UpdateAction.REMOVE, (Node("N3"),)), "topic 'm3' that no node publishes"),
         (
-            ModelUpdate(UpdateAction.ADD, (), (Observer.make("hz", ["m3"], ["N1"]),)),
+            ModelUpdate(UpdateAction.ADD, (), (ModelObserver.make("hz", ["m3"], ["N1"]),)),
             "caller id 'N1' that publishes none of its topics",
         ),
         (
-            ModelUpdate(UpdateAction.REMOVE, (), (Observer.make("timeout", ["m3"]),)),
+            ModelUpdate(UpdateAction.REMOVE, (), (ModelObserver.make("timeout", ["m3"]),)),
             "is not in the model",
         ),
     ],
@@ -214,7 +225,9 @@ def test_update_replaces_a_node_and_set_replaces_the_model() -> None:
     node = engine.model.node("N4")
     assert node is not None and node.sub_topic == ("m3", "m1")
     engine.update(
-        ModelUpdate(UpdateAction.SET, (Node("solo", (), ("x",)),), (Observer.make("hz", ["x"]),))
+        ModelUpdate(
+            UpdateAction.SET, (Node("solo", (), ("x",)),), (ModelObserver.make("hz", ["x"]),)
+        )
     )
     assert [n.name for n in engine.model.nodes] == ["solo"]
 
@@ -223,7 +236,7 @@ def test_a_problem_too_large_for_a_template_is_solved_on_its_own() -> None:
     # root feeds 40 topics with one publisher each: 40 conflicts and 41 classes
     width = 40
     nodes = [Node("root", (), ("r",))] + [Node(f"a{i}", ("r",), (f"m{i}",)) for i in range(width)]
-    observers = tuple(Observer.make("hz", [f"m{i}"]) for i in range(width))
+    observers = tuple(ModelObserver.make("hz", [f"m{i}"]) for i in range(width))
     engine = DiagnosisEngine(SystemDescription(tuple(nodes), observers))
     for i in range(width):
         engine.observe(ObservationInfo("hz", (f"m{i}",), -1))
@@ -243,7 +256,7 @@ def test_a_time_bound_returns_timeout_with_what_was_found() -> None:
     nodes = [Node("root", (), ("r",))]
     nodes += [Node(f"u{i}", ("r",), (f"p{i}",)) for i in range(width)]
     nodes += [Node(f"w{i}", (f"p{i}", f"p{(i + 1) % width}"), (f"q{i}",)) for i in range(width)]
-    observers = [Observer.make("hz", [f"q{i}"]) for i in range(width)]
+    observers = [ModelObserver.make("hz", [f"q{i}"]) for i in range(width)]
     engine = DiagnosisEngine(SystemDescription(tuple(nodes), tuple(observers)), timeout=0.2)
     for i in range(width):
         engine.observe(ObservationInfo("hz", (f"q{i}",), -1))
@@ -264,7 +277,7 @@ def test_a_time_bound_keeps_the_smallest_diagnoses_among_very_many() -> None:
     nodes = [Node("root", (), ("r",))]
     for i in range(topics):
         nodes += [Node(f"a{i}", ("r",), (f"m{i}",)), Node(f"b{i}", ("r",), (f"m{i}",))]
-    observers = tuple(Observer.make("hz", [f"m{i}"]) for i in range(topics))
+    observers = tuple(ModelObserver.make("hz", [f"m{i}"]) for i in range(topics))
     engine = DiagnosisEngine(SystemDescription(tuple(nodes), observers), timeout=1.0)
     for i in range(topics):
         engine.observe(ObservationInfo("hz", (f"m{i}",), -1))

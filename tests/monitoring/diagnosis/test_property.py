@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from executive.bus.payloads import ObservationInfo
 from monitoring.diagnosis.engine import DiagnosisEngine
-from monitoring.diagnosis.model import Node, Observer, SystemDescription
+from monitoring.diagnosis.model import ModelObserver, Node, SystemDescription
 from monitoring.diagnosis.result import Status
 from tests.monitoring.diagnosis.reference import diagnoses as reference
 
@@ -25,18 +25,18 @@ def situations(draw: st.DrawFn) -> tuple[SystemDescription, list[ObservationInfo
         nodes.append(Node(f"n{i}", tuple(sub), tuple(pub)))
     names = [n.name for n in nodes]
     published = sorted({t for n in nodes for t in n.pub_topic})
-    options: list[Observer] = [
-        Observer.make(k, [n]) for n in names for k in ("component", "resources")
+    options: list[ModelObserver] = [
+        ModelObserver.make(k, [n]) for n in names for k in ("component", "resources")
     ]
     for topic in published:
         publishers = [n.name for n in nodes if topic in n.pub_topic]
-        options.append(Observer.make("frequency", [topic]))
-        options.append(Observer.make("timeout", [topic], [publishers[0]]))
+        options.append(ModelObserver.make("frequency", [topic]))
+        options.append(ModelObserver.make("timeout", [topic], [publishers[0]]))
     for a in published:
         for b in published:
             if a < b:
-                options.append(Observer.make("timing", [a, b]))
-                options.append(Observer.make("movement", [a, b, "slip"]))
+                options.append(ModelObserver.make("timing", [a, b]))
+                options.append(ModelObserver.make("movement", [a, b, "slip"]))
     observers = draw(st.lists(st.sampled_from(options), min_size=1, max_size=5, unique=True))
     model = SystemDescription(tuple(nodes), tuple(observers))
     infos = [
