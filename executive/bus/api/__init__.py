@@ -1,0 +1,15 @@
+"""Each service's bus API, declared once (one module per service).
+
+- :mod:`.planning` — goals, plans, the world's facts and objects, events, status (the
+  high level);
+- :mod:`.tasks` — tasks, the schedule, faults and resets of components (the task
+  executor);
+- :mod:`.components` — component processes: list, start, stop, logs, achievements (the
+  launcher);
+- :mod:`.monitoring` — observers at run time and the diagnosis model.
+
+A declaration is a :class:`~executive.bus.verb.Verb`: its key, its request and reply
+types (:class:`~executive.bus.schema.Payload` dataclasses) and how long a caller waits.
+The services serve them, and the CLI, the test harness, the dashboard, the rule engine
+and the component SDK call them, through these constants.
+"""

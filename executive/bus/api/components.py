@@ -1,0 +1,54 @@
+"""The launcher's API: component processes (list, start, stop, logs, achievements)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Annotated, Any
+
+from executive.bus.keys import api
+from executive.bus.payloads import ComponentState
+from executive.bus.schema import Between, Payload, Text
+from executive.bus.verb import Empty, Verb
+
+MAX_LOG_LINES = 10_000
+
+
+@dataclass(frozen=True)
+class ComponentName(Payload):
+    name: Text
+
+
+@dataclass(frozen=True)
+class ComponentsReply(Payload):
+    """Each component's state payload with its ``kind`` and ``log`` path."""
+
+    components: list[dict[str, Any]]
+
+
+@dataclass(frozen=True)
+class LogQuery(Payload):
+    name: Text
+    lines: Annotated[int, Between(0, MAX_LOG_LINES)] = 50
+
+
+@dataclass(frozen=True)
+class LogReply(Payload):
+    name: str
+    path: str
+    lines: list[str]
+
+
+@dataclass(frozen=True)
+class Achievement(Payload):
+    """A behavior's achievement, kept for a warm start."""
+
+    component: Text
+    key: Text
+    value: Any = None
+
+
+COMPONENT_LIST = Verb(api("component/list"), Empty, ComponentsReply, threaded=False)
+COMPONENT_START = Verb(api("component/start"), ComponentName, ComponentState, timeout=60.0)
+COMPONENT_STOP = Verb(api("component/stop"), ComponentName, ComponentState, timeout=60.0)
+COMPONENT_LOGS = Verb(api("component/logs"), LogQuery, LogReply, threaded=False)
+COMPONENT_ACHIEVE = Verb(api("component/achieve"), Achievement, Empty, timeout=5.0)

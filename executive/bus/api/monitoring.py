@@ -1,0 +1,85 @@
+"""The monitoring services' API: observers at run time (the observer manager) and the
+diagnosis model (the diagnosis engine)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from executive.bus.keys import DIAGNOSIS_MODEL, observers_api
+from executive.bus.schema import Payload, Text
+from executive.bus.verb import Empty, Verb
+
+
+@dataclass(frozen=True)
+class ObserversReply(Payload):
+    """Each observer: ``{id, type, component, enabled, active, main_loop_rate,
+    start_up_time}``."""
+
+    observers: list[dict[str, Any]]
+
+
+@dataclass(frozen=True)
+class ObserverAdd(Payload):
+    """An observer entry (the thesis/tug schema), of a component or of its own, with an
+    optional name (its id)."""
+
+    config: Any
+    component: str | None = None
+    name: str | None = None
+
+
+@dataclass(frozen=True)
+class ObserverChange(Payload):
+    id: Text
+    config: Any
+
+
+@dataclass(frozen=True)
+class ObserverId(Payload):
+    id: Text
+
+
+@dataclass(frozen=True)
+class ObserverActive(Payload):
+    """Whether the observer observes now (enabled, and its component READY)."""
+
+    id: str
+    active: bool
+
+
+@dataclass(frozen=True)
+class LatestReply(Payload):
+    """The last observation of every resource of every active observer, as published on
+    ``observations``."""
+
+    observations: list[dict[str, Any]]
+
+
+@dataclass(frozen=True)
+class ModelChange(Payload):
+    """A change of the diagnosis model: ADD, REMOVE, UPDATE, SET or GET, with nodes
+    ``{name, sub_topic, pub_topic}`` and observers ``{type, resource, callerids}``."""
+
+    action: Text
+    nodes: list[dict[str, Any]] = field(default_factory=list)
+    observers: list[dict[str, Any]] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class ModelReply(Payload):
+    """The model after the change, or why the change was refused (it changed nothing)."""
+
+    ok: bool
+    model: dict[str, Any] | None = None
+    error: str = ""
+
+
+OBSERVER_LIST = Verb(observers_api("list"), Empty, ObserversReply, threaded=False)
+OBSERVER_ADD = Verb(observers_api("add"), ObserverAdd, ObserverActive, threaded=False)
+OBSERVER_CHANGE = Verb(observers_api("change"), ObserverChange, ObserverActive, threaded=False)
+OBSERVER_REMOVE = Verb(observers_api("remove"), ObserverId, ObserverId, threaded=False)
+OBSERVER_ACTIVATE = Verb(observers_api("activate"), ObserverId, ObserverActive, threaded=False)
+OBSERVER_DEACTIVATE = Verb(observers_api("deactivate"), ObserverId, ObserverActive, threaded=False)
+OBSERVER_LATEST = Verb(observers_api("latest"), Empty, LatestReply, threaded=False, timeout=5.0)
+DIAGNOSIS_MODEL_CHANGE = Verb(DIAGNOSIS_MODEL, ModelChange, ModelReply, threaded=False)

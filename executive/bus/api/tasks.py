@@ -1,0 +1,96 @@
+"""The task executor's API: tasks by hand, the schedule, faults and resets of components."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Annotated, Any
+
+from executive.bus.keys import api
+from executive.bus.schema import Between, Payload, Text
+from executive.bus.verb import Empty, Verb
+
+Seconds = Annotated[float, Between(0.0, 1e9)]
+
+
+@dataclass(frozen=True)
+class TaskStart(Payload):
+    """A task of the robot (or a behavior) with its goal fields and constraints; times
+    are seconds from now, ``together`` lists waiting tasks to start with."""
+
+    task: Text
+    goal: dict[str, Any] = field(default_factory=dict)
+    duration: Seconds | None = None
+    earliest: Seconds | None = None
+    deadline: Seconds | None = None
+    together: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class TaskStarted(Payload):
+    id: str
+    behavior: str
+
+
+@dataclass(frozen=True)
+class TaskId(Payload):
+    id: Text
+
+
+@dataclass(frozen=True)
+class TaskReply(Payload):
+    task: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class TasksReply(Payload):
+    tasks: list[dict[str, Any]]
+
+
+@dataclass(frozen=True)
+class ScheduleReply(Payload):
+    """Waiting and running tasks in time, the running and the permanently faulty
+    functionalities."""
+
+    tasks: list[dict[str, Any]]
+    running: list[str]
+    faulty: list[str]
+
+
+@dataclass(frozen=True)
+class ComponentFault(Payload):
+    """A fault of a component reported by a repair rule or a user."""
+
+    name: Text
+    reason: str = ""
+
+
+@dataclass(frozen=True)
+class FaultReply(Payload):
+    """The component's state (a ``component/<name>/state`` payload) and its faults."""
+
+    state: dict[str, Any]
+    faults: int
+    permanent: bool
+
+
+@dataclass(frozen=True)
+class ComponentName(Payload):
+    name: Text
+
+
+@dataclass(frozen=True)
+class ResetReply(Payload):
+    """The functionalities usable again."""
+
+    usable: list[str]
+
+
+TASK_START = Verb(api("task/start"), TaskStart, TaskStarted)
+TASK_LIST = Verb(api("task/list"), Empty, TasksReply)
+TASK_STOP = Verb(api("task/stop"), TaskId, TaskReply)
+TASK_PAUSE = Verb(api("task/pause"), TaskId, TaskReply)
+TASK_RESUME = Verb(api("task/resume"), TaskId, TaskReply)
+SCHEDULE_SHOW = Verb(api("schedule/show"), Empty, ScheduleReply)
+COMPONENT_RESTART = Verb(api("component/restart"), ComponentFault, FaultReply)
+COMPONENT_FAULT = Verb(api("component/fault"), ComponentFault, FaultReply)
+COMPONENT_RESET = Verb(api("component/reset"), ComponentName, ResetReply)

@@ -1,0 +1,199 @@
+"""Typed payloads: frozen dataclasses read from JSON objects by their annotations.
+
+A request or reply of a service's bus API is a :class:`Payload`: a frozen dataclass
+whose fields say what a valid JSON object holds. :meth:`Payload.from_payload` checks
+every field against its annotation and refuses bad input with one sentence that names
+the field and the bad value; nothing else in dura validates requests by hand.
+
+Supported annotations: ``str``, ``int`` (not ``bool``; within 64 bits), ``float``
+(finite; an integer is accepted), ``bool``, ``X | None``, ``list[X]``,
+``tuple[X, ...]``, ``dict[str, X]``, ``Any``, an :class:`enum.Enum` (by value), a
+nested :class:`Payload`, and ``Annotated[X, constraint]`` with :class:`NonEmpty` and
+:class:`Between`. A field with a default may be absent; ``None`` means absent too.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import json
+import math
+import types
+import typing
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, Self
+
+from knowledge.errors import DuraError
+
+INT64 = 2**63
+
+
+class PayloadError(DuraError):
+    """A payload that does not fit its type."""
+
+
+@dataclass(frozen=True)
+class NonEmpty:
+    """A text with something in it, or a list with at least one item."""
+
+
+@dataclass(frozen=True)
+class Between:
+    """A number from ``low`` to ``high`` (both included)."""
+
+    low: float
+    high: float
+
+
+def shown(value: Any) -> str:
+    """A value as JSON (as the sender wrote it), cut short if long."""
+    try:
+        text = json.dumps(value)
+    except (TypeError, ValueError):
+        text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def read(annotation: Any, value: Any, name: str) -> Any:
+    """Check ``value`` against ``annotation``; the value as the field holds it.
+
+    Raises:
+        PayloadError: the value does not fit, with a sentence naming ``name``.
+    """
+    constraints: tuple[Any, ...] = ()
+    if typing.get_origin(annotation) is typing.Annotated:
+        annotation, *rest = typing.get_args(annotation)
+        constraints = tuple(rest)
+    blank = not isinstance(value, str) or not value.strip()
+    if annotation is str and blank and any(isinstance(c, NonEmpty) for c in constraints):
+        raise PayloadError(f"'{name}' must be a non-empty string, not {shown(value)}")
+    result = _read(annotation, value, name)
+    for constraint in constraints:
+        if isinstance(constraint, NonEmpty) and not (
+            result.strip() if isinstance(result, str) else result
+        ):
+            what = "a non-empty string" if isinstance(result, str) else "a non-empty list"
+            raise PayloadError(f"'{name}' must be {what}, not {shown(value)}")
+        if isinstance(constraint, Between) and not constraint.low <= result <= constraint.high:
+            raise PayloadError(
+                f"'{name}' must be from {constraint.low:g} to {constraint.high:g}, "
+                f"not {shown(value)}"
+            )
+    return result
+
+
+def _read(annotation: Any, value: Any, name: str) -> Any:
+    origin = typing.get_origin(annotation)
+    if annotation is Any:
+        return value
+    if origin in (types.UnionType, typing.Union):
+        options = typing.get_args(annotation)
+        if value is None and type(None) in options:
+            return None
+        (inner,) = [o for o in options if o is not type(None)]
+        return read(inner, value, name)
+    if annotation is str:
+        if not isinstance(value, str):
+            raise PayloadError(f"'{name}' must be a string, not {shown(value)}")
+        return value
+    if annotation is bool:
+        if not isinstance(value, bool):
+            raise PayloadError(f"'{name}' must be true or false, not {shown(value)}")
+        return value
+    if annotation is int:
+        if not isinstance(value, int) or isinstance(value, bool) or not -INT64 <= value < INT64:
+            raise PayloadError(f"'{name}' must be an integer, not {shown(value)}")
+        return value
+    if annotation is float:
+        if not isinstance(value, int | float) or isinstance(value, bool):
+            raise PayloadError(f"'{name}' must be a number, not {shown(value)}")
+        if not math.isfinite(value):
+            raise PayloadError(f"'{name}' must be a finite number, not {shown(value)}")
+        return float(value)
+    if origin in (list, tuple):
+        if not isinstance(value, list):
+            raise PayloadError(f"'{name}' must be a list, not {shown(value)}")
+        inner = typing.get_args(annotation)[0]
+        items = [read(inner, item, f"{name}[{i}]") for i, item in enumerate(value)]
+        return items if origin is list else tuple(items)
+    if origin is dict or annotation is dict:
+        if not isinstance(value, dict):
+            raise PayloadError(f"'{name}' must be an object, not {shown(value)}")
+        args = typing.get_args(annotation)
+        if not args or args[1] is Any:
+            return value
+        return {k: read(args[1], v, f"{name}.{k}") for k, v in value.items()}
+    if isinstance(annotation, type) and issubclass(annotation, enum.Enum):
+        try:
+            return annotation(value)
+        except ValueError:
+            choices = ", ".join(str(m.value) for m in annotation)
+            raise PayloadError(f"'{name}' must be one of {choices}, not {shown(value)}") from None
+    if isinstance(annotation, type) and issubclass(annotation, Payload):
+        if not isinstance(value, dict):
+            raise PayloadError(f"'{name}' must be an object, not {shown(value)}")
+        return annotation.from_payload(value, prefix=f"{name}.")
+    raise TypeError(f"no reader for the annotation {annotation!r} of '{name}'")
+
+
+def plain(value: Any) -> Any:
+    """A field's value as JSON data."""
+    if isinstance(value, Payload):
+        return value.to_payload()
+    if isinstance(value, enum.Enum):
+        return value.value
+    if isinstance(value, list | tuple):
+        return [plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: plain(v) for k, v in value.items()}
+    return value
+
+
+_FIELDS: dict[type, tuple[tuple[str, Any, bool], ...]] = {}
+
+
+def _fields(cls: type) -> tuple[tuple[str, Any, bool], ...]:
+    """Each field's name, annotation and whether it must be given (read once per class)."""
+    known = _FIELDS.get(cls)
+    if known is not None:
+        return known
+    hints = typing.get_type_hints(cls, include_extras=True)
+    known = _FIELDS[cls] = tuple(
+        (
+            f.name,
+            hints[f.name],
+            f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING,
+        )
+        for f in dataclasses.fields(cls)
+    )
+    return known
+
+
+class Payload:
+    """A frozen dataclass that is a JSON object on the bus (subclasses are dataclasses)."""
+
+    @classmethod
+    def from_payload(cls, payload: Mapping[str, Any], *, prefix: str = "") -> Self:
+        """Read and check a JSON object; unknown keys are ignored (newer senders).
+
+        Raises:
+            PayloadError: a field is missing or does not fit its annotation.
+        """
+        values: dict[str, Any] = {}
+        for name, annotation, required in _fields(cls):
+            value = payload.get(name)
+            if value is None and not required:
+                continue  # absent: the default
+            values[name] = read(annotation, value, prefix + name)
+        return cls(**values)
+
+    def to_payload(self) -> dict[str, Any]:
+        """The JSON object (fields with ``None`` included)."""
+        return {
+            f.name: plain(getattr(self, f.name))
+            for f in dataclasses.fields(self)  # type: ignore[arg-type]
+        }
+
+
+Text = typing.Annotated[str, NonEmpty()]

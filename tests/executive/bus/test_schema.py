@@ -1,0 +1,69 @@
+"""Typed payloads read JSON objects by their annotations and refuse bad input in one sentence."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from typing import Annotated, Any
+
+import pytest
+
+from executive.bus.schema import Between, Payload, PayloadError, Text
+
+
+class Color(enum.Enum):
+    RED = "red"
+    GREEN = "green"
+
+
+@dataclass(frozen=True)
+class Inner(Payload):
+    name: Text
+
+
+@dataclass(frozen=True)
+class Sample(Payload):
+    text: Text
+    count: int = 0
+    ratio: float | None = None
+    flag: bool = False
+    colors: list[Color] = field(default_factory=list)
+    inner: Inner | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+    bounded: Annotated[int, Between(0, 10)] = 5
+
+
+def test_a_full_payload_reads_back_to_what_it_was() -> None:
+    sample = Sample("hi", 3, 0.5, True, [Color.RED], Inner("x"), {"a": [1]}, 7)
+    assert Sample.from_payload(sample.to_payload()) == sample
+    assert sample.to_payload()["colors"] == ["red"]
+
+
+def test_absent_fields_take_their_defaults_and_unknown_keys_are_ignored() -> None:
+    assert Sample.from_payload({"text": "hi", "newer": 1}) == Sample("hi")
+
+
+@pytest.mark.parametrize(
+    ("payload", "message"),
+    [
+        ({}, "'text' must be a non-empty string, not null"),
+        ({"text": "  "}, "'text' must be a non-empty string, not \"  \""),
+        ({"text": "a", "count": "3"}, "'count' must be an integer, not \"3\""),
+        ({"text": "a", "count": True}, "'count' must be an integer, not true"),
+        ({"text": "a", "count": 10**30}, "'count' must be an integer, not 1000000000000"),
+        ({"text": "a", "ratio": float("nan")}, "'ratio' must be a finite number, not NaN"),
+        ({"text": "a", "ratio": float("inf")}, "'ratio' must be a finite number"),
+        ({"text": "a", "flag": 1}, "'flag' must be true or false, not 1"),
+        ({"text": "a", "colors": "red"}, "'colors' must be a list, not \"red\""),
+        ({"text": "a", "colors": ["blue"]}, "'colors[0]' must be one of red, green, not \"blue\""),
+        ({"text": "a", "inner": {}}, "'inner.name' must be a non-empty string, not null"),
+        ({"text": "a", "extra": [1]}, "'extra' must be an object, not [1]"),
+        ({"text": "a", "bounded": 11}, "'bounded' must be from 0 to 10, not 11"),
+    ],
+)
+def test_a_bad_payload_is_refused_with_the_field_and_the_value(
+    payload: dict[str, Any], message: str
+) -> None:
+    with pytest.raises(PayloadError) as raised:
+        Sample.from_payload(payload)
+    assert message in str(raised.value)
