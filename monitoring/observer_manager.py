@@ -22,14 +22,16 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from executive.bus.keys import OBSERVATIONS, component, observers_api
+from executive.bus.api import monitoring as api
+from executive.bus.keys import OBSERVATIONS, component
 from executive.bus.payloads import ComponentState, Lifecycle
 from executive.bus.service import Context, Service
-from executive.bus.session import Message
+from executive.bus.session import Bus, Message
+from executive.bus.verb import Verb
 from knowledge.description import ObserverSpec
 from knowledge.errors import ConfigError, DuraError
 from knowledge.yamlsource import did_you_mean
@@ -139,8 +141,7 @@ class ObserverManager(Service):
                 self._register(_Slot(observer_id, owner, observer, observer.inputs()))
         bus = self.context.bus
         self._declared.append(bus.subscribe(component("*", "state"), self._on_component_state))
-        for verb, handler in self._api().items():
-            self._declared.append(bus.serve(observers_api(verb), handler))
+        self._declared.extend(self._serve(bus))
         self._thread = threading.Thread(target=self._run, name="observer-manager", daemon=True)
         self._thread.start()
 
@@ -375,58 +376,44 @@ class ObserverManager(Service):
 
     # --- the bus API ----------------------------------------------------------------
 
-    def _api(self) -> dict[str, Callable[[dict[str, Any]], Mapping[str, Any]]]:
-        def text(request: dict[str, Any], key: str, verb: str, *, required: bool = True) -> Any:
-            value = request.get(key)
-            if value is None and not required:
-                return None
-            if not isinstance(value, str) or not value:
-                raise ConfigError(f"{observers_api(verb)}: '{key}' must be a non-empty string")
-            return value
+    def _serve(self, bus: Bus) -> list[Any]:
+        """Serve the observer verbs of :mod:`executive.bus.api.monitoring`."""
 
-        def entry(request: dict[str, Any], verb: str) -> Mapping[str, Any]:
-            value = request.get("config")
-            if not isinstance(value, dict):
-                raise ConfigError(
-                    f"{observers_api(verb)}: 'config' must be an observer entry (a mapping)"
-                )
-            return value
+        def entry(config: Any, verb: Verb[Any, Any]) -> Mapping[str, Any]:
+            if not isinstance(config, dict):
+                raise ConfigError(f"{verb.key}: 'config' must be an observer entry (a mapping)")
+            return config
 
-        def add(request: dict[str, Any]) -> Mapping[str, Any]:
+        def add(request: api.ObserverAdd) -> api.ObserverActive:
+            key = api.OBSERVER_ADD.key
             with self._lock:
-                observer_id = self._add(
-                    entry(request, "add"),
-                    text(request, "component", "add", required=False),
-                    text(request, "name", "add", required=False),
-                    observers_api("add"),
-                )
-                return {"id": observer_id, "active": self._slots[observer_id].active}
+                config = entry(request.config, api.OBSERVER_ADD)
+                observer_id = self._add(config, request.component, request.name, key)
+                return api.ObserverActive(observer_id, self._slots[observer_id].active)
 
-        def change(request: dict[str, Any]) -> Mapping[str, Any]:
-            observer_id = text(request, "id", "change")
-            self.change(observer_id, entry(request, "change"), source=observers_api("change"))
-            return {"id": observer_id, "active": self._slot(observer_id).active}
+        def change(request: api.ObserverChange) -> api.ObserverActive:
+            config = entry(request.config, api.OBSERVER_CHANGE)
+            self.change(request.id, config, source=api.OBSERVER_CHANGE.key)
+            return api.ObserverActive(request.id, self._slot(request.id).active)
 
-        def remove(request: dict[str, Any]) -> Mapping[str, Any]:
-            observer_id = text(request, "id", "remove")
-            self.remove(observer_id)
-            return {"id": observer_id}
+        def remove(request: api.ObserverId) -> api.ObserverId:
+            self.remove(request.id)
+            return request
 
-        def activate(request: dict[str, Any]) -> Mapping[str, Any]:
-            observer_id = text(request, "id", "activate")
-            return {"id": observer_id, "active": self.activate(observer_id)}
+        def deactivate(request: api.ObserverId) -> api.ObserverActive:
+            self.deactivate(request.id)
+            return api.ObserverActive(request.id, False)
 
-        def deactivate(request: dict[str, Any]) -> Mapping[str, Any]:
-            observer_id = text(request, "id", "deactivate")
-            self.deactivate(observer_id)
-            return {"id": observer_id, "active": False}
-
-        return {
-            "list": lambda request: {"observers": [s.to_payload() for s in self.observers()]},
-            "add": add,
-            "change": change,
-            "remove": remove,
-            "activate": activate,
-            "deactivate": deactivate,
-            "latest": lambda request: {"observations": self.latest()},
-        }
+        return [
+            api.OBSERVER_LIST.serve(
+                bus, lambda _: api.ObserversReply([s.to_payload() for s in self.observers()])
+            ),
+            api.OBSERVER_ADD.serve(bus, add),
+            api.OBSERVER_CHANGE.serve(bus, change),
+            api.OBSERVER_REMOVE.serve(bus, remove),
+            api.OBSERVER_ACTIVATE.serve(
+                bus, lambda r: api.ObserverActive(r.id, self.activate(r.id))
+            ),
+            api.OBSERVER_DEACTIVATE.serve(bus, deactivate),
+            api.OBSERVER_LATEST.serve(bus, lambda _: api.LatestReply(self.latest())),
+        ]

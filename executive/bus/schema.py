@@ -189,10 +189,12 @@ class Payload:
         return cls(**values)
 
     def to_payload(self) -> dict[str, Any]:
-        """The JSON object (fields with ``None`` included)."""
+        """The JSON object; an optional field left at ``None`` is not sent (absent reads
+        back as its default)."""
         return {
-            f.name: plain(getattr(self, f.name))
+            f.name: plain(value)
             for f in dataclasses.fields(self)  # type: ignore[arg-type]
+            if (value := getattr(self, f.name)) is not None or f.default is dataclasses.MISSING
         }
 
 

@@ -1,4 +1,4 @@
-"""How commands find the running executive they talk to.
+"""How commands find the running executive they talk to, and ask it.
 
 ``dura run`` writes ``.dura/executive.json`` (robot, endpoint, pid) in its working
 folder; commands run in the same folder find the executive there. ``--robot
@@ -11,13 +11,17 @@ import argparse
 import json
 import os
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from executive.bus.session import Bus
+from executive.bus.verb import Codec, Verb
 from knowledge.errors import DuraError
 from knowledge.robot import read_robot
 
 RUN_FILE = Path(".dura") / "executive.json"
+
+Req = TypeVar("Req", bound=Codec)
+Rep = TypeVar("Rep", bound=Codec)
 
 
 def add_client_options(parser: Any) -> None:
@@ -76,3 +80,20 @@ def connect(args: argparse.Namespace) -> Bus:
     """
     name, endpoint = _target(args)
     return Bus(name, name="cli", endpoint=endpoint)
+
+
+def ask(
+    args: argparse.Namespace,
+    verb: Verb[Req, Rep],
+    request: Req | None = None,
+    *,
+    timeout: float | None = None,
+) -> Rep:
+    """Call one verb of the executive the command line names: every command's one way
+    to ask (see :mod:`executive.bus.api`).
+
+    Raises:
+        DuraError: no executive answers, or it refused the request (its reason).
+    """
+    with connect(args) as bus:
+        return verb.call(bus, request, timeout=timeout)

@@ -6,9 +6,9 @@ import argparse
 import time
 from typing import Any
 
-from executive.bus.keys import api
+from executive.bus.api import components, tasks
 from executive.bus.payloads import ComponentState, Lifecycle
-from executive.cli.client import add_client_options, connect
+from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
 from executive.runtime.spawn import describe_exit
 from knowledge.errors import DuraError
@@ -61,16 +61,15 @@ def _since(stamp: float) -> str:
 
 
 def run_list(args: argparse.Namespace) -> int:
-    with connect(args) as bus:
-        reply = bus.request(api("component/list"))
+    reply = ask(args, components.COMPONENT_LIST)
     if args.json:
-        print_json(reply)
+        print_json(reply.to_payload())
         return 0
     table(
         ["name", "kind", "state", "pid", "since", "reason"],
         [
             [c["component"], c["kind"], c["state"], c["pid"], _since(c["stamp"]), c["reason"]]
-            for c in reply["components"]
+            for c in reply.components
         ],
     )
     return 0
@@ -89,29 +88,32 @@ def _summary(state: ComponentState) -> str:
 def run_lifecycle(args: argparse.Namespace) -> int:
     if args.timeout <= 0:
         raise DuraError(f"--timeout must be positive, not {args.timeout:g}")
-    with connect(args) as bus:
-        reply = bus.request(
-            api(f"component/{args.verb}"), {"name": args.name}, timeout=args.timeout
-        )
+    name, timeout = args.name, args.timeout
     if args.verb == "reset":
+        reset = ask(args, tasks.COMPONENT_RESET, tasks.ComponentName(name), timeout=timeout)
         if args.json:
-            print_json(reply)
+            print_json(reset.to_payload())
         else:
-            usable = ", ".join(reply["usable"]) or "nothing new"
-            print(f"{args.name}: faults cleared; usable again: {usable}")
+            print(
+                f"{name}: faults cleared; usable again: {', '.join(reset.usable) or 'nothing new'}"
+            )
         return 0
-    state = ComponentState.from_payload(reply)
+    if args.verb in ("restart", "fault"):
+        faulting = tasks.COMPONENT_RESTART if args.verb == "restart" else tasks.COMPONENT_FAULT
+        fault = ask(args, faulting, tasks.ComponentFault(name), timeout=timeout)
+        state = ComponentState.from_payload(fault.state)
+        faults = f", {fault.faults} faults" + (", permanently faulty" if fault.permanent else "")
+        payload = fault.to_payload()
+    else:
+        switch = components.COMPONENT_START if args.verb == "start" else components.COMPONENT_STOP
+        state = ask(args, switch, components.ComponentName(name), timeout=timeout)
+        faults, payload = "", state.to_payload()
     failed = state.state is Lifecycle.FAILED
     if args.json:
-        print_json(reply)
+        print_json(payload)
         return 1 if failed else 0
     if failed:
         raise DuraError(f"'{state.component}' failed to start: {state.reason}")
-    faults = ""
-    if "faults" in reply:
-        faults = f", {reply['faults']} faults" + (
-            ", permanently faulty" if reply["permanent"] else ""
-        )
     print(_summary(state) + faults)
     return 0
 
@@ -119,11 +121,10 @@ def run_lifecycle(args: argparse.Namespace) -> int:
 def run_logs(args: argparse.Namespace) -> int:
     if args.lines < 0:
         raise DuraError(f"--lines must be 0 or more, not {args.lines}")
-    with connect(args) as bus:
-        reply = bus.request(api("component/logs"), {"name": args.name, "lines": args.lines})
+    reply = ask(args, components.COMPONENT_LOGS, components.LogQuery(args.name, args.lines))
     if args.json:
-        print_json(reply)
+        print_json(reply.to_payload())
         return 0
-    for line in reply["lines"]:
+    for line in reply.lines:
         print(line)
     return 0

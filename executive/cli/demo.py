@@ -18,6 +18,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from executive.bus.api.planning import PLAN_SHOW
+from executive.bus.api.tasks import TASK_LIST
 from executive.bus.keys import DIAGNOSES, EVENTS
 from executive.bus.session import Message
 from executive.cli.goal import details
@@ -171,7 +173,7 @@ def _demo(args: argparse.Namespace, folder: Path) -> int:
 
 
 def _driving_on_lidar(robot: RobotProcess) -> bool:
-    tasks = robot.request("task/list")["tasks"]
+    tasks = TASK_LIST.call(robot.bus).tasks
     return any(
         t["behavior"] == "move_to" and t["state"] == "running" and "lidar" in t["functionalities"]
         for t in tasks
@@ -181,8 +183,7 @@ def _driving_on_lidar(robot: RobotProcess) -> bool:
 def _show_plan(robot: RobotProcess, quiet: bool) -> None:
     if quiet:
         return
-    reply = robot.request("plan/show")
-    plan = reply["plan"]
+    plan = PLAN_SHOW.call(robot.bus).plan
     if plan is None:
         return
     span = max((s["start"] + (s["duration"] or 0.0) for s in plan["steps"]), default=0.0)

@@ -6,13 +6,11 @@ import argparse
 import time
 from typing import Any
 
-from executive.bus.keys import api
-from executive.cli.client import add_client_options, connect
+from executive.bus.api import planning as api
+from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
 from knowledge.errors import DuraError
 from knowledge.records import GoalState
-
-TIMEOUT = 30.0  # seconds to wait for the executive's answer
 
 
 def register(sub: Any) -> None:
@@ -55,11 +53,6 @@ def register(sub: Any) -> None:
         add_json_flag(cmd)
 
 
-def _ask(args: argparse.Namespace, verb: str, payload: dict[str, Any]) -> dict[str, Any]:
-    with connect(args) as bus:
-        return bus.request(api(verb), payload, timeout=TIMEOUT)
-
-
 def clock(stamp: float) -> str:
     return time.strftime("%H:%M:%S", time.localtime(stamp)) if stamp else "-"
 
@@ -83,14 +76,10 @@ GOAL_HEADERS = ["id", "state", "priority", "deadline", "source", "goal", "reason
 
 
 def run_add(args: argparse.Namespace) -> int:
-    payload: dict[str, Any] = {"expression": args.expression, "priority": args.priority}
-    if args.deadline is not None:
-        if not args.deadline > 0:
-            raise DuraError(
-                f"--deadline must be a positive number of seconds, not {args.deadline:g}"
-            )
-        payload["deadline"] = args.deadline
-    goal = _ask(args, "goal/add", payload)["goal"]
+    if args.deadline is not None and not args.deadline > 0:
+        raise DuraError(f"--deadline must be a positive number of seconds, not {args.deadline:g}")
+    request = api.GoalAdd(args.expression, args.priority, args.deadline)
+    goal = ask(args, api.GOAL_ADD, request).goal
     if args.json:
         print_json(goal)
     else:
@@ -99,8 +88,8 @@ def run_add(args: argparse.Namespace) -> int:
 
 
 def run_list(args: argparse.Namespace) -> int:
-    states = [s.value for s in GoalState if s.is_open] if args.open else None
-    goals = _ask(args, "goal/list", {"states": states})["goals"]
+    states = [s for s in GoalState if s.is_open] if args.open else None
+    goals = ask(args, api.GOAL_LIST, api.GoalQuery(states)).goals
     if args.json:
         print_json({"goals": goals})
     else:
@@ -109,27 +98,27 @@ def run_list(args: argparse.Namespace) -> int:
 
 
 def run_show(args: argparse.Namespace) -> int:
-    reply = _ask(args, "goal/show", {"id": args.id})
+    reply = ask(args, api.GOAL_SHOW, api.GoalId(args.id))
     if args.json:
-        print_json(reply)
+        print_json(reply.to_payload())
         return 0
-    g = reply["goal"]
+    g = reply.goal
     print(f"goal {g['id']}: {g['expression']}")
     print(f"  state {g['state']}{': ' + g['reason'] if g['reason'] else ''}")
     deadline = "none" if g["deadline"] is None else f"{g['deadline']:g} s after submission"
     print(f"  priority {g['priority']}, deadline {deadline}, from {g['source']}")
     print(f"  submitted {clock(g['created'])}, last change {clock(g['updated'])}")
-    if reply["events"]:
+    if reply.events:
         print()
         table(
             ["time", "event", "details"],
-            [[clock(e["stamp"]), e["kind"], details(e["data"])] for e in reply["events"]],
+            [[clock(e["stamp"]), e["kind"], details(e["data"])] for e in reply.events],
         )
     return 0
 
 
 def run_cancel(args: argparse.Namespace) -> int:
-    goal = _ask(args, "goal/cancel", {"id": args.id})["goal"]
+    goal = ask(args, api.GOAL_CANCEL, api.GoalId(args.id)).goal
     if args.json:
         print_json(goal)
     else:

@@ -10,11 +10,11 @@ import sys
 import time
 from typing import Any
 
-from executive.bus.keys import OBSERVATIONS, observers_api
+from executive.bus.api.monitoring import OBSERVER_LATEST
+from executive.bus.keys import OBSERVATIONS
 from executive.bus.session import Bus
 from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json, table
-from knowledge.errors import BusError
 
 REDRAW = 1.0  # seconds between two tables with --follow
 
@@ -66,11 +66,7 @@ def _table(observations: list[dict[str, Any]]) -> None:
 
 
 def _latest(bus: Bus) -> list[dict[str, Any]]:
-    reply = bus.request(observers_api("latest"), timeout=5.0)
-    observations = reply.get("observations")
-    if not isinstance(observations, list):
-        raise BusError(f"{observers_api('latest')}: malformed reply (no 'observations' list)")
-    return [o for o in observations if isinstance(o, dict)]
+    return OBSERVER_LATEST.call(bus).observations
 
 
 def _follow(bus: Bus, as_json: bool) -> int:

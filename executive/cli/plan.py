@@ -8,8 +8,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from executive.bus.keys import api
-from executive.cli.client import add_client_options, connect
+from executive.bus.api import planning as api
+from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, shown, table
 from executive.planning.goals import GoalSpec
 from executive.planning.partial_order import PartialOrderPlan, Step
@@ -79,16 +79,15 @@ def run(args: argparse.Namespace) -> int:
 
 
 def run_show(args: argparse.Namespace) -> int:
-    with connect(args) as bus:
-        reply = bus.request(api("plan/show"), {}, timeout=30.0)
+    reply = ask(args, api.PLAN_SHOW)
     if args.json:
-        print_json(reply)
+        print_json(reply.to_payload())
         return 0
-    plan = reply["plan"]
+    plan = reply.plan
     if plan is None:
         print("no plan yet")
         return 0
-    states = {s["index"]: s["state"] for s in reply["execution"].get("steps", [])}
+    states = {s["index"]: s["state"] for s in reply.execution.get("steps", [])}
     steps = plan["steps"]
     span = max((s["start"] + (s["duration"] or 0.0) for s in steps), default=0.0)
     goals = ", ".join(str(g) for g in plan["goal_ids"]) or "-"

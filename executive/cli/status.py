@@ -9,13 +9,12 @@ import sys
 import time
 from typing import Any
 
-from executive.bus.keys import EVENTS, api
+from executive.bus.api import planning as api
+from executive.bus.keys import EVENTS
 from executive.bus.session import Message
-from executive.cli.client import add_client_options, connect
+from executive.cli.client import add_client_options, ask, connect
 from executive.cli.goal import GOAL_HEADERS, details, goal_rows
 from executive.cli.output import add_json_flag, print_json, section, table
-
-TIMEOUT = 30.0
 
 
 def register(sub: Any) -> None:
@@ -56,10 +55,7 @@ def run_events(args: argparse.Namespace) -> int:
     with connect(args) as bus:
         if args.follow:
             bus.subscribe(EVENTS, lambda m: arrived.put(m.payload) if _is_event(m) else None)
-        request: dict[str, Any] = {"limit": args.lines}
-        if args.kind:
-            request["kind"] = args.kind
-        past = bus.request(api("events"), request, timeout=TIMEOUT)["events"]
+        past = api.EVENTS.call(bus, api.EventQuery(limit=args.lines, kind=args.kind)).events
         last = max((int(e["id"]) for e in past), default=0)
         if args.json and not args.follow:
             print_json({"events": past})
@@ -87,8 +83,7 @@ def _show(event: dict[str, Any], as_json: bool) -> None:
 
 
 def run_status(args: argparse.Namespace) -> int:
-    with connect(args) as bus:
-        status = bus.request(api("status"), {}, timeout=TIMEOUT)
+    status = ask(args, api.STATUS).to_payload()
     if args.json:
         print_json(status)
         return 0
@@ -118,7 +113,7 @@ def print_status(status: dict[str, Any], out: Any = None) -> None:
             ],
             out,
         )
-    if "tasks" in status:
+    if isinstance(status.get("tasks"), list):
         section("tasks", out)
         table(
             ["id", "task", "state", "uses"],
@@ -129,7 +124,7 @@ def print_status(status: dict[str, Any], out: Any = None) -> None:
             ],
             out,
         )  # fmt: skip
-    if "components" in status:
+    if isinstance(status.get("components"), list):
         section("components", out)
         table(
             ["name", "kind", "state", "pid"],

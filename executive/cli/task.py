@@ -6,13 +6,11 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from executive.bus.keys import api
-from executive.cli.client import add_client_options, connect
+from executive.bus.api import tasks as api
+from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, section, table
 from executive.cli.plan import bar
 from knowledge.errors import DuraError
-
-TIMEOUT = 30.0
 
 
 def register(sub: Any) -> None:
@@ -66,11 +64,6 @@ def register(sub: Any) -> None:
         add_json_flag(cmd)
 
 
-def _ask(args: argparse.Namespace, verb: str, payload: dict[str, Any]) -> dict[str, Any]:
-    with connect(args) as bus:
-        return bus.request(api(verb), payload, timeout=TIMEOUT)
-
-
 def _goal(pairs: list[str]) -> dict[str, Any]:
     goal: dict[str, Any] = {}
     for pair in pairs:
@@ -82,17 +75,14 @@ def _goal(pairs: list[str]) -> dict[str, Any]:
 
 
 def run_start(args: argparse.Namespace) -> int:
-    payload: dict[str, Any] = {"task": args.task, "goal": _goal(args.arg)}
-    for key in ("duration", "earliest", "deadline"):
-        if getattr(args, key) is not None:
-            payload[key] = getattr(args, key)
-    if args.together:
-        payload["together"] = args.together
-    reply = _ask(args, "task/start", payload)
+    request = api.TaskStart(
+        args.task, _goal(args.arg), args.duration, args.earliest, args.deadline, args.together
+    )
+    reply = ask(args, api.TASK_START, request)
     if args.json:
-        print_json(reply)
+        print_json(reply.to_payload())
     else:
-        print(f"task {reply['id']}: {args.task} requested")
+        print(f"task {reply.id}: {args.task} requested")
     return 0
 
 
@@ -104,7 +94,7 @@ def _rows(tasks: list[dict[str, Any]]) -> list[list[Any]]:
 
 
 def run_list(args: argparse.Namespace) -> int:
-    tasks = _ask(args, "task/list", {})["tasks"]
+    tasks = ask(args, api.TASK_LIST).tasks
     if args.json:
         print_json({"tasks": tasks})
     else:
@@ -113,7 +103,8 @@ def run_list(args: argparse.Namespace) -> int:
 
 
 def run_verb(args: argparse.Namespace) -> int:
-    task = _ask(args, f"task/{args.verb}", {"id": args.id})["task"]
+    verb = {"stop": api.TASK_STOP, "pause": api.TASK_PAUSE, "resume": api.TASK_RESUME}[args.verb]
+    task = ask(args, verb, api.TaskId(args.id)).task
     if args.json:
         print_json(task)
     else:
@@ -122,11 +113,11 @@ def run_verb(args: argparse.Namespace) -> int:
 
 
 def run_schedule(args: argparse.Namespace) -> int:
-    schedule = _ask(args, "schedule/show", {})
+    schedule = ask(args, api.SCHEDULE_SHOW)
     if args.json:
-        print_json(schedule)
+        print_json(schedule.to_payload())
         return 0
-    tasks = schedule["tasks"]
+    tasks = schedule.tasks
     span = max((t["end"] for t in tasks), default=0.0)
     first = min((t["start"] for t in tasks), default=0.0)
     table(
@@ -139,7 +130,7 @@ def run_schedule(args: argparse.Namespace) -> int:
         ],
     )  # fmt: skip
     section(
-        f"running: {', '.join(schedule['running']) or 'nothing'}; "
-        f"permanently faulty: {', '.join(schedule['faulty']) or 'none'}"
+        f"running: {', '.join(schedule.running) or 'nothing'}; "
+        f"permanently faulty: {', '.join(schedule.faulty) or 'none'}"
     )
     return 0

@@ -6,11 +6,9 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from executive.bus.keys import api
-from executive.cli.client import add_client_options, connect
+from executive.bus.api import planning as api
+from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
-
-TIMEOUT = 30.0
 
 
 def register(sub: Any) -> None:
@@ -46,30 +44,26 @@ def register(sub: Any) -> None:
         add_json_flag(cmd)
 
 
-def _ask(args: argparse.Namespace, verb: str, payload: dict[str, Any]) -> dict[str, Any]:
-    with connect(args) as bus:
-        return bus.request(api(verb), payload, timeout=TIMEOUT)
-
-
 def _value(fact: dict[str, Any]) -> str:
     value = fact["value"]
     return "true" if value is True else f"{value:g}"
 
 
 def run_get(args: argparse.Namespace) -> int:
-    reply = _ask(args, "state/get", {"pattern": args.pattern})
+    reply = ask(args, api.STATE_GET, api.StateQuery(args.pattern))
     if args.json:
-        print_json(reply)
+        print_json(reply.to_payload())
         return 0
     table(
         ["fact", "value"],
-        [[f"({' '.join([f['name'], *f['args']])})", _value(f)] for f in reply["facts"]],
+        [[f"({' '.join([f['name'], *f['args']])})", _value(f)] for f in reply.facts],
     )
     return 0
 
 
 def run_change(args: argparse.Namespace) -> int:
-    fact = _ask(args, f"state/{args.verb}", {"fact": args.fact})["fact"]
+    verb = api.STATE_UNSET if args.verb == "unset" else api.STATE_SET
+    fact = ask(args, verb, api.FactChange(args.fact)).fact
     if args.json:
         print_json(fact)
     else:
@@ -78,9 +72,9 @@ def run_change(args: argparse.Namespace) -> int:
 
 
 def run_object_add(args: argparse.Namespace) -> int:
-    added = _ask(args, "object/add", {"name": args.name, "type": args.type})
+    added = ask(args, api.OBJECT_ADD, api.ObjectAdd(args.name, args.type))
     if args.json:
-        print_json(added)
+        print_json(added.to_payload())
     else:
-        print(f"object {added['name']} - {added['type']} added")
+        print(f"object {added.name} - {added.type} added")
     return 0

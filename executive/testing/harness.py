@@ -25,6 +25,7 @@ from typing import Any
 
 import yaml
 
+from executive.bus.api import planning
 from executive.bus.keys import api, component
 from executive.bus.payloads import Command
 from executive.bus.session import Bus
@@ -193,18 +194,14 @@ class RobotProcess:
         self, expression: str, *, priority: int = 0, deadline: float | None = None
     ) -> int:
         """Submit a goal; returns its id. Raises BusError if the executive refuses it."""
-        payload: dict[str, Any] = {"expression": expression, "priority": priority}
-        if deadline is not None:
-            payload["deadline"] = deadline
-        return int(self.request("goal/add", payload)["goal"]["id"])
+        request = planning.GoalAdd(expression, priority, deadline)
+        return int(planning.GOAL_ADD.call(self.bus, request).goal["id"])
 
     def goal(self, goal_id: int) -> dict[str, Any]:
-        goal: dict[str, Any] = self.request("goal/show", {"id": goal_id})["goal"]
-        return goal
+        return planning.GOAL_SHOW.call(self.bus, planning.GoalId(goal_id)).goal
 
     def goals(self) -> list[dict[str, Any]]:
-        goals: list[dict[str, Any]] = self.request("goal/list")["goals"]
-        return goals
+        return planning.GOAL_LIST.call(self.bus).goals
 
     def wait_for(
         self, goal_id: int, state: str | GoalState = GoalState.ACHIEVED, timeout: float = 60.0
@@ -234,7 +231,7 @@ class RobotProcess:
             time.sleep(0.05)
 
     def cancel_goal(self, goal_id: int) -> None:
-        self.request("goal/cancel", {"id": goal_id})
+        planning.GOAL_CANCEL.call(self.bus, planning.GoalId(goal_id))
 
     def inject_fault(self, name: str, mode: str, **options: Any) -> None:
         """Make a running component misbehave (see :mod:`executive.sdk.fault_injection`)."""
@@ -245,18 +242,15 @@ class RobotProcess:
 
     def events(self, kind: str | None = None, limit: int = 10_000) -> list[dict[str, Any]]:
         """The event log, oldest first (only events of ``kind`` if given)."""
-        payload: dict[str, Any] = {"limit": limit}
-        if kind is not None:
-            payload["kind"] = kind
-        events: list[dict[str, Any]] = self.request("events", payload)["events"]
-        return events
+        return planning.EVENTS.call(self.bus, planning.EventQuery(limit=limit, kind=kind)).events
 
     def facts(self, pattern: str = "") -> list[str]:
         """The true facts and values as text, e.g. ``(robot_at dock)``."""
-        return [f["text"] for f in self.request("state/get", {"pattern": pattern})["facts"]]
+        reply = planning.STATE_GET.call(self.bus, planning.StateQuery(pattern))
+        return [f["text"] for f in reply.facts]
 
     def set_fact(self, fact: str) -> None:
-        self.request("state/set", {"fact": fact})
+        planning.STATE_SET.call(self.bus, planning.FactChange(fact))
 
     def status(self) -> dict[str, Any]:
-        return self.request("status")
+        return planning.STATUS.call(self.bus).to_payload()

@@ -17,7 +17,8 @@ import threading
 import time
 from typing import Any
 
-from executive.bus.keys import DIAGNOSES, DIAGNOSIS_MODEL, OBSERVATIONS
+from executive.bus.api import monitoring as api
+from executive.bus.keys import DIAGNOSES, OBSERVATIONS
 from executive.bus.payloads import ObservationInfo
 from executive.bus.service import Context, Service
 from knowledge.errors import BusError, ConfigError, DuraError
@@ -81,7 +82,7 @@ class DiagnosisService(Service):
         self._thread.start()
         self._entities = [
             bus.subscribe(OBSERVATIONS, self._on_observation),
-            bus.serve(DIAGNOSIS_MODEL, self._on_model),
+            api.DIAGNOSIS_MODEL_CHANGE.serve(bus, self._on_model),
         ]
 
     def stop(self) -> None:
@@ -148,21 +149,21 @@ class DiagnosisService(Service):
             self._ignored.add(reason)
             log.warning("ignored: %s", reason)
 
-    def _on_model(self, request: dict[str, Any]) -> dict[str, Any]:
+    def _on_model(self, request: api.ModelChange) -> api.ModelReply:
         """Apply a model update; a refused one answers with the reason."""
-        if str(request.get("action", "")).upper() == "GET":
+        if request.action.upper() == "GET":
             with self._changed:
-                return {"ok": True, "model": self.engine.model.to_payload()}
+                return api.ModelReply(True, self.engine.model.to_payload())
         try:
-            update = ModelUpdate.from_payload(request)
+            update = ModelUpdate.from_payload(request.to_payload())
             with self._changed:
                 model = self.engine.update(self._without_orphans(update))
                 self._dirty = True
                 self._changed.notify()
         except DuraError as e:
             log.info("model update refused: %s", e)
-            return {"ok": False, "error": str(e)}
-        return {"ok": True, "model": model.to_payload()}
+            return api.ModelReply(False, error=str(e))
+        return api.ModelReply(True, model.to_payload())
 
     # --- the diagnosing thread ----------------------------------------------------------
 

@@ -12,6 +12,9 @@ class CommandAction(ExecutiveAction):
 
     type = "command"
 
+    def describe(self) -> str:
+        return f"command executive/api/{self.verb}"
+
     def __init__(self, verb: str, payload: dict[str, object], timeout: float) -> None:
         super().__init__(timeout)
         self.verb = verb
@@ -24,4 +27,4 @@ class CommandAction(ExecutiveAction):
 
     def _run(self, context: ActionContext, firing: Firing) -> None:
         payload = {k: firing.fill(v) if isinstance(v, str) else v for k, v in self.payload.items()}
-        self.request(context, payload)
+        self.request(context, self.verb, payload)

@@ -2,14 +2,19 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
+from executive.bus.api import tasks as api
+from executive.bus.verb import Verb
 from monitoring.repair.actions.restart import RestartAction
 
 
 class FaultAction(RestartAction):
-    """``executive/api/component/fault`` with ``{name, reason}``; configured as restart."""
+    """``component/fault`` of the task executor with ``{name, reason}``; configured as
+    restart."""
 
     type = "fault"
-    verb = "component/fault"
+    verb: ClassVar[Verb[api.ComponentFault, api.FaultReply]] = api.COMPONENT_FAULT
 
     def describe(self) -> str:
         return f"mark {self.component} faulty"

@@ -29,7 +29,8 @@ class ParameterAction(ExecutiveAction):
         return cls(component, key, None if node is None else to_python(node), timeout)
 
     def _run(self, context: ActionContext, firing: Firing) -> None:
-        self.request(context, {"component": self.component, "key": self.key, "value": self.value})
+        payload = {"component": self.component, "key": self.key, "value": self.value}
+        self.request(context, self.verb, payload)
 
     def describe(self) -> str:
         return f"set {self.component}.{self.key}"

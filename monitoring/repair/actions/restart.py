@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
+from executive.bus.api import tasks as api
+from executive.bus.verb import Verb
 from knowledge.yamlsource import Section
 from monitoring.repair.action import Action, ActionContext, Firing
 from monitoring.repair.actions.executive import ExecutiveAction
 
 
 class RestartAction(ExecutiveAction):
-    """``executive/api/component/restart`` with ``{name, reason}``."""
+    """``component/restart`` of the task executor with ``{name, reason}``."""
 
     type = "restart"
-    verb = "component/restart"
+    verb: ClassVar[Verb[api.ComponentFault, api.FaultReply]] = api.COMPONENT_RESTART
 
     def __init__(self, component: str, reason: str, timeout: float) -> None:
         super().__init__(timeout)
@@ -24,9 +28,8 @@ class RestartAction(ExecutiveAction):
         return cls(component, entry.text("reason", "rule $rule fired") or "", timeout)
 
     def _run(self, context: ActionContext, firing: Firing) -> None:
-        self.request(
-            context, {"name": firing.fill(self.component), "reason": firing.fill(self.reason)}
-        )
+        request = api.ComponentFault(firing.fill(self.component), firing.fill(self.reason))
+        self.call(context, self.verb, request)
 
     def describe(self) -> str:
         return f"restart {self.component}"

@@ -13,6 +13,7 @@ from typing import Any
 import pytest
 from aiosmtpd.controller import Controller
 
+from executive.bus.api import planning, tasks
 from executive.bus.keys import api
 from executive.bus.session import Bus
 from knowledge.errors import BusError, DuraError
@@ -125,18 +126,35 @@ def test_the_mail_action_fails_when_no_server_answers(tmp_path: Path) -> None:
 
 @pytest.fixture
 def executive(endpoint: str) -> Iterator[tuple[Bus, list[tuple[str, dict[str, Any]]]]]:
-    """A stand-in for the executive: serves the API keys the actions call and records them."""
+    """A stand-in for the executive: serves the API keys the actions call and records them.
+
+    Declared verbs answer with their declared replies (a refusal is an error reply, as
+    the executive's); the verbs a rule names freely answer ``ok``.
+    """
     requests: list[tuple[str, dict[str, Any]]] = []
     with Bus("testbot", name="executive", endpoint=endpoint, listen=True) as server:
-        for verb in ("component/restart", "component/fault", "goal/add", "parameter/set", "replan"):
+        for verb in (tasks.COMPONENT_RESTART, tasks.COMPONENT_FAULT):
 
-            def handle(payload: dict[str, Any], verb: str = verb) -> dict[str, Any]:
-                requests.append((verb, payload))
-                if payload.get("name") == "unknown":
-                    return {"ok": False, "error": "no component 'unknown'"}
+            def fault(request: tasks.ComponentFault, key: str = verb.key) -> tasks.FaultReply:
+                requests.append((key.removeprefix("executive/api/"), request.to_payload()))
+                if request.name == "unknown":
+                    raise DuraError("no component 'unknown'")
+                return tasks.FaultReply({"component": request.name, "state": "ready"}, 1, False)
+
+            verb.serve(server, fault)
+
+        def goal(request: planning.GoalAdd) -> planning.GoalReply:
+            requests.append(("goal/add", request.to_payload()))
+            return planning.GoalReply({"id": 1, "expression": request.expression})
+
+        planning.GOAL_ADD.serve(server, goal)
+        for verb_name in ("parameter/set", "replan"):
+
+            def handle(payload: dict[str, Any], verb_name: str = verb_name) -> dict[str, Any]:
+                requests.append((verb_name, payload))
                 return {"ok": True}
 
-            server.serve(api(verb), handle)
+            server.serve(api(verb_name), handle)
         with Bus("testbot", name="rules", endpoint=endpoint) as client:
             yield client, requests
 

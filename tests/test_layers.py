@@ -1,0 +1,161 @@
+"""The architecture is visible in the imports: an upper layer may import a lower one,
+never the reverse (DESIGN.md, "Layout"); every import counts, lazy ones included."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import ROOT
+
+# Each layer and what it may import (besides itself and the standard library or
+# third-party packages). A layer is a package prefix; the longest prefix wins.
+ALLOWED: dict[str, set[str]] = {
+    "knowledge": set(),
+    "executive.bus": {"knowledge"},
+    "monitoring": {"executive.bus", "knowledge"},
+    "executive.sdk": {"executive.bus", "knowledge"},
+    "executive.runtime": {"executive.bus", "executive.sdk", "knowledge"},
+    "executive.ros2": {"executive.bus", "knowledge"},
+    "executive.planning": {"executive.bus", "knowledge"},
+    # the task executor runs plan steps through the plan executer's port
+    "executive.tasks": {
+        "executive.bus",
+        "executive.runtime",
+        "executive.sdk",
+        "executive.planning.runner",
+        "executive.planning.partial_order",
+        "executive.planning.expression",
+        "knowledge",
+    },
+    "executive.testing": {"executive.bus", "executive.sdk", "knowledge"},
+    "executive.dashboard": {"executive.bus", "executive.planning", "knowledge"},
+    "executive.executive": {
+        "executive.bus",
+        "executive.runtime",
+        "executive.sdk",
+        "executive.ros2",
+        "executive.tasks",
+        "executive.planning",
+        "executive.dashboard",
+        "monitoring",
+        "knowledge",
+    },
+    "executive.cli": {
+        "executive.bus",
+        "executive.runtime",
+        "executive.sdk",
+        "executive.ros2",
+        "executive.tasks",
+        "executive.planning",
+        "executive.testing",
+        "executive.dashboard",
+        "executive.executive",
+        "monitoring",
+        "knowledge",
+    },
+    "executive": {"knowledge"},  # the package's own __init__
+}
+PACKAGES = ("executive", "monitoring", "knowledge")
+
+
+def layer(module: str) -> str | None:
+    """The layer a module belongs to: the longest layer name that prefixes it."""
+    found = [name for name in ALLOWED if module == name or module.startswith(name + ".")]
+    return max(found, key=len) if found else None
+
+
+def module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def imports(path: Path) -> list[tuple[int, str]]:
+    """Every module of dura that a file imports, with the line."""
+    tree = ast.parse(path.read_text(), str(path))
+    package = module_name(path).rpartition(".")[0]
+    if path.name == "__init__.py":
+        package = module_name(path)
+    found: list[tuple[int, str]] = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found.extend((node.lineno, alias.name) for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parent = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join([*parent, base] if base else parent)
+            found.append((node.lineno, base))
+            found.extend((node.lineno, f"{base}.{alias.name}") for alias in node.names)
+    return [(line, name) for line, name in found if name.split(".")[0] in PACKAGES]
+
+
+def violations() -> list[str]:
+    found = []
+    for package in PACKAGES:
+        for path in sorted((ROOT / package).rglob("*.py")):
+            own = layer(module_name(path))
+            assert own is not None, f"{path}: in no layer"
+            for line, target in imports(path):
+                other = layer(target)
+                if other is None or other == own or own.startswith(other + "."):
+                    continue
+                allowed = ALLOWED[own]
+                if any(target == a or target.startswith(a + ".") for a in allowed):
+                    continue
+                if other in allowed:
+                    continue
+                found.append(f"{path.relative_to(ROOT)}:{line}: {own} imports {target}")
+    return found
+
+
+def test_no_layer_imports_one_above_it() -> None:
+    assert violations() == []
+
+
+def test_the_check_finds_an_import_that_runs_upward(tmp_path: Path) -> None:
+    offending = ROOT / "executive" / "bus" / "_upward_probe.py"
+    offending.write_text("def f() -> None:\n    from executive.tasks import executor\n")
+    try:
+        assert any(
+            "_upward_probe.py:2: executive.bus imports executive.tasks" in v for v in violations()
+        )
+    finally:
+        offending.unlink()
+
+
+@pytest.mark.parametrize(
+    ("module", "forbidden"),
+    [
+        (
+            "executive.bus",
+            (
+                "executive.runtime",
+                "executive.tasks",
+                "executive.planning",
+                "executive.cli",
+                "monitoring",
+            ),
+        ),
+        ("executive.bus.api.planning", ("executive.planning", "executive.cli", "monitoring")),
+        (
+            "monitoring.observer_manager",
+            ("executive.runtime", "executive.tasks", "executive.planning"),
+        ),
+    ],
+)
+def test_importing_a_layer_loads_nothing_above_it(module: str, forbidden: tuple[str, ...]) -> None:
+    code = (
+        f"import sys, {module}\n"
+        f"print('\\n'.join(m for m in sys.modules if m.startswith({forbidden!r})))"
+    )
+    loaded = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True
+    ).stdout.split()
+    assert loaded == []
