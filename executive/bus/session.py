@@ -17,16 +17,19 @@ import threading
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import zenoh
 
+from executive.bus.security import Login
 from knowledge.description import DEFAULT_ENDPOINT
 from knowledge.errors import BusError, DuraError
 
 log = logging.getLogger("dura.bus")
 
 _BAD_KEY = re.compile(r"[*$?#\s]|//")
+MAX_PAYLOAD = 1 << 20  # bytes: a larger message is dropped (a robot's messages are far smaller)
 
 Handler = Callable[["Message"], None]
 RequestHandler = Callable[[dict[str, Any]], Mapping[str, Any]]
@@ -48,12 +51,17 @@ def decode(raw: bytes, key: str = "") -> dict[str, Any]:
     """A JSON object from bytes.
 
     Raises:
-        BusError: the payload is not a JSON object.
+        BusError: the payload is not a JSON object, is larger than ``MAX_PAYLOAD`` or
+            nested too deeply to read.
     """
+    if len(raw) > MAX_PAYLOAD:
+        raise BusError(f"{key}: payload of {len(raw)} bytes refused (at most {MAX_PAYLOAD})")
     try:
         value = json.loads(raw)
     except (UnicodeDecodeError, json.JSONDecodeError) as e:
         raise BusError(f"{key}: malformed payload (not JSON: {e})") from e
+    except RecursionError:
+        raise BusError(f"{key}: malformed payload (nested too deeply)") from None
     if not isinstance(value, dict):
         raise BusError(f"{key}: malformed payload (a JSON {type(value).__name__}, not an object)")
     return value
@@ -97,8 +105,20 @@ class _Dropped:
             log.warning("dropped malformed message #%d on %s: %s", n, key, reason)
 
 
-def session_config(*, listen: tuple[str, ...] = (), connect: tuple[str, ...] = ()) -> zenoh.Config:
-    """A zenoh configuration: router if it listens, else client; no multicast scouting."""
+def session_config(
+    *,
+    listen: tuple[str, ...] = (),
+    connect: tuple[str, ...] = (),
+    login: Login | None = None,
+    dictionary: Path | None = None,
+    access: Mapping[str, Any] | None = None,
+) -> zenoh.Config:
+    """A zenoh configuration: router if it listens, else client; no multicast scouting.
+
+    ``login`` authenticates this session (a router checks its clients against the
+    user-password ``dictionary`` file); ``access`` is Zenoh's access control (see
+    :mod:`executive.bus.security`).
+    """
     config = zenoh.Config()
     config.insert_json5("mode", json.dumps("router" if listen else "client"))
     if listen:
@@ -107,6 +127,15 @@ def session_config(*, listen: tuple[str, ...] = (), connect: tuple[str, ...] = (
         config.insert_json5("connect/endpoints", json.dumps(list(connect)))
     config.insert_json5("scouting/multicast/enabled", "false")
     config.insert_json5("scouting/gossip/enabled", "false")
+    auth: dict[str, str] = {}
+    if login is not None:
+        auth.update(user=login.user, password=login.password)
+    if dictionary is not None:
+        auth["dictionary_file"] = str(dictionary)
+    if auth:
+        config.insert_json5("transport/auth/usrpwd", json.dumps(auth))
+    if access is not None:
+        config.insert_json5("access_control", json.dumps(access))
     return config
 
 
@@ -119,6 +148,8 @@ class Bus:
         endpoint: where the executive listens, e.g. ``tcp/127.0.0.1:7447``.
         listen: listen on ``endpoint`` (the executive) instead of connecting to it.
         connect: further endpoints to connect to (other machines).
+        login: the user and password this session authenticates with.
+        dictionary, access: (the executive) the users it accepts and what each may do.
 
     Raises:
         BusError: the endpoint is unusable: in use (listen) or nobody listens (connect).
@@ -132,6 +163,9 @@ class Bus:
         endpoint: str = DEFAULT_ENDPOINT,
         listen: bool = False,
         connect: tuple[str, ...] = (),
+        login: Login | None = None,
+        dictionary: Path | None = None,
+        access: Mapping[str, Any] | None = None,
     ) -> None:
         self.robot = check_name(robot, "robot name")
         self.name = name
@@ -145,6 +179,9 @@ class Bus:
         config = session_config(
             listen=(endpoint,) if listen else (),
             connect=connect if listen else (endpoint, *connect),
+            login=login,
+            dictionary=dictionary,
+            access=access,
         )
         try:
             self._session = zenoh.open(config)
@@ -153,7 +190,10 @@ class Bus:
                 raise BusError(
                     f"cannot listen on {endpoint}: {_short(e)} (is an executive already running?)"
                 ) from e
-            raise BusError(f"no executive for robot '{robot}' at {endpoint} ({_short(e)})") from e
+            hint = " or it refused these credentials" if login is not None else ""
+            raise BusError(
+                f"no executive for robot '{robot}' at {endpoint}{hint} ({_short(e)})"
+            ) from e
 
     # --- lifecycle --------------------------------------------------------------------
 
@@ -214,6 +254,11 @@ class Bus:
 
         def on_sample(sample: zenoh.Sample) -> None:
             key_expr = str(sample.key_expr)
+            if len(sample.payload) > MAX_PAYLOAD:
+                dropped(
+                    key_expr[prefix_len:], f"{len(sample.payload)} bytes (at most {MAX_PAYLOAD})"
+                )
+                return
             attachment = sample.attachment
             stamp = sample.timestamp
             message = Message(

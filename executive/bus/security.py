@@ -1,0 +1,233 @@
+"""Who may use a robot's bus: per-robot credentials and Zenoh's own access control.
+
+The executive listens as a Zenoh router with user-password authentication: a process
+without the robot's credentials cannot even connect. Every user has a role, and Zenoh's
+access control (default deny) lets each role do only what its part needs, checked by the
+router on every message that reaches it from a client:
+
+- ``executive`` and ``service`` (the executive's own services in other processes, host
+  agents): everything under ``dura/<robot>/``;
+- ``operator`` (the CLI, the dashboard, the test harness, scripts): call the services'
+  APIs, command components (fault injection), subscribe and watch liveliness — but
+  publish nothing, so no operator can forge a diagnosis, an observation or a state;
+- ``component.<name>`` (one user per component): publish topics and its own results and
+  feedback, answer its own commands, declare its own liveliness token, and call the few
+  verbs a component needs (achievements, facts).
+
+Credentials are generated on the executive's first run into ``.dura/<robot>.bus.json``
+(user-only permissions, 0600) and kept; components get theirs from the launcher in their
+environment, the command line reads the file. For a client on another machine, copy the
+file (it is the robot's key: treat it like an SSH key).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import secrets
+import stat
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from knowledge.errors import BusError
+
+EXECUTIVE = "executive"
+SERVICE = "service"
+OPERATOR = "operator"
+COMPONENT = "component."
+
+ENV_USER = "DURA_BUS_USER"  # a component's user and password, set by the launcher
+ENV_PASSWORD = "DURA_BUS_PASSWORD"  # noqa: S105 - the name of a variable, not a password
+ENV_CREDENTIALS = "DURA_BUS_CREDENTIALS"  # a credentials file to use instead of .dura/'s
+
+ALL = [
+    "put",
+    "delete",
+    "declare_subscriber",
+    "query",
+    "declare_queryable",
+    "reply",
+    "liveliness_token",
+    "declare_liveliness_subscriber",
+    "liveliness_query",
+]
+
+
+@dataclass(frozen=True)
+class Login:
+    """A user and password to connect with."""
+
+    user: str
+    password: str
+
+
+@dataclass(frozen=True)
+class Credentials:
+    """A robot's bus users and their passwords (the router's dictionary)."""
+
+    robot: str
+    passwords: Mapping[str, str]
+
+    def login(self, user: str) -> Login:
+        """The login of a user.
+
+        Raises:
+            BusError: the credentials have no such user.
+        """
+        password = self.passwords.get(user)
+        if password is None:
+            raise BusError(f"the bus credentials of robot '{self.robot}' have no user '{user}'")
+        return Login(user, password)
+
+    def to_payload(self) -> dict[str, Any]:
+        return {"robot": self.robot, "users": dict(sorted(self.passwords.items()))}
+
+
+def component_user(name: str) -> str:
+    return COMPONENT + name
+
+
+def credentials_file(folder: Path, robot: str) -> Path:
+    """Where a robot's credentials live in a working folder's ``.dura/``."""
+    return folder / ".dura" / f"{robot}.bus.json"
+
+
+def read_credentials(path: Path) -> Credentials:
+    """Read a credentials file.
+
+    Raises:
+        BusError: it is missing, unreadable, malformed, or others may read it.
+    """
+    try:
+        mode = path.stat().st_mode
+        data = json.loads(path.read_text())
+        users = data["users"]
+        if not isinstance(users, dict) or not all(
+            isinstance(k, str) and isinstance(v, str) for k, v in users.items()
+        ):
+            raise ValueError("'users' must map names to passwords")
+        robot = str(data["robot"])
+    except FileNotFoundError:
+        raise BusError(
+            f"{path}: no bus credentials (the executive writes them when it starts)"
+        ) from None
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise BusError(f"{path}: unreadable bus credentials ({e})") from e
+    if mode & (stat.S_IRWXG | stat.S_IRWXO):
+        raise BusError(f"{path}: others may read the bus credentials (run: chmod 600 {path})")
+    return Credentials(robot, users)
+
+
+def ensure_credentials(path: Path, robot: str, components: Iterable[str]) -> Credentials:
+    """The robot's credentials, created with user-only permissions if missing; a user for
+    every component that lacks one is added (a robot description may grow).
+
+    Raises:
+        BusError: an existing file is unreadable, or belongs to another robot.
+    """
+    wanted = [EXECUTIVE, SERVICE, OPERATOR, *(component_user(c) for c in components)]
+    existing: dict[str, str] = {}
+    if path.exists():
+        known = read_credentials(path)
+        if known.robot != robot:
+            raise BusError(f"{path}: bus credentials of robot '{known.robot}', not '{robot}'")
+        existing = dict(known.passwords)
+    missing = [user for user in wanted if user not in existing]
+    if not missing:
+        return Credentials(robot, existing)
+    passwords = {**existing, **{user: secrets.token_urlsafe(24) for user in missing}}
+    credentials = Credentials(robot, passwords)
+    _write_private(path, json.dumps(credentials.to_payload(), indent=2) + "\n")
+    return credentials
+
+
+def _write_private(path: Path, text: str) -> None:
+    """Write a file only its owner may read, atomically (never readable by others, not
+    even for a moment)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    temporary = path.with_name(f".{path.name}.{os.getpid()}")
+    fd = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    try:
+        with os.fdopen(fd, "w") as out:
+            out.write(text)
+        os.replace(temporary, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            temporary.unlink()
+        raise
+
+
+def dictionary(credentials: Credentials, path: Path) -> Path:
+    """Write the router's user-password dictionary (user-only) and return its path."""
+    lines = "".join(f"{user}:{password}\n" for user, password in credentials.passwords.items())
+    _write_private(path, lines)
+    return path
+
+
+def access_control(robot: str, components: Iterable[str]) -> dict[str, Any]:
+    """Zenoh's access control configuration for a robot's bus (see the module doc)."""
+    root = f"dura/{robot}"
+    rules: list[dict[str, Any]] = [
+        _rule("everything", ALL, [f"{root}/**"]),
+        _rule("deliver", ALL, [f"{root}/**"], flows=["egress"]),
+        _rule("ask", ["query"], [f"{root}/executive/api/**", f"{root}/monitoring/**",
+                                 f"{root}/diagnosis/**", f"{root}/component/*/cmd"]),
+        _rule("listen", ["declare_subscriber", "declare_liveliness_subscriber",
+                         "liveliness_query"], [f"{root}/**"]),
+        _rule("publish topics", ["put"], [f"{root}/topic/**"]),
+        _rule("component calls", ["query"], [f"{root}/executive/api/component/achieve",
+                                             f"{root}/executive/api/state/set",
+                                             f"{root}/executive/api/state/unset"]),
+    ]  # fmt: skip
+    subjects = [
+        {"id": "trusted", "usernames": [EXECUTIVE, SERVICE]},
+        {"id": "operators", "usernames": [OPERATOR]},
+    ]
+    policies = [
+        {"rules": ["everything"], "subjects": ["trusted"]},
+        {"rules": ["deliver", "ask", "listen"], "subjects": ["operators"]},
+    ]
+    for name in components:
+        own = f"own {name}"
+        rules.append(
+            _rule(
+                own,
+                ["put"],
+                [f"{root}/component/{name}/result", f"{root}/component/{name}/feedback"],
+            )
+        )
+        rules.append(_rule(f"{own} commands", ["declare_queryable", "reply"],
+                           [f"{root}/component/{name}/cmd"]))  # fmt: skip
+        rules.append(_rule(f"{own} token", ["liveliness_token"],
+                           [f"{root}/alive/component/{name}/*"]))  # fmt: skip
+        subject = f"component {name}"
+        subjects.append({"id": subject, "usernames": [component_user(name)]})
+        policies.append(
+            {
+                "rules": ["deliver", "listen", "publish topics", "component calls", own,
+                          f"{own} commands", f"{own} token"],
+                "subjects": [subject],
+            }
+        )  # fmt: skip
+    return {
+        "enabled": True,
+        "default_permission": "deny",
+        "rules": rules,
+        "subjects": subjects,
+        "policies": policies,
+    }
+
+
+def _rule(
+    rule_id: str, messages: list[str], keys: list[str], *, flows: list[str] | None = None
+) -> dict[str, Any]:
+    return {
+        "id": rule_id,
+        "permission": "allow",
+        "flows": flows or ["ingress"],
+        "messages": messages,
+        "key_exprs": keys,
+    }

@@ -1,0 +1,101 @@
+"""The bus is not open: only the robot's users connect, and each may do only its part."""
+
+from __future__ import annotations
+
+import stat
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from executive.bus import security
+from executive.bus.security import Credentials, Login
+from executive.bus.session import Bus, Message
+from knowledge.errors import BusError
+from tests.conftest import wait_for
+
+ROBOT = "guarded"
+COMPONENTS = ("lidar", "cam")
+
+
+@pytest.fixture
+def credentials(tmp_path: Path) -> Credentials:
+    return security.ensure_credentials(tmp_path / "bus.json", ROBOT, COMPONENTS)
+
+
+@pytest.fixture
+def router(tmp_path: Path, endpoint: str, credentials: Credentials) -> Iterator[Bus]:
+    with Bus(
+        ROBOT,
+        name="executive",
+        endpoint=endpoint,
+        listen=True,
+        login=credentials.login(security.EXECUTIVE),
+        dictionary=security.dictionary(credentials, tmp_path / "users"),
+        access=security.access_control(ROBOT, COMPONENTS),
+    ) as bus:
+        yield bus
+
+
+def heard(router: Bus, key: str) -> list[Message]:
+    got: list[Message] = []
+    router.subscribe(key, got.append, decoded=False)
+    return got
+
+
+def test_credentials_are_made_once_for_the_owner_only_and_grow_with_the_robot(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / ".dura" / "robot.bus.json"
+    first = security.ensure_credentials(path, "robot", ["lidar"])
+    assert stat.S_IMODE(path.stat().st_mode) == 0o600
+    assert set(first.passwords) == {"executive", "service", "operator", "component.lidar"}
+    again = security.ensure_credentials(path, "robot", ["lidar", "cam"])
+    assert again.passwords["operator"] == first.passwords["operator"]
+    assert "component.cam" in again.passwords
+    path.chmod(0o644)
+    with pytest.raises(BusError, match="others may read the bus credentials"):
+        security.read_credentials(path)
+
+
+def test_a_client_without_the_robots_credentials_cannot_connect(
+    router: Bus, endpoint: str, credentials: Credentials
+) -> None:
+    with pytest.raises(BusError, match="no executive for robot 'guarded'"):
+        Bus(ROBOT, name="intruder", endpoint=endpoint)
+    wrong = Login(security.OPERATOR, "guess")
+    with pytest.raises(BusError, match="refused these credentials"):
+        Bus(ROBOT, name="intruder", endpoint=endpoint, login=wrong)
+
+
+def test_an_operator_asks_but_cannot_forge_what_services_publish(
+    router: Bus, endpoint: str, credentials: Credentials
+) -> None:
+    router.serve("executive/api/status", lambda request: {"robot": ROBOT})
+    diagnoses = heard(router, "diagnoses")
+    with Bus(
+        ROBOT, name="cli", endpoint=endpoint, login=credentials.login(security.OPERATOR)
+    ) as operator:
+        assert operator.request("executive/api/status") == {"robot": ROBOT}
+        operator.publish("diagnoses", {"status": "DIAGNOSED", "diagnoses": [["lidar"]]})
+        router.publish("diagnoses", {"status": "OK", "diagnoses": []})  # the real one arrives
+        assert wait_for(lambda: len(diagnoses) >= 1)
+        time.sleep(0.3)
+    assert [m.payload["status"] for m in diagnoses] == ["OK"]
+
+
+def test_a_component_publishes_topics_and_its_own_results_only(
+    router: Bus, endpoint: str, credentials: Credentials
+) -> None:
+    results = heard(router, "component/*/result")
+    scans = heard(router, "topic/scan")
+    login = credentials.login(security.component_user("lidar"))
+    with Bus(ROBOT, name="lidar", endpoint=endpoint, login=login) as lidar:
+        lidar.publish("topic/scan", {"ranges": [1.0]})
+        lidar.publish("component/cam/result", {"forged": True})
+        lidar.publish("component/lidar/result", {"own": True})
+        assert wait_for(lambda: scans and results)
+        time.sleep(0.3)
+    assert [m.key for m in results] == ["component/lidar/result"]
+    assert len(scans) == 1
