@@ -17,6 +17,12 @@ import yaml
 
 from knowledge.finding import Report
 
+MAX_BYTES = 1 << 20  # a robot description, rules or observers file is far smaller
+MAX_DEPTH = 64  # levels of nesting: the schemas need about ten
+MAX_VALUES = 100_000  # values a document may hold once its aliases are expanded
+# libyaml when it is there: it is faster, and refuses pathological nesting by itself
+_LOADER: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
 _NUMBER_TAGS = ("tag:yaml.org,2002:int", "tag:yaml.org,2002:float")
 _TAG_NAMES = {
     "tag:yaml.org,2002:str": "a string",
@@ -47,12 +53,19 @@ def to_python(node: yaml.Node) -> Any:
 
 
 def compose(path: Path, report: Report, text: str | None = None) -> yaml.Node | None:
-    """Parse one YAML document; report syntax errors and duplicate keys.
+    """Parse one YAML document; report syntax errors, duplicate keys, and documents no
+    robot needs and a reader must not choke on: larger than ``MAX_BYTES``, nested deeper
+    than ``MAX_DEPTH``, or whose aliases expand to more than ``MAX_VALUES`` values.
 
-    Returns ``None`` when the file cannot be read or parsed.
+    Returns ``None`` when the file cannot be read or parsed, or is refused.
     """
     if text is None:
         try:
+            if path.stat().st_size > MAX_BYTES:
+                report.error(
+                    None, f"too large: {_size(path.stat().st_size)} (at most {_size(MAX_BYTES)})"
+                )
+                return None
             text = path.read_text(encoding="utf-8")
         except OSError as e:
             report.error(None, f"cannot read: {e.strerror or e}")
@@ -60,8 +73,11 @@ def compose(path: Path, report: Report, text: str | None = None) -> yaml.Node | 
         except UnicodeDecodeError:
             report.error(None, "is not UTF-8 text")
             return None
+    if len(text) > MAX_BYTES:
+        report.error(None, f"too large: {_size(len(text))} (at most {_size(MAX_BYTES)})")
+        return None
     try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
+        node = yaml.compose(text, Loader=_LOADER)
     except yaml.MarkedYAMLError as e:
         mark = e.problem_mark or e.context_mark
         line = int(mark.line) + 1 if mark is not None else None
@@ -71,9 +87,54 @@ def compose(path: Path, report: Report, text: str | None = None) -> yaml.Node | 
     except yaml.YAMLError as e:
         report.error(None, f"invalid YAML: {e}")
         return None
+    except RecursionError:
+        report.error(None, f"invalid YAML: nested more than {MAX_DEPTH} levels deep")
+        return None
     if node is not None:
+        if not _within_bounds(node, report):
+            return None
         _check_duplicate_keys(node, report)
     return node
+
+
+def _size(count: int) -> str:
+    return f"{count / (1 << 20):.1f} MiB" if count >= 1 << 20 else f"{count // 1024} KiB"
+
+
+def _within_bounds(root: yaml.Node, report: Report) -> bool:
+    """Whether a document is at most ``MAX_DEPTH`` deep and its aliases expand to at most
+    ``MAX_VALUES`` values; reports the line where it is not (without recursion, and in
+    time linear in the document, however far its aliases would expand)."""
+    stack: list[tuple[yaml.Node, int]] = [(root, 1)]
+    seen: set[int] = set()
+    order: list[yaml.Node] = []
+    while stack:
+        node, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            report.error(line_of(node), f"nested more than {MAX_DEPTH} levels deep")
+            return False
+        if id(node) in seen:
+            continue
+        seen.add(id(node))
+        order.append(node)
+        stack.extend((child, depth + 1) for child in _children(node))
+    values: dict[int, int] = {}
+    for node in reversed(order):  # children before parents: each node counted once
+        values[id(node)] = 1 + sum(values.get(id(c), 1) for c in _children(node))
+        if values[id(node)] > MAX_VALUES:
+            report.error(
+                line_of(node), f"its aliases expand to more than {MAX_VALUES} values (a YAML bomb?)"
+            )
+            return False
+    return True
+
+
+def _children(node: yaml.Node) -> list[yaml.Node]:
+    if isinstance(node, yaml.MappingNode):
+        return [n for pair in node.value for n in pair]
+    if isinstance(node, yaml.SequenceNode):
+        return list(node.value)
+    return []
 
 
 def _check_duplicate_keys(node: yaml.Node, report: Report) -> None:
