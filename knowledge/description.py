@@ -9,13 +9,21 @@ capabilities), behaviors (components that run a goal to completion) and tasks
 from __future__ import annotations
 
 import enum
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
+
+# Names become file names (knowledge base, logs) and bus keys: no path or key syntax.
+SAFE_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_-]{0,63}")
+SAFE_NAME_RULE = "must be a letter, then up to 63 letters, digits, '_' or '-'"
+SAFE_TOPIC = re.compile(r"/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*")
+SAFE_TOPIC_RULE = "must be names of letters, digits and '_' joined by '/' (a ROS topic name)"
 DEFAULT_ENGINE = "kairos"
+PYTHONS = ("python", "python3")  # in a command: the executive's own interpreter
 
 
 class Kind(enum.Enum):

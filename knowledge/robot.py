@@ -15,6 +15,8 @@ import yaml
 
 from knowledge.description import (
     DEFAULT_ENDPOINT,
+    SAFE_NAME,
+    SAFE_NAME_RULE,
     BehaviorSpec,
     FunctionalitySpec,
     GoalArg,
@@ -177,6 +179,8 @@ def read_robot(
         return None, report.findings
     base = path.resolve().parent
     name = top.text("robot", required=True) or path.stem
+    if not SAFE_NAME.fullmatch(name):
+        report.error(top.key_line("robot"), f"robot name '{name}' {SAFE_NAME_RULE}")
     domain = next(iter(_files(top, "domain", base, required=True)), None)
     problem = next(iter(_files(top, "problem", base)), None)
     planner = _planner(top.section("planner"), report)

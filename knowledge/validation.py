@@ -6,12 +6,22 @@ and returns every finding, so ``dura validate`` can list each problem on a line.
 
 from __future__ import annotations
 
+import importlib.util
+import os
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
 import networkx as nx
 
-from knowledge.description import RobotDescription
+from knowledge.description import (
+    PYTHONS,
+    SAFE_NAME,
+    SAFE_NAME_RULE,
+    SAFE_TOPIC,
+    SAFE_TOPIC_RULE,
+    RobotDescription,
+)
 from knowledge.domain import DomainInfo, parse_problem, read_domain
 from knowledge.errors import DomainError
 from knowledge.finding import Finding, Report, Severity
@@ -47,7 +57,8 @@ def _reserved(name: str) -> bool:
 
 
 def check_names(robot: RobotDescription, report: Report) -> None:
-    """No component or topic may start with AB (the diagnosis engine's own names)."""
+    """Component and topic names are safe (they become file names and bus keys) and none
+    starts with AB (the diagnosis engine's own names)."""
     both = set(robot.functionalities) & set(robot.behaviors)
     for name in sorted(both):
         report.error(
@@ -55,11 +66,18 @@ def check_names(robot: RobotDescription, report: Report) -> None:
             f"'{name}' is both a functionality and a behavior; component names must be unique",
         )
     for c in robot.components.values():
-        if _reserved(c.name):
+        if not SAFE_NAME.fullmatch(c.name):
+            report.error(c.line, f"{c.kind.value} name '{c.name}' {SAFE_NAME_RULE}")
+        elif _reserved(c.name):
             report.error(c.line, f"{c.kind.value} name '{c.name}' must not start with 'AB'")
         for key in ("publishes", "subscribes"):
             for topic in getattr(c, key):
-                if _reserved(topic):
+                if not SAFE_TOPIC.fullmatch(topic):
+                    report.error(
+                        c.line_of(key),
+                        f"topic '{topic}' of {c.kind.value} '{c.name}' {SAFE_TOPIC_RULE}",
+                    )
+                elif _reserved(topic):
                     report.error(
                         c.line_of(key),
                         f"topic '{topic}' of {c.kind.value} '{c.name}' must not start with 'AB'",
@@ -152,6 +170,68 @@ def _components_checks(robot: RobotDescription, report: Report) -> None:
     check_names(robot, report)
     check_capabilities(robot, report)
     check_topics(robot, report)
+    check_commands(robot, report)
+
+
+def check_commands(robot: RobotDescription, report: Report) -> None:
+    """Each component's command can start on this machine (its program or module
+    exists), so a typo is met here and not as a permanent fault at run time."""
+    folder = robot.path.parent
+    for c in robot.components.values():
+        problem = command_problem(c.command, folder)
+        if problem:
+            report.error(c.line_of("command"), f"{c.kind.value} '{c.name}': {problem}")
+
+
+def command_problem(argv: tuple[str, ...], folder: Path) -> str:
+    """Why an argv cannot start from ``folder``, or an empty string."""
+    if not argv:
+        return "its command is empty"
+    program = argv[0]
+    if len(argv) == 1 and len(program.split()) > 1:
+        words = ", ".join(program.split())
+        return f"command '{program}' is one string with spaces: write it as a list: [{words}]"
+    if program in PYTHONS:
+        rest = list(argv[1:])
+        if rest[:1] == ["-m"]:
+            if len(rest) < 2:
+                return "command runs 'python -m' without a module"
+            return "" if _module_exists(rest[1], folder) else f"no Python module '{rest[1]}'"
+        if rest and not rest[0].startswith("-") and not (folder / rest[0]).is_file():
+            return f"no Python script '{rest[0]}' in {folder}"
+        return ""
+    if "/" in program:
+        path = folder / program
+        if not path.is_file():
+            return f"no program '{program}' in {folder}"
+        if not os.access(path, os.X_OK):
+            return f"program '{program}' is not executable (chmod +x {program})"
+        return ""
+    if shutil.which(program) is None:
+        return f"program '{program}' is not on this machine's PATH"
+    return ""
+
+
+def _module_exists(module: str, folder: Path) -> bool:
+    """Whether ``python -m module`` finds it from ``folder``, without importing anything
+    of the robot's own code."""
+    parts = module.split(".")
+    if _module_below(folder, parts):
+        return True
+    try:
+        top = importlib.util.find_spec(parts[0])
+    except (ImportError, ValueError):
+        return False
+    if top is None:
+        return False
+    if len(parts) == 1:
+        return True
+    return any(_module_below(Path(p), parts[1:]) for p in top.submodule_search_locations or ())
+
+
+def _module_below(folder: Path, parts: list[str]) -> bool:
+    base = folder.joinpath(*parts)
+    return base.with_suffix(".py").is_file() or (base / "__init__.py").is_file()
 
 
 def validate(path: Path, text: str | None = None) -> Validation:

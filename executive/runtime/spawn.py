@@ -16,10 +16,11 @@ import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+from knowledge.description import PYTHONS
+
 _libc = ctypes.CDLL(None, use_errno=True)
 _PR_SET_PDEATHSIG = 1
 _SIGKILL = int(signal.SIGKILL)
-PYTHONS = ("python", "python3")
 
 
 def _die_with_parent(parent: int) -> None:

@@ -44,6 +44,9 @@ class BrokenRobot:
             assert self.old in robot, self.name
             robot = robot.replace(self.old, self.new, 1)
         (folder / "domain.pddl").write_text(domain)
+        components = folder / "components"  # the commands start them: they must exist
+        if not components.exists():
+            components.symlink_to(ROOT / "examples" / "usecase" / "components")
         path = folder / "robot.yaml"
         path.write_text(robot)
         return path
@@ -153,5 +156,48 @@ BROKEN_ROBOTS = [
         "(photogenic ?p)",
         "PDDL: Not able to handle: (photogenic ?p)",
         in_domain=True,
+    ),
+    BrokenRobot(
+        "robot name that is a path",
+        "robot: usecase",
+        "robot: ../../evil",
+        "robot: ../../evil",
+        "robot name '../../evil' must be a letter, then up to 63 letters, digits, '_' or '-'",
+    ),
+    BrokenRobot(
+        "component name that is a path",
+        "  cam:\n",
+        "  ../../x:\n",
+        "../../x:",
+        "functionality name '../../x' must be a letter, then up to 63 letters",
+    ),
+    BrokenRobot(
+        "topic with key syntax",
+        "publishes: [image]",
+        "publishes: ['image/**']",
+        "publishes: ['image/**']",
+        "topic 'image/**' of functionality 'cam' must be names of letters, digits and '_'",
+    ),
+    BrokenRobot(
+        "command as one string",
+        "    command: [python, -m, components.cam]",
+        "    command: python -m components.cam",
+        "command: python -m components.cam",
+        "functionality 'cam': command 'python -m components.cam' is one string with spaces: "
+        "write it as a list: [python, -m, components.cam]",
+    ),
+    BrokenRobot(
+        "command with a missing module",
+        "    command: [python, -m, components.cam]",
+        "    command: [python, -m, components.camera]",
+        "command: [python, -m, components.camera]",
+        "functionality 'cam': no Python module 'components.camera'",
+    ),
+    BrokenRobot(
+        "command with a missing program",
+        "    command: [python, -m, components.cam]",
+        "    command: [camera-driver, --fast]",
+        "command: [camera-driver, --fast]",
+        "functionality 'cam': program 'camera-driver' is not on this machine's PATH",
     ),
 ]
