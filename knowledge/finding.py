@@ -55,3 +55,14 @@ class Report:
     @property
     def errors(self) -> list[Finding]:
         return [f for f in self.findings if f.is_error]
+
+
+def finding_of(error: Exception, fallback: str) -> Finding:
+    """A finding from an error whose message reads ``file:line: message`` (PDDL, ASP), or
+    one about ``fallback`` with the whole message."""
+    text = str(error)
+    head, _, rest = text.partition(": ")
+    path, _, line = head.rpartition(":")
+    if path and line.isdigit() and rest:
+        return Finding(path, int(line), rest)
+    return Finding(fallback, None, text)

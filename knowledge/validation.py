@@ -24,7 +24,7 @@ from knowledge.description import (
 )
 from knowledge.domain import DomainInfo, parse_problem, read_domain
 from knowledge.errors import DomainError
-from knowledge.finding import Finding, Report, Severity
+from knowledge.finding import Finding, Report, Severity, finding_of
 from knowledge.robot import read_robot
 from knowledge.yamlsource import did_you_mean
 
@@ -245,7 +245,7 @@ def validate(path: Path, text: str | None = None) -> Validation:
             try:
                 domain = read_domain(robot.domain)
             except DomainError as e:
-                findings.append(_from_error(e))
+                findings.append(finding_of(e, str(path)))
         if domain is not None:
             domain_report = Report(str(robot.domain))
             check_tasks(robot, domain, report, domain_report)
@@ -257,20 +257,10 @@ def validate(path: Path, text: str | None = None) -> Validation:
                 except (OSError, UnicodeDecodeError) as e:
                     report.error(None, f"cannot read problem {robot.problem}: {e}")
                 except DomainError as e:
-                    findings.append(_from_error(e))
+                    findings.append(finding_of(e, str(path)))
     all_findings = tuple(sorted(findings + report.findings, key=_order))
     return Validation(robot, domain, all_findings)
 
 
 def _order(f: Finding) -> tuple[str, int, int]:
     return (f.path, f.line or 0, 0 if f.is_error else 1)
-
-
-def _from_error(error: DomainError) -> Finding:
-    """A finding from an error message of the form ``file:line: message``."""
-    text = str(error)
-    head, _, rest = text.partition(": ")
-    path, _, line = head.rpartition(":")
-    if path and line.isdigit():
-        return Finding(path, int(line), rest)
-    return Finding(head, None, rest)

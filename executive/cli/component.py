@@ -8,6 +8,7 @@ from typing import Any
 
 from executive.bus.api import components, tasks
 from executive.bus.payloads import ComponentState, Lifecycle
+from executive.cli.arguments import count, seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
 from executive.runtime.spawn import describe_exit
@@ -37,7 +38,7 @@ def register(sub: Any) -> None:
         cmd.add_argument("name", metavar="NAME", help="the component")
         cmd.add_argument(
             "--timeout",
-            type=float,
+            type=seconds(),
             default=60.0,
             metavar="SECONDS",
             help="how long to wait for the executive's answer (default 60)",
@@ -49,7 +50,7 @@ def register(sub: Any) -> None:
     logs = csub.add_parser("logs", help="the last lines of a component's log")
     logs.add_argument("name", metavar="NAME", help="the component")
     logs.add_argument(
-        "-n", "--lines", type=int, default=50, metavar="N", help="how many lines (default 50)"
+        "-n", "--lines", type=count, default=50, metavar="N", help="how many lines (default 50)"
     )
     add_client_options(logs)
     add_json_flag(logs)
@@ -86,8 +87,6 @@ def _summary(state: ComponentState) -> str:
 
 
 def run_lifecycle(args: argparse.Namespace) -> int:
-    if args.timeout <= 0:
-        raise DuraError(f"--timeout must be positive, not {args.timeout:g}")
     name, timeout = args.name, args.timeout
     if args.verb == "reset":
         reset = ask(args, tasks.COMPONENT_RESET, tasks.ComponentName(name), timeout=timeout)
@@ -119,8 +118,6 @@ def run_lifecycle(args: argparse.Namespace) -> int:
 
 
 def run_logs(args: argparse.Namespace) -> int:
-    if args.lines < 0:
-        raise DuraError(f"--lines must be 0 or more, not {args.lines}")
     reply = ask(args, components.COMPONENT_LOGS, components.LogQuery(args.name, args.lines))
     if args.json:
         print_json(reply.to_payload())

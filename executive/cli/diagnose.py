@@ -6,8 +6,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from executive.cli.arguments import count, seconds
 from executive.cli.output import add_json_flag, print_json
-from knowledge.errors import ConfigError
 from monitoring.diagnosis.engine import DiagnosisEngine
 from monitoring.diagnosis.reader import read_model, read_observations
 from monitoring.diagnosis.result import Status
@@ -28,15 +28,13 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--exonerate", action="store_true", help="an OK topic observation clears that topic"
     )
-    p.add_argument("--max-card", metavar="K", type=int, help="only diagnoses of at most K names")
-    p.add_argument("--timeout", metavar="SECONDS", type=float, help="stop after this long")
+    p.add_argument("--max-card", metavar="K", type=count, help="only diagnoses of at most K names")
+    p.add_argument("--timeout", metavar="SECONDS", type=seconds(), help="stop after this long")
     add_json_flag(p)
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.max_card is not None and args.max_card < 0:
-        raise ConfigError(f"--max-card must be at least 0, not {args.max_card}")
     model = read_model(args.model)
     engine = DiagnosisEngine(
         model, exonerate=args.exonerate, max_card=args.max_card, timeout=args.timeout

@@ -7,9 +7,9 @@ import time
 from typing import Any
 
 from executive.bus.api import planning as api
+from executive.cli.arguments import identifier, priority, seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
-from knowledge.errors import DuraError
 from knowledge.records import GoalState
 
 
@@ -27,10 +27,10 @@ def register(sub: Any) -> None:
     )
     add.add_argument("expression", metavar="EXPR", help="the goal expression")
     add.add_argument(
-        "--deadline", type=float, metavar="S", help="seconds from now by which it must hold"
+        "--deadline", type=seconds(), metavar="S", help="seconds from now by which it must hold"
     )
     add.add_argument(
-        "--priority", type=int, default=0, metavar="P", help="higher goals win (default 0)"
+        "--priority", type=priority, default=0, metavar="P", help="higher goals win (default 0)"
     )
     add.set_defaults(run=run_add)
 
@@ -41,11 +41,11 @@ def register(sub: Any) -> None:
     listing.set_defaults(run=run_list)
 
     show = gsub.add_parser("show", help="one goal and its history")
-    show.add_argument("id", type=int, metavar="ID", help="the goal's id")
+    show.add_argument("id", type=identifier, metavar="ID", help="the goal's id")
     show.set_defaults(run=run_show)
 
     cancel = gsub.add_parser("cancel", help="cancel an open goal (the others are replanned)")
-    cancel.add_argument("id", type=int, metavar="ID", help="the goal's id")
+    cancel.add_argument("id", type=identifier, metavar="ID", help="the goal's id")
     cancel.set_defaults(run=run_cancel)
 
     for cmd in (add, listing, show, cancel):
@@ -76,8 +76,6 @@ GOAL_HEADERS = ["id", "state", "priority", "deadline", "source", "goal", "reason
 
 
 def run_add(args: argparse.Namespace) -> int:
-    if args.deadline is not None and not args.deadline > 0:
-        raise DuraError(f"--deadline must be a positive number of seconds, not {args.deadline:g}")
     request = api.GoalAdd(args.expression, args.priority, args.deadline)
     goal = ask(args, api.GOAL_ADD, request).goal
     if args.json:

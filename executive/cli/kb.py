@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from executive.cli.arguments import count
 from executive.cli.output import add_json_flag, print_json, section, shown, table
 from knowledge.errors import DuraError
 from knowledge.knowledge_base import KnowledgeBase
@@ -29,7 +30,7 @@ def register(sub: Any) -> None:
     )
     where.add_argument("--db", type=Path, help="the knowledge base file")
     show.add_argument(
-        "--events", type=int, default=20, metavar="N", help="how many recent events (20)"
+        "--events", type=count, default=20, metavar="N", help="how many recent events (20)"
     )
     add_json_flag(show)
     show.set_defaults(run=run_show)
@@ -51,8 +52,6 @@ def _clock(stamp: float) -> str:
 
 
 def run_show(args: argparse.Namespace) -> int:
-    if args.events < 0:
-        raise DuraError(f"--events must be 0 or more, not {args.events}")
     with KnowledgeBase(database_path(args), readonly=True) as kb:
         data = kb.snapshot(events=args.events)
     if args.json:

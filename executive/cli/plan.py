@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from executive.bus.api import planning as api
+from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, shown, table
 from executive.planning.goals import GoalSpec
@@ -16,7 +17,6 @@ from executive.planning.partial_order import PartialOrderPlan, Step
 from executive.planning.planner import Planner, PlanningTask, PlanResult, engine_names
 from executive.planning.problem import read_world
 from knowledge.description import DEFAULT_ENGINE
-from knowledge.errors import DuraError
 
 BAR = 40  # characters of the timeline
 
@@ -45,7 +45,7 @@ def register(sub: Any) -> None:
         help=f"the planning engine (default {DEFAULT_ENGINE})",
     )
     p.add_argument(
-        "--timeout", type=float, default=30.0, metavar="S", help="seconds to search (30)"
+        "--timeout", type=seconds(), default=30.0, metavar="S", help="seconds to search (30)"
     )
     add_client_options(p)
     add_json_flag(p)
@@ -58,8 +58,6 @@ def run(args: argparse.Namespace) -> int:
     if args.show:
         return run_show(args)
     domain, problem = args.offline
-    if not args.timeout > 0:
-        raise DuraError(f"--timeout must be a positive number of seconds, not {args.timeout:g}")
     world, goal = read_world(domain, problem)
     task = PlanningTask(domain.resolve(), world, (GoalSpec(0, goal),))
     with Planner(args.engine, args.timeout) as planner:

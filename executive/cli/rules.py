@@ -9,7 +9,7 @@ from typing import Any
 
 from executive.cli.output import add_json_flag, print_json, shown
 from knowledge.errors import AspError
-from knowledge.finding import Finding, Report
+from knowledge.finding import Finding, Report, finding_of
 from monitoring.repair.engine import RuleEngine
 from monitoring.repair.rule import read_rules
 
@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
         try:
             RuleEngine([rule_set])
         except AspError as e:
-            findings.append(Finding(shown(args.rules), None, str(e)))
+            findings.append(finding_of(e, shown(args.rules)))
     errors = [f for f in findings if f.is_error]
     if args.json:
         print_json(

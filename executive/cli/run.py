@@ -10,11 +10,11 @@ import threading
 from pathlib import Path
 from typing import Any
 
+from executive.cli.arguments import rate, seconds
 from executive.cli.client import remove_run_file, write_run_file
 from executive.cli.output import add_json_flag, print_json, shown
 from executive.executive import Executive
 from executive.runtime.launcher import local_endpoint
-from knowledge.errors import DuraError
 from knowledge.robot import load_robot
 
 
@@ -39,14 +39,14 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         "--resource-rate",
-        type=float,
+        type=rate,
         default=1.0,
         metavar="HZ",
         help="how often the resource monitor publishes (default 1)",
     )
     p.add_argument(
         "--grace",
-        type=float,
+        type=seconds(),
         default=3.0,
         metavar="SECONDS",
         help="time a component gets to stop, before SIGTERM and again before SIGKILL (default 3)",
@@ -56,10 +56,6 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    for option in ("resource_rate", "grace"):
-        if getattr(args, option) <= 0:
-            flag = "--" + option.replace("_", "-")
-            raise DuraError(f"{flag} must be positive, not {getattr(args, option):g}")
     robot = load_robot(args.robot)
     stop = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):

@@ -12,6 +12,7 @@ from typing import Any
 from executive.bus.api import planning as api
 from executive.bus.keys import EVENTS
 from executive.bus.session import Message
+from executive.cli.arguments import count
 from executive.cli.client import add_client_options, ask, connect
 from executive.cli.goal import GOAL_HEADERS, details, goal_rows
 from executive.cli.output import add_json_flag, print_json, section, table
@@ -25,7 +26,7 @@ def register(sub: Any) -> None:
         "keep printing them as they happen until Ctrl-C.",
     )
     events.add_argument(
-        "-n", "--lines", type=int, default=30, metavar="N", help="how many past events (30)"
+        "-n", "--lines", type=count, default=30, metavar="N", help="how many past events (30)"
     )
     events.add_argument("--kind", metavar="KIND", help="only events of this kind (e.g. FAIL)")
     events.add_argument("--follow", action="store_true", help="keep printing new events")
@@ -49,8 +50,6 @@ def event_line(event: dict[str, Any]) -> str:
 
 
 def run_events(args: argparse.Namespace) -> int:
-    if args.lines < 0:
-        args.parser.error(f"-n must not be negative, not {args.lines}")
     arrived: queue.Queue[dict[str, Any]] = queue.Queue()
     with connect(args) as bus:
         if args.follow:

@@ -7,6 +7,7 @@ import argparse
 from typing import Any
 
 from executive.bus.api import tasks as api
+from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, section, table
 from executive.cli.plan import bar
@@ -29,12 +30,18 @@ def register(sub: Any) -> None:
     start.add_argument(
         "--arg", action="append", default=[], metavar="K=V", help="a goal field (repeatable)"
     )
-    start.add_argument("--duration", type=float, metavar="S", help="the expected duration")
+    start.add_argument("--duration", type=seconds(), metavar="S", help="the expected duration")
     start.add_argument(
-        "--earliest", type=float, metavar="S", help="start no sooner than S seconds from now"
+        "--earliest",
+        type=seconds(zero=True),
+        metavar="S",
+        help="start no sooner than S seconds from now",
     )
     start.add_argument(
-        "--deadline", type=float, metavar="S", help="end within S seconds from now, or never start"
+        "--deadline",
+        type=seconds(),
+        metavar="S",
+        help="end within S seconds from now, or never start",
     )
     start.add_argument(
         "--with", dest="together", action="append", default=[], metavar="ID",

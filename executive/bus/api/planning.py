@@ -11,6 +11,7 @@ from executive.bus.verb import Empty, Verb
 from knowledge.records import GoalState
 
 Count = Annotated[int, Between(0, 2**63 - 1)]
+Priority = Annotated[int, Between(-(10**9), 10**9)]  # what the CLI accepts too
 
 
 @dataclass(frozen=True)
@@ -18,7 +19,7 @@ class GoalAdd(Payload):
     """A goal expression with its priority, deadline (seconds from now) and source."""
 
     expression: Text
-    priority: int = 0
+    priority: Priority = 0
     deadline: float | None = None
     source: str = "user"
 

@@ -119,3 +119,34 @@ def test_version_names_the_engines(dura: Dura) -> None:
     assert data["dura"] == "0.1.0"
     for name in ("unified-planning", "up-kairos", "clingo", "eclipse-zenoh"):
         assert data[name] != "not installed"
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (
+            ["goal", "add", "(robot_at dock)", "--priority", "99999999999999999999999"],
+            "argument --priority: must be a whole number from -1000000000 to 1000000000",
+        ),
+        (["goal", "add", "(robot_at dock)", "--deadline", "nan"], "'nan' is not a finite number"),
+        (["goal", "show", "0"], "argument ID: must be an id"),
+        (
+            ["diagnose", "m.yaml", "--observations", "o.yaml", "--timeout", "-1"],
+            "--timeout: must be",
+        ),
+        (["task", "start", "move_to", "--earliest", "-2"], "argument --earliest: must be 0 and"),
+        (["events", "-n", "-5"], "argument -n/--lines: must be a whole number from 0"),
+        (["run", "r.yaml", "--grace", "inf"], "argument --grace: 'inf' is not a finite number"),
+        (
+            ["component", "logs", "lidar", "-n", "x"],
+            "argument -n/--lines: 'x' is not a whole number",
+        ),
+    ],
+)
+def test_a_bad_number_is_a_usage_error_that_says_what_is_allowed(
+    dura: Dura, args: list[str], message: str
+) -> None:
+    result = dura(*args)
+    assert result.returncode == 2
+    assert message in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1, result.stderr

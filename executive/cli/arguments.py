@@ -1,0 +1,76 @@
+"""Argument types of the command line: a number out of range is a usage error (exit 2)
+that says what is allowed, before anything is asked of anyone."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Callable
+
+LIMIT = 10**9  # no count, priority or number of seconds a person means is larger
+
+
+def _number(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"'{text}' is not a finite number")
+    return value
+
+
+def _whole(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
+
+
+def seconds(*, zero: bool = False) -> Callable[[str], float]:
+    """A positive number of seconds (or zero, if allowed), at most ``LIMIT``."""
+
+    def read(text: str) -> float:
+        value = _number(text)
+        if value < 0 or (value == 0 and not zero) or value > LIMIT:
+            least = "0" if zero else "more than 0"
+            raise argparse.ArgumentTypeError(
+                f"must be {least} and at most {LIMIT} seconds, not {text}"
+            )
+        return value
+
+    return read
+
+
+def count(text: str) -> int:
+    """A whole number from 0 to ``LIMIT``."""
+    value = _whole(text)
+    if not 0 <= value <= LIMIT:
+        raise argparse.ArgumentTypeError(f"must be a whole number from 0 to {LIMIT}, not {text}")
+    return value
+
+
+def identifier(text: str) -> int:
+    """An id: a whole number from 1 to 2**63 - 1 (what the knowledge base counts in)."""
+    value = _whole(text)
+    if not 1 <= value < 2**63:
+        raise argparse.ArgumentTypeError(f"must be an id (a whole number from 1), not {text}")
+    return value
+
+
+def priority(text: str) -> int:
+    """A goal's priority: a whole number from -``LIMIT`` to ``LIMIT``."""
+    value = _whole(text)
+    if not -LIMIT <= value <= LIMIT:
+        raise argparse.ArgumentTypeError(
+            f"must be a whole number from -{LIMIT} to {LIMIT}, not {text}"
+        )
+    return value
+
+
+def rate(text: str) -> float:
+    """A positive rate in Hz, at most ``LIMIT``."""
+    value = _number(text)
+    if not 0 < value <= LIMIT:
+        raise argparse.ArgumentTypeError(f"must be more than 0 and at most {LIMIT} Hz, not {text}")
+    return value
