@@ -11,11 +11,13 @@ from typing import Any
 
 from executive.bus.api import planning as api
 from executive.bus.keys import EVENTS
-from executive.bus.session import Message
+from executive.bus.session import Bus, Message
 from executive.cli.arguments import count
 from executive.cli.client import add_client_options, ask, connect
 from executive.cli.goal import GOAL_HEADERS, details, goal_rows
 from executive.cli.output import add_json_flag, print_json, section, table
+
+PAGE = 1000  # events read at a time when catching up
 
 
 def register(sub: Any) -> None:
@@ -52,25 +54,49 @@ def event_line(event: dict[str, Any]) -> str:
 def run_events(args: argparse.Namespace) -> int:
     arrived: queue.Queue[dict[str, Any]] = queue.Queue()
     with connect(args) as bus:
-        if args.follow:
+        if args.follow:  # before the history: nothing falls between the two
             bus.subscribe(EVENTS, lambda m: arrived.put(m.payload) if _is_event(m) else None)
         past = api.EVENTS.call(bus, api.EventQuery(limit=args.lines, kind=args.kind)).events
-        last = max((int(e["id"]) for e in past), default=0)
         if args.json and not args.follow:
             print_json({"events": past})
             return 0
         for event in past:
             _show(event, args.json)
-        while args.follow:
-            try:
-                event = arrived.get(timeout=0.5)
-            except queue.Empty:
-                continue
-            if int(event["id"]) <= last or (args.kind and event.get("kind") != args.kind):
-                continue
-            last = int(event["id"])
-            _show(event, args.json)
+        if args.follow:
+            newest = api.EVENTS.call(bus, api.EventQuery(limit=1)).events
+            _follow(bus, arrived, max((int(e["id"]) for e in newest + past), default=0), args)
     return 0
+
+
+def _follow(
+    bus: Bus, arrived: queue.Queue[dict[str, Any]], last: int, args: argparse.Namespace
+) -> None:
+    """Print events as they come, in order and without a gap: an event that arrives
+    after a gap (the bus dropped some, or they came before the subscription) is
+    preceded by the missing ones, read from the knowledge base by sequence number."""
+    while True:
+        try:
+            event = arrived.get(timeout=0.5)
+        except queue.Empty:
+            continue
+        number = int(event["id"])
+        if number <= last:
+            continue
+        while last < number - 1:
+            page = api.EVENTS.call(bus, api.EventQuery(after=last, limit=PAGE, oldest=True))
+            missing = [e for e in page.events if int(e["id"]) < number]
+            if not missing:
+                break  # not stored yet: the stream's own copies come later
+            for old in missing:
+                _print_followed(old, args)
+            last = int(missing[-1]["id"])
+        _print_followed(event, args)
+        last = number
+
+
+def _print_followed(event: dict[str, Any], args: argparse.Namespace) -> None:
+    if not args.kind or event.get("kind") == args.kind:
+        _show(event, args.json)
 
 
 def _is_event(message: Message) -> bool:

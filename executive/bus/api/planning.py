@@ -95,11 +95,14 @@ class ObjectAdd(Payload):
 
 @dataclass(frozen=True)
 class EventQuery(Payload):
-    """Events after a sequence number, at most ``limit``, of one kind (all without)."""
+    """Events after a sequence number, of one kind (all without), oldest first: the
+    newest ``limit`` of them, or with ``oldest`` the oldest ``limit`` (to page forward
+    through the log without a gap)."""
 
     after: Count = 0
     limit: Count = 100
     kind: str | None = None
+    oldest: bool = False
 
 
 @dataclass(frozen=True)
