@@ -100,7 +100,8 @@ def run_lifecycle(args: argparse.Namespace) -> int:
             usable = ", ".join(reply["usable"]) or "nothing new"
             print(f"{args.name}: faults cleared; usable again: {usable}")
         return 0
-    state = ComponentState.from_payload(reply)
+    # restart and fault answer {state, faults, permanent} (executive.bus.api.tasks.FaultReply)
+    state = ComponentState.from_payload(reply["state"] if "faults" in reply else reply)
     failed = state.state is Lifecycle.FAILED
     if args.json:
         print_json(reply)
