@@ -123,7 +123,7 @@ class TaskView:
             "functionalities": sorted(set(self.providers.values())),
             "duration": self.duration,
             "reason": self.reason,
-            "end": None if self.end is None else self.end.value,
+            "ended_by": None if self.end is None else self.end.value,
             "result": None if self.result is None else dict(self.result),
         }
 

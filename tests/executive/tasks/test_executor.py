@@ -62,7 +62,7 @@ def test_a_task_ended_by_its_requester_or_by_a_user_says_who_ended_it(
         theirs = tasks.start_task("take_picture", {"place": "office"})  # waits for mine
         mine.cancel("no longer needed")
         stopped = TASK_STOP.call(r.bus, TaskId(theirs.id)).task
-        assert (stopped["state"], stopped["end"]) == ("cancelled", "user")
+        assert (stopped["state"], stopped["ended_by"]) == ("cancelled", "user")
         assert mine.wait(30) and theirs.wait(30)
         assert (mine.phase, mine.end, mine.reason) == (
             TaskPhase.CANCELLED,

@@ -62,5 +62,5 @@ def test_a_step_its_plan_cancels_reports_nothing_and_one_a_user_stops_fails(
         assert wait_for(lambda: reports.of(1) != [], 30)
         assert reports.of(1)[-1] == ("failed", "cancelled: stopped by the user")
         assert wait_for(lambda: task_of(tasks, "take_picture(lab)")["state"] == "cancelled", 30)
-        assert task_of(tasks, "take_picture(lab)")["end"] == TaskEnd.REQUESTER.value
+        assert task_of(tasks, "take_picture(lab)")["ended_by"] == TaskEnd.REQUESTER.value
         assert all(kind != "failed" for kind, _ in reports.of(0)), reports.of(0)
