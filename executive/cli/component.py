@@ -100,8 +100,10 @@ def run_lifecycle(args: argparse.Namespace) -> int:
             usable = ", ".join(reply["usable"]) or "nothing new"
             print(f"{args.name}: faults cleared; usable again: {usable}")
         return 0
-    # restart and fault answer {state, faults, permanent} (executive.bus.api.tasks.FaultReply)
-    state = ComponentState.from_payload(reply["state"] if "faults" in reply else reply)
+    if "faults" in reply:  # restart and fault answer executive.bus.api.tasks.FaultReply:
+        # {state, faults, permanent}; shown flat, as before, so --json output keeps its shape
+        reply = {**reply["state"], "faults": reply["faults"], "permanent": reply["permanent"]}
+    state = ComponentState.from_payload(reply)
     failed = state.state is Lifecycle.FAILED
     if args.json:
         print_json(reply)
