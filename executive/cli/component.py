@@ -102,7 +102,7 @@ def run_lifecycle(args: argparse.Namespace) -> int:
         fault = ask(args, faulting, tasks.ComponentFault(name), timeout=timeout)
         state = ComponentState.from_payload(fault.state)
         faults = f", {fault.faults} faults" + (", permanently faulty" if fault.permanent else "")
-        payload = fault.to_payload()
+        payload = {**fault.state, "faults": fault.faults, "permanent": fault.permanent}
     else:
         switch = components.COMPONENT_START if args.verb == "start" else components.COMPONENT_STOP
         state = ask(args, switch, components.ComponentName(name), timeout=timeout)

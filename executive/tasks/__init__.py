@@ -1,8 +1,15 @@
 """The task executor (thesis 5.1.3): tasks on scheduled system configurations.
 
-It owns the tasks and the running system configuration: the scheduler (clingo,
-``schedule.lp``), configuration changes, fault handling and the supervision of running
-behaviors, and the adapter that runs plan steps as tasks. It may import
-:mod:`executive.bus`, :mod:`executive.runtime`, the plan executer's port in
-:mod:`executive.planning` and :mod:`knowledge`.
+It owns the tasks and the running system configuration. Pure parts, testable without
+processes: the task model (``task``), the decisions (``decisions``: requests, faults
+and availability to a schedule and configuration changes), the scheduler (clingo,
+``scheduler`` with ``schedule.lp``, ``schedule``, ``cancellation``), configurations
+(``configuration``) and fault decisions (``faults``). Parts that act, on the
+executor's one worker thread: the ledger of tasks (``ledger``), configuration changes
+on the launcher (``configurator``), the diagnosis model (``diagnosis_model``),
+supervision of behaviors (``supervision``), fault handling (``fault_handling``), the
+decisions carried out (``dispatch``); the service with its bus API and status snapshot
+(``executor``, ``snapshot``); and the adapter that runs plan steps as tasks
+(``plan_tasks``). It may import :mod:`executive.bus`, :mod:`executive.runtime`, the
+plan executer's port in :mod:`executive.planning` and :mod:`knowledge`.
 """

@@ -13,7 +13,7 @@ counts in the knowledge base, so a restarted executive remembers it.
 - A failing behavior is restarted (warm, from its achievements) up to ``max_restarts``
   times within its task; then the task fails.
 
-This module decides; the task executor carries the decisions out.
+This module decides; :mod:`executive.tasks.fault_handling` carries the decisions out.
 """
 
 from __future__ import annotations
@@ -97,9 +97,13 @@ class Faults:
         """The permanently faulty components."""
         return frozenset(c.name for c in self.kb.components() if c.permanent_fault)
 
+    def ratings(self) -> dict[str, float]:
+        """Each component's rating as the knowledge base holds it."""
+        return {c.name: c.rating for c in self.kb.components()}
+
     def functionalities(self) -> list[FunctionalitySpec]:
         """The robot's functionalities with the ratings the knowledge base holds."""
-        ratings = {c.name: c.rating for c in self.kb.components()}
+        ratings = self.ratings()
         return [
             dataclasses.replace(f, rating=ratings.get(f.name, f.rating))
             for f in self.robot.functionalities.values()

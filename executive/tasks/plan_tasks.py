@@ -4,7 +4,8 @@ A step of action ``a`` runs the task the robot description maps ``a`` to: its be
 with a goal whose fields are filled in from the step's objects (``move_to(dock, lab)``
 → ``{start: dock, target: lab}``), for the planned duration. The task executor reports
 back; a task the scheduler cancels fails the step with the reason, and the planner
-replans.
+replans. A task the plan executer cancels itself (:attr:`TaskEnd.REQUESTER`) reports
+nothing more.
 """
 
 from __future__ import annotations
@@ -14,7 +15,8 @@ from typing import Any
 
 from executive.planning.partial_order import Step
 from executive.planning.plan_executer import StepReport, StepTask, TaskRunner
-from executive.tasks.executor import TaskExecutor, TaskHandle, TaskPhase
+from executive.tasks.executor import TaskExecutor
+from executive.tasks.task import TaskEnd, TaskHandle, TaskPhase
 from knowledge.description import RobotDescription
 from knowledge.errors import DuraError
 
@@ -62,9 +64,9 @@ class PlanTasks(TaskRunner):
                 report.succeeded(handle.result)
             elif phase is TaskPhase.FAILED:
                 report.failed(handle.reason)
-            elif (
-                phase is TaskPhase.CANCELLED and "the plan no longer needs it" not in handle.reason
-            ):
+            elif phase is TaskPhase.CANCELLED and handle.end is not TaskEnd.REQUESTER:
+                # cancelled by someone else than the plan (a user, the shutdown): the step
+                # failed, and the planner plans again
                 report.failed(f"cancelled: {handle.reason}")
             seen.add(phase)
 

@@ -1,0 +1,168 @@
+"""The task executor's decisions carried out, on its worker thread.
+
+After every change that may move tasks (a request, a task's end, a permanent fault, a
+reset, a due start) the :class:`Dispatcher` asks :func:`~executive.tasks.decisions.decide`
+and carries the decision out in this order: it ends the tasks the scheduler cancelled,
+gives running tasks their new providers, changes the system configuration (a start
+that fails is a fault of that component), starts the behaviors of the tasks due now,
+lets repaired tasks go on, and sets a timer for the next due start. Ending a task
+schedules the others before the configuration changes, so what they share keeps
+running.
+
+It composes the parts that act: the :class:`~executive.tasks.ledger.TaskLedger`, the
+:class:`~executive.tasks.configurator.Configurator`, the
+:class:`~executive.tasks.supervision.Supervisor` and the
+:class:`~executive.tasks.fault_handling.FaultHandler`.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+
+from executive.bus.service import Context
+from executive.runtime.launcher import Launcher
+from executive.tasks.configuration import SystemConfiguration, Transition
+from executive.tasks.configurator import Configurator
+from executive.tasks.decisions import Decision, decide
+from executive.tasks.diagnosis_model import DiagnosisModelSync
+from executive.tasks.fault_handling import FaultHandler
+from executive.tasks.faults import Faults
+from executive.tasks.ledger import TaskLedger
+from executive.tasks.supervision import Post, Supervisor
+from executive.tasks.task import Task, TaskControl, TaskEnd, TaskPhase
+
+
+class Dispatcher:
+    """Schedules the tasks and carries the decisions out (worker thread only).
+
+    Registers the robot's components in the knowledge base (:class:`Faults`).
+
+    Args:
+        context: robot, bus and knowledge base.
+        launcher: starts and stops the component processes.
+        control: what the requesters' handles act through.
+        post: runs a job on the executor's worker.
+        publish: refreshes the executor's snapshot (before each component start).
+        time_limit: seconds one schedule may take.
+    """
+
+    def __init__(
+        self,
+        context: Context,
+        launcher: Launcher,
+        control: TaskControl,
+        *,
+        post: Post,
+        publish: Callable[[], None],
+        time_limit: float = 1.0,
+    ) -> None:
+        self.robot = context.robot
+        self.time_limit = time_limit
+        self._post = post
+        self._timer: threading.Timer | None = None
+        self.faults = Faults(context.robot, context.kb)
+        self.ledger = TaskLedger(context.kb, control)
+        self.configurator = Configurator(
+            context.kb,
+            launcher,
+            DiagnosisModelSync(context.bus, context.robot),
+            before_start=publish,
+        )
+        self.supervisor = Supervisor(
+            context.robot, ledger=self.ledger, launcher=launcher,
+            configurator=self.configurator, faults=self.faults, end=self.end, post=post,
+        )  # fmt: skip
+        self.repairs = FaultHandler(
+            context.robot, context.kb, ledger=self.ledger, launcher=launcher,
+            configurator=self.configurator, supervisor=self.supervisor, faults=self.faults,
+            end=self.end, reschedule=self.reschedule, post=post,
+        )  # fmt: skip
+
+    def request(self, task: Task) -> None:
+        """A new task asks for its configuration."""
+        self.ledger.add(task)
+        self.reschedule(f"task {task.id} requested")
+
+    def reschedule(self, why: str) -> None:
+        """Schedule every waiting and running task again, and act on the schedule."""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        decision = decide(
+            self.ledger.views(),
+            self.configurator.configuration,
+            robot=self.robot,
+            faulty=self.faults.faulty(),
+            ratings=self.faults.ratings(),
+            now=time.time(),
+            time_limit=self.time_limit,
+        )
+        self._carry_out(decision, why)
+
+    def end(self, task: Task, end: TaskEnd, reason: str, *, reschedule: bool = True) -> None:
+        """End a task; then (unless the caller goes on scheduling) schedule the others."""
+        if task.phase.final:
+            return
+        phase = end.phase
+        task.reason, task.end = reason, end
+        if task.phase.holds:
+            self.supervisor.stop(task, reason or phase.value)
+        self.ledger.set_phase(task, phase, reason=reason, result=task.result)
+        self.faults.finished(task.id)
+        self.ledger.event(f"TASK_{phase.name}", task, **({"reason": reason} if reason else {}))
+        task.done.set()
+        if reschedule:
+            self.reschedule(f"task {task.id} {phase.value}")
+
+    def cancel(self, task_id: str, end: TaskEnd, reason: str) -> None:
+        """End a task if there is one of that id."""
+        task = self.ledger.find(task_id)
+        if task is not None:
+            self.end(task, end, reason)
+
+    def shutdown(self) -> None:
+        """Cancel every task and stop what they held."""
+        for task in self.ledger:
+            self.end(task, TaskEnd.SHUTDOWN, "the executive stops", reschedule=False)
+        self.reschedule("the executive stops")  # no task left: everything stops, no timer
+
+    def _carry_out(self, decision: Decision, why: str) -> None:
+        for task_id, why_not in decision.cancelled.items():
+            task = self.ledger.get(task_id)
+            reason = f"cancelled by the scheduler: {why_not}"
+            self.end(task, TaskEnd.UNSCHEDULABLE, reason, reschedule=False)
+        for task_id, providers in decision.reconfigured.items():
+            task = self.ledger.get(task_id)
+            self.ledger.event("TASK_RECONFIGURED", task, before=task.providers, after=providers)
+            task.providers = dict(providers)
+        for task_id in decision.behind_running:
+            self.ledger.get(task_id).start_at = None  # it waits for a running task
+        for task_id, start in decision.start_later.items():
+            self.ledger.get(task_id).start_at = start
+        for task_id, providers in decision.start_now.items():
+            task = self.ledger.get(task_id)
+            task.providers, task.start_at = dict(providers), None
+            self.ledger.set_phase(task, TaskPhase.STARTING)
+            self.ledger.event("TASK_SCHEDULED", task, providers=task.providers)
+        self._apply(decision.configuration, decision.transition, why)
+        # what is due now, from the tasks as they are: a fault while the configuration
+        # changed may have scheduled them again meanwhile
+        for task in self.ledger.in_phase(TaskPhase.STARTING):
+            self.supervisor.launch(task)
+        for task in self.ledger.in_phase(TaskPhase.REPAIRING):
+            self.supervisor.go_on(task)
+        wake = decision.wake
+        if wake is not None:
+            self._timer = threading.Timer(
+                max(0.0, wake - time.time()),
+                lambda: self._post(lambda: self.reschedule("a task is due")),
+            )
+            self._timer.daemon = True
+            self._timer.start()
+
+    def _apply(self, target: SystemConfiguration, transition: Transition, why: str) -> None:
+        failed = self.configurator.apply(target, transition, why)
+        for name, reason in failed.items():  # a start that failed is a fault of that component
+            self.repairs.fault(name, f"could not start: {reason}")

@@ -1,0 +1,139 @@
+"""Fault handling carried out: what :mod:`executive.tasks.faults` decides, done.
+
+A fault of a component is its process exiting while the executor keeps it running, a
+start that failed, a repair command or a user's restart or mark. Below its
+``max_faults`` a functionality is restarted while the behaviors on it pause
+(reconfigurable) or stop, and they go on once it is ready again; at ``max_faults`` it
+is permanently faulty, stopped, and the tasks are scheduled again on what is left. A
+behavior's fault is its task's: restarted up to ``max_restarts``, then the task fails.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from executive.bus.api.tasks import FaultReply
+from executive.bus.payloads import ComponentState, Lifecycle
+from executive.runtime.launcher import Launcher
+from executive.tasks.configurator import Configurator
+from executive.tasks.faults import Faults
+from executive.tasks.ledger import TaskLedger
+from executive.tasks.supervision import End, Post, Supervisor
+from executive.tasks.task import TaskEnd
+from knowledge.description import Kind, RobotDescription
+from knowledge.knowledge_base import KnowledgeBase
+
+
+class FaultHandler:
+    """Counts faults, repairs what they hit, and clears faults after maintenance.
+
+    Args:
+        end: ends a task (the executor then schedules the others).
+        reschedule: schedules every task again, with a reason for the log.
+        post: runs a job on the executor's worker.
+    """
+
+    def __init__(
+        self,
+        robot: RobotDescription,
+        kb: KnowledgeBase,
+        *,
+        ledger: TaskLedger,
+        launcher: Launcher,
+        configurator: Configurator,
+        supervisor: Supervisor,
+        faults: Faults,
+        end: End,
+        reschedule: Callable[[str], None],
+        post: Post,
+    ) -> None:
+        self.robot = robot
+        self.kb = kb
+        self.ledger = ledger
+        self.launcher = launcher
+        self.configurator = configurator
+        self.supervisor = supervisor
+        self.faults = faults
+        self._end = end
+        self._reschedule = reschedule
+        self._post = post
+
+    def on_component_state(self, state: ComponentState) -> None:
+        """The launcher's listener (its threads): an exit goes to the worker."""
+        if state.state in (Lifecycle.EXITED, Lifecycle.FAILED):
+            self._post(lambda: self._exited(state))
+
+    def fault(
+        self, name: str, reason: str, *, permanent: bool = False, restart: bool = False
+    ) -> FaultReply:
+        """Count a fault of a component and repair what it hit.
+
+        Args:
+            permanent: mark it permanently faulty at once.
+            restart: restart it even if no task holds it (a user's or a rule's restart).
+        """
+        if self.robot.components[name].kind is Kind.BEHAVIOR:
+            self._behavior_fault(name, reason, permanent=permanent)
+            return self.reply(name)
+        running = [t.usage() for t in self.ledger.holding()]
+        decision = self.faults.fault(name, reason, running, permanent=permanent)
+        self.kb.log_event(
+            "REPAIR",
+            name,
+            {"restart": decision.restart, "unusable": dict(decision.unusable),
+             "tasks": {t: a.value for t, a in decision.tasks.items()}},
+        )  # fmt: skip
+        for task_id, action in decision.tasks.items():
+            self.supervisor.interrupt(self.ledger.get(task_id), action, name)
+        if decision.restart:
+            alive = self.configurator.alive(name)
+            if name in self.configurator.configuration.functionalities or (restart and alive):
+                state = self.configurator.restart(name, "restarting after a fault")
+                if state.state is not Lifecycle.READY:
+                    return self.fault(name, f"could not restart: {state.reason}")
+            for task_id in decision.tasks:
+                self.supervisor.go_on(self.ledger.get(task_id))
+        else:
+            if self.configurator.alive(name):
+                self.configurator.stop(name, "permanently faulty")
+            self._reschedule(f"{name} is permanently faulty")
+        return self.reply(name)
+
+    def reply(self, name: str) -> FaultReply:
+        """The component's state with its fault count."""
+        record = self.kb.component(name)
+        return FaultReply(
+            state=self.launcher.state(name).to_payload(),
+            faults=record.fault_count,
+            permanent=record.permanent_fault,
+        )
+
+    def reset(self, name: str) -> list[str]:
+        """Clear a component's faults after maintenance; the functionalities usable again."""
+        usable = self.faults.reset(name)
+        self.kb.log_event("COMPONENT_RESET", name, {"usable": usable})
+        self._reschedule(f"{name} was reset")
+        return usable
+
+    def _behavior_fault(self, name: str, reason: str, *, permanent: bool) -> None:
+        hit = [t for t in self.ledger.holding() if t.behavior == name]
+        if permanent:
+            self.faults.fault(name, reason, permanent=True)
+            for task in hit:
+                self._end(task, TaskEnd.BEHAVIOR_FAULTY, f"{name} is permanently faulty: {reason}")
+        elif hit:
+            self.supervisor.failed(hit[0], reason)
+        else:
+            self.faults.fault(name, reason)
+
+    def _exited(self, state: ComponentState) -> None:
+        name = state.component
+        if not self.configurator.expects(name) or self.robot.components[name].kind is Kind.BEHAVIOR:
+            return  # not ours to keep running; a behavior's goal result tells its task
+        self.configurator.lost(name)
+        why = state.reason or (
+            f"exited with code {state.exit_code}"
+            if state.signal is None
+            else f"killed by signal {state.signal}"
+        )
+        self.fault(name, why)

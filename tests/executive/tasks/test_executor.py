@@ -1,0 +1,76 @@
+"""The task executor with real component processes, bus and knowledge base: status
+queries from its snapshot, and why a task ended as code reads it."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from executive.bus.api.tasks import SCHEDULE_SHOW, TASK_LIST, TASK_STOP, TaskId
+from executive.bus.payloads import Lifecycle
+from executive.tasks.task import TaskEnd, TaskPhase
+from tests.conftest import wait_for
+from tests.executive.tasks.executor_rig import executor, slow_camera_robot
+
+pytestmark = pytest.mark.slow
+
+QUICK = 1.0  # seconds: a status query answers well within this (the slow start takes 4)
+
+
+def timed(query: Callable[[], Any]) -> float:
+    began = time.monotonic()
+    query()
+    return time.monotonic() - began
+
+
+def test_status_queries_answer_from_the_snapshot_while_a_component_starts_slowly(
+    endpoint: str, tmp_path: Path
+) -> None:
+    with executor(slow_camera_robot(delay=4.0), endpoint, tmp_path) as (tasks, r):
+        first = tasks.start_task("take_picture", {"place": "lab"})
+        assert wait_for(lambda: r.launcher.state("slow_cam").state is Lifecycle.STARTING, 10)
+        # the worker is inside the camera's start now; a task asked for meanwhile is
+        # listed at once, before the worker can take it up
+        second = tasks.start_task("take_picture", {"place": "office"})
+        queries = {
+            "tasks()": tasks.tasks,
+            "schedule()": tasks.schedule,
+            "task/list": lambda: TASK_LIST.call(r.bus),
+            "schedule/show": lambda: SCHEDULE_SHOW.call(r.bus),
+        }
+        took = {name: timed(query) for name, query in queries.items()}
+        assert r.launcher.state("slow_cam").state is Lifecycle.STARTING  # still starting
+        assert all(t < QUICK for t in took.values()), took
+        listed = {t["id"]: t["state"] for t in TASK_LIST.call(r.bus).tasks}
+        assert listed == {first.id: "starting", second.id: "waiting"}
+        assert SCHEDULE_SHOW.call(r.bus).running == ["slow_cam"]
+        assert first.wait(30) and first.phase is TaskPhase.SUCCEEDED, first.reason
+        assert first.end is TaskEnd.SUCCEEDED
+        assert second.wait(30) and second.phase is TaskPhase.SUCCEEDED, second.reason
+        assert wait_for(lambda: [t["state"] for t in tasks.tasks()] == ["succeeded"] * 2)
+
+
+def test_a_task_ended_by_its_requester_or_by_a_user_says_who_ended_it(
+    endpoint: str, tmp_path: Path
+) -> None:
+    with executor(slow_camera_robot(delay=0.5, picture=5.0), endpoint, tmp_path) as (tasks, r):
+        mine = tasks.start_task("take_picture", {"place": "lab"})
+        theirs = tasks.start_task("take_picture", {"place": "office"})  # waits for mine
+        mine.cancel("no longer needed")
+        stopped = TASK_STOP.call(r.bus, TaskId(theirs.id)).task
+        assert (stopped["state"], stopped["ended_by"]) == ("cancelled", "user")
+        assert mine.wait(30) and theirs.wait(30)
+        assert (mine.phase, mine.end, mine.reason) == (
+            TaskPhase.CANCELLED,
+            TaskEnd.REQUESTER,
+            "no longer needed",
+        )
+        assert (theirs.phase, theirs.end, theirs.reason) == (
+            TaskPhase.CANCELLED,
+            TaskEnd.USER,
+            "stopped by the user",
+        )
