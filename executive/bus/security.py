@@ -231,3 +231,25 @@ def _rule(
         "messages": messages,
         "key_exprs": keys,
     }
+
+
+def find_login(robot: str, user: str, folders: Iterable[Path]) -> Login | None:
+    """The login of ``user`` from the robot's credentials: the file ``DURA_BUS_CREDENTIALS``
+    names, else ``.dura/<robot>.bus.json`` in the first of ``folders`` that has one;
+    ``None`` if there is none (an executive without security, or none yet).
+
+    Raises:
+        BusError: a credentials file is there but unusable (unreadable, others may read
+            it, another robot's, or without that user).
+    """
+    named = os.environ.get(ENV_CREDENTIALS)
+    candidates = [Path(named)] if named else [credentials_file(f, robot) for f in folders]
+    for path in candidates:
+        if path.exists() or named:
+            credentials = read_credentials(path)
+            if credentials.robot != robot:
+                raise BusError(
+                    f"{path}: bus credentials of robot '{credentials.robot}', not '{robot}'"
+                )
+            return credentials.login(user)
+    return None
