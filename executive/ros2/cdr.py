@@ -70,7 +70,7 @@ class Decoder:
         buf = memoryview(raw)[4:]
         try:
             value, end = self._readers[order](buf, 0)
-        except (struct.error, UnicodeDecodeError, IndexError) as e:
+        except (struct.error, UnicodeDecodeError, IndexError, CdrError) as e:
             raise CdrError(f"not a {self.type}: {e}") from e
         return value, len(buf) - end
 

@@ -77,6 +77,40 @@ def gid_layouts(library: TypeLibrary) -> list[tuple[int, Decoder]]:
     return layouts
 
 
+NodeEntry = tuple[str, list[bytes], list[bytes]]  # a node, its readers' and writers' GUIDs
+
+
+def read_entities_info(
+    data: bytes, layouts: list[tuple[int, Decoder]]
+) -> tuple[int, bytes, list[NodeEntry]]:
+    """A ``ros_discovery_info`` sample: the gid size that fits, the participant, its nodes.
+
+    Raises:
+        CdrError: no layout fits the bytes exactly.
+    """
+    problems = []
+    for gid_size, decoder in layouts:
+        try:
+            value = decoder.exact(data)
+        except CdrError as e:
+            problems.append(str(e))
+            continue
+
+        def gid(item: dict[str, Any]) -> bytes:
+            return bytes(item["data"][:16])  # a GUID, padded to 24 bytes before Iron
+
+        nodes = [
+            (
+                node_name(n["node_namespace"], n["node_name"]),
+                [gid(g) for g in n["reader_gid_seq"]],
+                [gid(g) for g in n["writer_gid_seq"]],
+            )
+            for n in value["node_entities_info_seq"]
+        ]
+        return gid_size, gid(value["gid"]), nodes
+    raise CdrError(problems[0])
+
+
 class Discovery:
     """The ROS 2 graph of a domain, from one participant's view."""
 
@@ -90,7 +124,7 @@ class Discovery:
         self._writers: dict[bytes, Endpoint] = {}
         self._readers: dict[bytes, Endpoint] = {}
         self._handles: dict[int, bytes] = {}  # publication instance handle -> writer GUID
-        self._nodes: dict[bytes, list[tuple[str, list[bytes], list[bytes]]]] = {}  # by participant
+        self._nodes: dict[bytes, list[NodeEntry]] = {}  # by participant
         self._node_of: dict[bytes, str] = {}  # endpoint GUID -> node
         self._callers: dict[int, str] = {}  # publication handle -> caller id, once known
         self._own_readers: dict[bytes, None] = {}  # dura's, in the order declared
@@ -244,37 +278,20 @@ class Discovery:
                 self._reindex()
         self._changed()
 
-    def _read_info(
-        self, data: bytes
-    ) -> tuple[bytes, list[tuple[str, list[bytes], list[bytes]]]] | None:
+    def _read_info(self, data: bytes) -> tuple[bytes, list[NodeEntry]] | None:
         """A participant and its nodes from a ``ros_discovery_info`` sample (None: malformed)."""
-        problems = []
-        for gid_size, decoder in self._layouts:
-            try:
-                value = decoder.exact(data)
-            except CdrError as e:
-                problems.append(str(e))
-                continue
-            if gid_size != self._gid_size:
-                self._warn_once(
-                    f"gid{gid_size}",
-                    f"ros_discovery_info comes with {gid_size}-byte gids, not the "
-                    f"{self._gid_size} of ROS 2 {self.library.distribution}; understood anyway",
-                )
-
-            def gid(item: dict[str, Any]) -> bytes:
-                return bytes(item["data"][:16])
-
-            return gid(value["gid"]), [
-                (
-                    node_name(n["node_namespace"], n["node_name"]),
-                    [gid(g) for g in n["reader_gid_seq"]],
-                    [gid(g) for g in n["writer_gid_seq"]],
-                )
-                for n in value["node_entities_info_seq"]
-            ]
-        log.warning("ignored a malformed ros_discovery_info sample: %s", problems[0])
-        return None
+        try:
+            gid_size, participant, nodes = read_entities_info(data, self._layouts)
+        except CdrError as e:
+            log.warning("ignored a malformed ros_discovery_info sample: %s", e)
+            return None
+        if gid_size != self._gid_size:
+            self._warn_once(
+                f"gid{gid_size}",
+                f"ros_discovery_info comes with {gid_size}-byte gids, not the "
+                f"{self._gid_size} of ROS 2 {self.library.distribution}; understood anyway",
+            )
+        return participant, nodes
 
     def _reindex(self) -> None:
         self._node_of = {
