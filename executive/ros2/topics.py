@@ -33,7 +33,7 @@ from knowledge.ros2_spec import Ros2Spec, Ros2TopicSpec
 
 log = logging.getLogger("dura.ros2")
 
-READER_DEPTH = 100  # samples a reader keeps while the receive thread is busy elsewhere
+READER_DEPTH = 1000  # samples a reader keeps while the receive thread is busy elsewhere
 
 
 @dataclass

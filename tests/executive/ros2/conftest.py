@@ -22,24 +22,8 @@ from knowledge.description import RobotDescription
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.robot import read_robot
 from monitoring.observer_manager import ObserverManager
-from tests.executive.ros2.peer import RosPeer
+from tests.executive.ros2.peer import LOOPBACK, RosPeer
 from tests.monitoring.harness import Observations, write_robot
-
-CYCLONEDDS = """\
-<CycloneDDS xmlns="https://cdds.io/config">
-  <Domain id="any">
-    <General>
-      <Interfaces><NetworkInterface address="127.0.0.1" multicast="false"/></Interfaces>
-      <AllowMulticast>false</AllowMulticast>
-    </General>
-    <Discovery>
-      <ParticipantIndex>auto</ParticipantIndex>
-      <MaxAutoParticipantIndex>40</MaxAutoParticipantIndex>
-      <Peers><Peer address="127.0.0.1"/></Peers>
-    </Discovery>
-  </Domain>
-</CycloneDDS>
-"""
 
 ROS2 = """\
 ros2:
@@ -60,7 +44,7 @@ ros2:
 def domain(tmp_path_factory: pytest.TempPathFactory) -> Iterator[int]:
     """This test process's DDS domain (the configuration is in CYCLONEDDS_URI)."""
     config = tmp_path_factory.mktemp("dds") / "cyclonedds.xml"
-    config.write_text(CYCLONEDDS)
+    config.write_text(LOOPBACK)
     before = os.environ.get("CYCLONEDDS_URI")
     os.environ["CYCLONEDDS_URI"] = config.as_uri()  # child processes inherit it
     yield random.SystemRandom().randint(1, 230)

@@ -47,6 +47,23 @@ from tests.executive.ros2.messages import (
 
 FOREVER = duration(infinite=True)
 
+# Cyclone DDS on loopback only, no multicast: discovery by unicast to 127.0.0.1
+LOOPBACK = """\
+<CycloneDDS xmlns="https://cdds.io/config">
+  <Domain id="any">
+    <General>
+      <Interfaces><NetworkInterface address="127.0.0.1" multicast="false"/></Interfaces>
+      <AllowMulticast>false</AllowMulticast>
+    </General>
+    <Discovery>
+      <ParticipantIndex>auto</ParticipantIndex>
+      <MaxAutoParticipantIndex>40</MaxAutoParticipantIndex>
+      <Peers><Peer address="127.0.0.1"/></Peers>
+    </Discovery>
+  </Domain>
+</CycloneDDS>
+"""
+
 
 def ros_qos(*, reliable: bool = True, depth: int = 10, latched: bool = False) -> Qos:
     """The DDS QoS rmw_cyclonedds gives a ROS 2 endpoint."""
