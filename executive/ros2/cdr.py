@@ -44,7 +44,7 @@ class Decoder:
         self._readers = {order: _Compiler(fielddefs, order).struct(ros_type) for order in "<>"}
 
     def __call__(self, raw: bytes) -> dict[str, Any]:
-        """The message as a dict.
+        """Decode a message into a dict.
 
         Raises:
             CdrError: malformed bytes.
@@ -52,7 +52,7 @@ class Decoder:
         return self.decode(raw)[0]
 
     def exact(self, raw: bytes) -> dict[str, Any]:
-        """The message, if the bytes hold exactly it (at most 3 bytes of padding after it).
+        """Decode a message that fills the bytes (up to 3 bytes of padding may follow).
 
         Raises:
             CdrError: malformed bytes, or bytes left over (another definition wrote them).
@@ -63,7 +63,7 @@ class Decoder:
         return value
 
     def decode(self, raw: bytes) -> tuple[dict[str, Any], int]:
-        """The message and how many bytes followed it."""
+        """Decode a message; return it and how many bytes followed it."""
         order = _ENCAPSULATIONS.get(bytes(raw[:2]))
         if order is None or len(raw) < 4:
             raise CdrError(f"not plain CDR (encapsulation {bytes(raw[:4]).hex() or 'missing'})")
@@ -76,7 +76,7 @@ class Decoder:
 
 
 def _count(buf: memoryview, pos: int, order: str) -> tuple[int, int]:
-    """A sequence's or string's length (uint32, aligned to 4) and the position after it."""
+    """Read a sequence's or string's length (uint32, aligned to 4); return it and the next position."""
     pos += -pos % 4
     (n,) = struct.unpack_from(order + "I", buf, pos)
     if n > len(buf) - pos - 4:
@@ -139,7 +139,7 @@ class _Compiler:
         return read
 
     def _flat(self, names: list[str], codes: list[str]) -> Reader:
-        """A structure of primitives: one unpack, laid out for the alignment it starts at."""
+        """Read a structure of primitives with one unpack, laid out for where it starts."""
         layouts: dict[int, tuple[Callable[[memoryview, int], tuple[Any, ...]], int]] = {}
         order = self.order
 
@@ -171,7 +171,7 @@ class _Compiler:
         return read
 
     def _primitives(self, code: str, size: int | None) -> Reader:
-        """An array (``size``) or a sequence (``None``: counted) of primitives."""
+        """Read an array (``size``) or a sequence (``None``: counted) of primitives."""
         order = self.order
         width = struct.calcsize(code)
 
@@ -188,7 +188,7 @@ class _Compiler:
         return read
 
     def _many(self, element: Reader, size: int | None) -> Reader:
-        """An array or a sequence of strings or structures."""
+        """Read an array or a sequence of strings or structures."""
         order = self.order
 
         def read(buf: memoryview, pos: int) -> tuple[Any, int]:

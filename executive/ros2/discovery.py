@@ -65,7 +65,7 @@ class NodeInfo:
 
 
 def gid_layouts(library: TypeLibrary) -> list[tuple[int, Decoder]]:
-    """Decoders of ``ParticipantEntitiesInfo``: the distribution's gid size first."""
+    """Make decoders of ``ParticipantEntitiesInfo`` for both gid sizes, the distribution's first."""
     defs = {n: library.store.fielddefs[n] for n in ("rmw_dds_common/msg/Gid",
             "rmw_dds_common/msg/NodeEntitiesInfo", DISCOVERY_TYPE)}  # fmt: skip
     size = int(defs["rmw_dds_common/msg/Gid"][1][0][1][1][1])
@@ -83,7 +83,7 @@ NodeEntry = tuple[str, list[bytes], list[bytes]]  # a node, its readers' and wri
 def read_entities_info(
     data: bytes, layouts: list[tuple[int, Decoder]]
 ) -> tuple[int, bytes, list[NodeEntry]]:
-    """A ``ros_discovery_info`` sample: the gid size that fits, the participant, its nodes.
+    """Read a ``ros_discovery_info`` sample: the gid size that fits, the participant, its nodes.
 
     Raises:
         CdrError: no layout fits the bytes exactly.
@@ -121,6 +121,7 @@ class Discovery:
         self.library = library
         self.node = node_name("/", node)
         self._lock = threading.Lock()
+        self._announcing = threading.Lock()  # one announcement at a time, the newest last
         self._writers: dict[bytes, Endpoint] = {}
         self._readers: dict[bytes, Endpoint] = {}
         self._handles: dict[int, bytes] = {}  # publication instance handle -> writer GUID
@@ -152,7 +153,7 @@ class Discovery:
     # --- what the rest of dura asks -------------------------------------------------
 
     def caller(self, publication_handle: int) -> str:
-        """The caller id of a sample's writer: its node (``lidar``), else ``dds:<guid>``."""
+        """Name a sample's writer as a caller id: its node (``lidar``), else ``dds:<guid>``."""
         found = self._callers.get(publication_handle)
         if found is not None:
             return found
@@ -166,13 +167,15 @@ class Discovery:
         return found
 
     def node_of(self, guid: bytes) -> str | None:
-        """The node (``/ns/name``) a reader or writer belongs to, if ROS 2 told."""
+        """Return the node (``/ns/name``) of a reader or writer, if ROS 2 told."""
         with self._lock:
             return self._node_of.get(guid)
 
     def nodes(self, *, everything: bool = False) -> dict[str, NodeInfo]:
-        """Every node in the domain with its topics (without ``/rosout`` and
-        ``/parameter_events`` unless ``everything``)."""
+        """List every node of the domain with its topics.
+
+        ``/rosout`` and ``/parameter_events`` (every node has them) only with ``everything``.
+        """
         with self._lock:
             out: dict[str, tuple[set[str], set[str]]] = {}
             for entries in self._nodes.values():
@@ -188,7 +191,7 @@ class Discovery:
         return {t for t in found if t is not None and (everything or t not in INFRASTRUCTURE)}
 
     def types_of(self, topic: str) -> set[str]:
-        """The DDS type names the writers of a ROS 2 topic (``/scan``) use."""
+        """Return the DDS type names the writers of a ROS 2 topic (``/scan``) use."""
         with self._lock:
             return {e.type for e in self._writers.values() if ros_topic(e.topic) == topic}
 
@@ -213,10 +216,14 @@ class Discovery:
     def _announce(self) -> None:
         """Publish dura's node with its readers and writers on ``ros_discovery_info``."""
         own = self.participant.guid
-        with self._lock:
-            entry = (self.node, list(self._own_readers), list(self._own_writers))
-            self._nodes[own] = [entry]
-            self._reindex()
+        with self._announcing:
+            with self._lock:
+                entry = (self.node, list(self._own_readers), list(self._own_writers))
+                self._nodes[own] = [entry]
+                self._reindex()
+            self._write_info(own, entry)
+
+    def _write_info(self, own: bytes, entry: NodeEntry) -> None:
         pad = bytes(self._gid_size - 16)
         self._writer.write(
             self.library.create(
@@ -279,7 +286,7 @@ class Discovery:
         self._changed()
 
     def _read_info(self, data: bytes) -> tuple[bytes, list[NodeEntry]] | None:
-        """A participant and its nodes from a ``ros_discovery_info`` sample (None: malformed)."""
+        """Read a participant and its nodes from a ``ros_discovery_info`` sample (None: malformed)."""
         try:
             gid_size, participant, nodes = read_entities_info(data, self._layouts)
         except CdrError as e:

@@ -23,28 +23,28 @@ DISCOVERY_TYPE = "rmw_dds_common/msg/ParticipantEntitiesInfo"
 
 
 def dds_topic(topic: str) -> str:
-    """``/scan`` -> ``rt/scan``."""
+    """Name a ROS 2 topic on DDS: ``/scan`` -> ``rt/scan``."""
     return f"{TOPIC_PREFIX}/{topic.lstrip('/')}"
 
 
 def ros_topic(dds_name: str) -> str | None:
-    """``rt/scan`` -> ``/scan``; ``None`` for a DDS topic that is not a ROS 2 topic."""
+    """Name a DDS topic in ROS 2: ``rt/scan`` -> ``/scan`` (``None``: not a ROS 2 topic)."""
     prefix, _, rest = dds_name.partition("/")
     return "/" + rest if prefix == TOPIC_PREFIX and rest else None
 
 
 def request_topic(service: str) -> str:
-    """``/add`` -> ``rq/addRequest``."""
+    """Name the requests of a service on DDS: ``/add`` -> ``rq/addRequest``."""
     return f"{REQUEST_PREFIX}/{service.lstrip('/')}Request"
 
 
 def reply_topic(service: str) -> str:
-    """``/add`` -> ``rr/addReply``."""
+    """Name the replies of a service on DDS: ``/add`` -> ``rr/addReply``."""
     return f"{REPLY_PREFIX}/{service.lstrip('/')}Reply"
 
 
 def service_of(dds_name: str) -> str | None:
-    """The service of a request or reply DDS topic (``rq/addRequest`` -> ``/add``)."""
+    """Name the service of a request or reply DDS topic: ``rq/addRequest`` -> ``/add``."""
     prefix, _, rest = dds_name.partition("/")
     suffix = {REQUEST_PREFIX: "Request", REPLY_PREFIX: "Reply"}.get(prefix)
     if suffix is None or not rest.endswith(suffix) or len(rest) == len(suffix):
@@ -64,7 +64,7 @@ class ActionNames:
 
 
 def action_names(action: str) -> ActionNames:
-    """The ROS 2 names of an action's parts: ``/navigate/_action/send_goal`` ..."""
+    """Name an action's services and topics: ``/navigate/_action/send_goal`` ..."""
     base = "/" + action.strip("/") + "/_action/"
     return ActionNames(
         send_goal=base + "send_goal",
@@ -76,14 +76,16 @@ def action_names(action: str) -> ActionNames:
 
 
 def dds_type(ros_type: str) -> str:
-    """``sensor_msgs/msg/LaserScan`` -> ``sensor_msgs::msg::dds_::LaserScan_``."""
+    """Name a message type on DDS: ``std_msgs/msg/String`` -> ``std_msgs::msg::dds_::String_``."""
     package, kind, name = ros_type.split("/")
     return f"{package}::{kind}::dds_::{name}_"
 
 
 def ros_type(dds_name: str) -> str | None:
-    """``sensor_msgs::msg::dds_::LaserScan_`` -> ``sensor_msgs/msg/LaserScan``; ``None``
-    for a type name that does not follow ROS 2's convention."""
+    """Name a DDS type in ROS 2: ``std_msgs::msg::dds_::String_`` -> ``std_msgs/msg/String``.
+
+    ``None`` for a type name that does not follow ROS 2's convention.
+    """
     parts = dds_name.split("::")
     if len(parts) != 4 or parts[2] != "dds_" or not parts[3].endswith("_") or len(parts[3]) < 2:
         return None
@@ -91,11 +93,11 @@ def ros_type(dds_name: str) -> str | None:
 
 
 def node_name(namespace: str, name: str) -> str:
-    """The fully qualified name of a node: ``/`` + ``robot1`` + ``lidar`` -> ``/robot1/lidar``."""
+    """Qualify a node's name with its namespace: ``/robot1`` + ``lidar`` -> ``/robot1/lidar``."""
     namespace = namespace.strip("/")
     return f"/{namespace}/{name}" if namespace else f"/{name}"
 
 
 def caller_id(node: str) -> str:
-    """How observers name a node as a publisher: ``/robot1/lidar`` -> ``robot1/lidar``."""
+    """Name a node as observers name publishers: ``/robot1/lidar`` -> ``robot1/lidar``."""
     return node.strip("/")

@@ -85,9 +85,11 @@ def _announcement(sample: Any) -> Announcement:
 
 
 class _Waitsets:
-    """The few C calls of Cyclone the Python binding does not offer in the form needed:
-    a waitset that says *which* conditions fired. A library handle of our own, so that
-    our prototypes never change the binding's."""
+    """The few C calls of Cyclone that the binding lacks in the form needed here.
+
+    A waitset must say *which* conditions fired. The library handle is our own, so
+    that our prototypes never change the binding's.
+    """
 
     def __init__(self) -> None:
         lib = ct.CDLL(DDS._dll_handle._name)  # the binding's own library
@@ -118,7 +120,7 @@ _C = _Waitsets()
 
 
 def participants_in(domain_id: int) -> int:
-    """How many participants this process has in a domain (tests: none may be left)."""
+    """Count the participants this process has in a domain (tests: none may be left)."""
     return max(0, int(_C.lookup_participant(domain_id, None, 0)))
 
 
@@ -137,14 +139,6 @@ class Reader:
     @property
     def guid(self) -> bytes:
         return bytes(self.entity.guid.bytes)
-
-    def matched_writer(self, publication_handle: int) -> bytes | None:
-        """The GUID of a writer this reader heard from, by its publication handle."""
-        try:
-            found = self.entity.get_matched_publication_data(publication_handle)
-        except DDSException:
-            return None
-        return found.key.bytes if found is not None else None
 
     def close(self) -> None:
         """Delete the reader (idempotent)."""
@@ -206,7 +200,7 @@ class Participant:
 
     @property
     def guid(self) -> bytes:
-        """The participant's GUID (16 bytes), its ROS 2 gid."""
+        """Return the participant's GUID (16 bytes), its ROS 2 gid."""
         return bytes(self._dp.guid.bytes)
 
     @property
@@ -233,7 +227,7 @@ class Participant:
         *,
         first: bool = False,
     ) -> Reader:
-        """A reader whose raw samples (``(bytes, SampleInfo)``) go to ``on_samples``.
+        """Read a DDS topic: its raw samples (``(bytes, SampleInfo)``) go to ``on_samples``.
 
         Raises:
             BusError: DDS refused the reader.
@@ -253,9 +247,10 @@ class Participant:
             return self._attach(Reader(self, entity, topic), take, on_samples, first)
 
     def builtin_reader(self, kind: str, on_samples: OnSamples) -> Reader:
-        """A reader of what DDS discovery finds (``participant``, ``publication`` or
-        ``subscription``); its samples are :class:`Announcement` objects. Served first
-        in every wake-up."""
+        """Read what DDS discovery finds: ``participant``, ``publication`` or ``subscription``.
+
+        Its samples are :class:`Announcement` objects; it is served first in a wake-up.
+        """
         with self._lock:
             self._check_open()
             entity = BuiltinDataReader(self._dp, _BUILTIN[kind])
@@ -278,7 +273,7 @@ class Participant:
         return reader
 
     def writer(self, topic: str, data_type: type[IdlStruct], qos: Qos) -> Writer:
-        """A writer of one type on one DDS topic.
+        """Write one type on one DDS topic.
 
         Raises:
             BusError: DDS refused the writer.

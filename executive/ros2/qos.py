@@ -24,7 +24,7 @@ _UNLIMITED = -1
 
 
 def dds_qos(profile: QosProfile, *, depth: int | None = None, ignore_local: bool = False) -> Qos:
-    """The DDS QoS of a ROS 2 endpoint with this profile.
+    """Make the DDS QoS of a ROS 2 endpoint with this profile.
 
     Args:
         profile: the ROS 2 policies.

@@ -23,6 +23,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 from executive.bus.keys import DIAGNOSES, EVENTS, OBSERVATIONS
@@ -33,7 +34,7 @@ from executive.ros2.link import Ros2Link
 from executive.ros2.names import dds_topic
 from executive.ros2.participant import Writer
 from executive.ros2.qos import dds_qos
-from knowledge.errors import BusError, DuraError
+from knowledge.errors import DuraError
 from knowledge.ros2_spec import PROFILES, Ros2Spec
 
 log = logging.getLogger("dura.ros2")
@@ -44,7 +45,7 @@ OK, WARN, ERROR = 0, 1, 2  # diagnostic_msgs/msg/DiagnosticStatus levels
 
 
 def observation_status(payload: dict[str, Any], node: str) -> dict[str, Any]:
-    """The DiagnosticStatus fields of an ``observations`` payload."""
+    """Turn an ``observations`` payload into DiagnosticStatus fields."""
     info = ObservationInfo.from_payload(payload)
     callers = f" [{', '.join(info.callerids)}]" if info.callerids else ""
     values = {str(k): _text(v) for k, v in dict(payload.get("values") or {}).items()}
@@ -61,7 +62,7 @@ def observation_status(payload: dict[str, Any], node: str) -> dict[str, Any]:
 
 
 def diagnosis_status(payload: dict[str, Any], node: str) -> dict[str, Any]:
-    """The DiagnosticStatus fields of a ``diagnoses`` payload."""
+    """Turn a ``diagnoses`` payload into DiagnosticStatus fields."""
     info = DiagnosisInfo.from_payload(payload)
     level = {"OK": OK, "DIAGNOSED": ERROR}.get(info.status, WARN)
     if info.diagnoses:
@@ -90,7 +91,7 @@ def _text(value: Any) -> str:
 
 
 class Ros2StatePublisher(Service):
-    """Publishes dura's observations, diagnoses and events to the robot's ROS 2 graph.
+    """Publish dura's observations, diagnoses and events to the robot's ROS 2 graph.
 
     Args:
         context: the executive's services' context (its bus).
@@ -128,21 +129,30 @@ class Ros2StatePublisher(Service):
 
         Raises:
             BusError: DDS refused a writer or the participant.
+            ConfigError: the ``ros2:`` section cannot be used (its own link only).
         """
         link = self._link
         if link is None:
             link = self._own_link = Ros2Link(self.spec)
+        try:
+            self._open(link)
+        except BaseException:
+            self.stop()
+            raise
+
+    def _open(self, link: Ros2Link) -> None:
         node = link.discovery.node.strip("/")
         qos = dds_qos(PROFILES["default"])
         if self.spec.diagnostics is not None:
             self._diagnostics = link.participant.writer(
                 dds_topic(self.spec.diagnostics), link.library.idl(DIAGNOSTIC_ARRAY), qos
             )
+            self._writers.append(self._diagnostics)
         if self.spec.events is not None:
             self._events = link.participant.writer(
                 dds_topic(self.spec.events), link.library.idl(STRING), qos
             )
-        self._writers = [w for w in (self._diagnostics, self._events) if w is not None]
+            self._writers.append(self._events)
         for writer in self._writers:
             link.discovery.declare(writer.guid, writer=True)
         bus = self.context.bus
@@ -175,13 +185,16 @@ class Ros2StatePublisher(Service):
                 link.discovery.retract(writer.guid)
             writer.close()
         self._writers.clear()
+        self._diagnostics = self._events = None
         if self._own_link is not None:
             self._own_link.close()
             self._own_link = None
 
     # --- from the bus ---------------------------------------------------------------
 
-    def _status(self, message: Message, convert: Any, node: str) -> None:
+    def _status(
+        self, message: Message, convert: Callable[[dict[str, Any], str], dict[str, Any]], node: str
+    ) -> None:
         try:
             status = convert(message.payload, node)
         except (KeyError, ValueError, TypeError) as e:
@@ -228,5 +241,5 @@ class Ros2StatePublisher(Service):
                     DIAGNOSTIC_ARRAY, {"header": {"stamp": stamp}, "status": statuses}
                 )
             )
-        except (BusError, DuraError) as e:
+        except DuraError as e:
             log.warning("cannot publish diagnostics on ROS 2: %s", e)

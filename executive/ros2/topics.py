@@ -52,7 +52,7 @@ class Ros2Message(Message):
 
     @property
     def stamp(self) -> float | None:
-        """``header.stamp`` in seconds (a ``stamp`` field of the message without a header)."""
+        """Return ``header.stamp`` in seconds (a message without a header: its ``stamp``)."""
         payload = self.payload
         header = payload.get("header")
         stamp = header.get("stamp") if isinstance(header, dict) else payload.get("stamp")
@@ -160,7 +160,7 @@ class Ros2Topics:
             log.debug("cannot tell ROS 2 that dura stopped reading %s: %s", feed.spec.name, e)
 
     def status(self) -> dict[str, dict[str, Any]]:
-        """Each ROS 2 topic: its type (if known), whether it is read, and its malformed samples."""
+        """Tell each ROS 2 topic's type (if known), whether it is read, its malformed samples."""
         with self._lock:
             return {
                 f.spec.name: {"type": f.type, "reading": f.reader is not None,
@@ -207,8 +207,10 @@ class Ros2Topics:
         return None
 
     def _resolve(self) -> None:
-        """After a change of the graph: open readers that waited for a type, and warn
-        about publishers of another type than the declared one."""
+        """Open readers that waited for a type; warn of publishers of another type.
+
+        Called after every change of the graph.
+        """
         with self._lock:
             for feed in self._feeds.values():
                 if feed.handlers and feed.reader is None and feed.spec.type is None:
@@ -243,7 +245,10 @@ class Ros2Topics:
                     feed,
                 )
                 for handler in handlers:
-                    handler(message)
+                    try:
+                        handler(message)
+                    except Exception:  # one failing handler must not cost the others
+                        log.exception("a handler of ROS 2 topic %s failed", feed.spec.name)
 
         return on_samples
 

@@ -52,7 +52,7 @@ class TypeLibrary:
 
     @classmethod
     def of(cls, spec: Ros2Spec) -> TypeLibrary:
-        """The library a ``ros2:`` section names (its distribution and message files).
+        """Load the library a ``ros2:`` section names (its distribution and message files).
 
         Raises:
             ConfigError: an invalid message definition.
@@ -63,7 +63,7 @@ class TypeLibrary:
         return normalize_type(name) in self.store.fielddefs
 
     def check(self, name: str) -> str:
-        """The normalised name of a known type.
+        """Return the normalised name of a known type.
 
         Raises:
             ConfigError: no such type.
@@ -76,16 +76,16 @@ class TypeLibrary:
         return found
 
     def of_dds(self, dds_name: str) -> str | None:
-        """The known ROS 2 type of a DDS type name (``None``: not ROS 2's, or unknown)."""
+        """Return the known ROS 2 type of a DDS type name (``None``: not ROS 2's, or unknown)."""
         found = ros_type(dds_name)
         return found if found is not None and found in self.store.fielddefs else None
 
     def fields(self, name: str) -> list[tuple[str, tuple[Any, Any]]]:
-        """The fields of a type, in rosbags' form: ``(name, (Nodetype, details))``."""
+        """Return a type's fields in rosbags' form: ``(name, (Nodetype, details))``."""
         return list(self.store.fielddefs[self.check(name)][1])
 
     def idl(self, name: str) -> type[IdlStruct]:
-        """The Cyclone DDS class of a type (typename ``pkg::msg::dds_::Name_``)."""
+        """Return the Cyclone DDS class of a type (typename ``pkg::msg::dds_::Name_``)."""
         name = self.check(name)
         found = self._classes.get(name)
         if found is None:
@@ -111,7 +111,7 @@ class TypeLibrary:
         )
 
     def decoder(self, name: str) -> Decoder:
-        """The decoder of a type's CDR bytes into dicts."""
+        """Return the decoder of a type's CDR bytes into dicts."""
         name = self.check(name)
         found = self._decoders.get(name)
         if found is None:
@@ -119,7 +119,7 @@ class TypeLibrary:
         return found
 
     def create(self, name: str, values: Mapping[str, Any] | None = None) -> IdlStruct:
-        """A message of a type from a dict of its fields; absent fields are zero/empty.
+        """Make a message of a type from a dict of its fields (absent fields: zero, empty).
 
         Nested messages may be dicts or instances; arrays and sequences lists.
 
