@@ -4,17 +4,25 @@ as a node of the graph; also across processes, over real UDP on loopback."""
 from __future__ import annotations
 
 import json
+import logging
 import subprocess
 import sys
 from typing import Any
 
-from cyclonedds._clayer import ddspy_take
+import pytest
+from cyclonedds._clayer import ddspy_take, ddspy_write
 from cyclonedds.core import InstanceState, SampleState, ViewState
 
 from executive.bus.session import Message
 from executive.ros2.link import Ros2Link
 from tests.conftest import ROOT, wait_for
-from tests.executive.ros2.messages import LaserScan, ParticipantEntitiesInfo, Twist
+from tests.executive.ros2.messages import (
+    Gid,
+    LaserScan,
+    NodeEntitiesInfo,
+    ParticipantEntitiesInfo,
+    Twist,
+)
 from tests.executive.ros2.peer import RosPeer, ros_qos, streaming
 
 
@@ -97,3 +105,25 @@ def test_a_ros2_process_elsewhere_is_heard_over_udp_with_its_node_name(
     assert heard[-1].sent is not None and 0 <= heard[-1].received - heard[-1].sent < 1.0
     # the peer deleted its participant before it exited: gone at once, not after a lease
     assert wait_for(lambda: "/lidar" not in link.discovery.nodes(), timeout=2)
+
+
+def test_a_malformed_discovery_sample_is_one_warning_and_the_graph_stays(
+    link: Ros2Link, peer: RosPeer, caplog: pytest.LogCaptureFixture
+) -> None:
+    peer.publisher("lidar", "/scan", LaserScan)
+    assert wait_for(lambda: "/lidar" in link.discovery.nodes())
+    bad = (
+        ParticipantEntitiesInfo(
+            gid=Gid(data=list(peer.participant.guid.bytes)),
+            node_entities_info_seq=[NodeEntitiesInfo(node_name="lidar")],
+        )
+        .serialize()
+        .replace(b"lidar\x00", b"\xffidar\x00")
+    )  # valid CDR, not UTF-8
+    with caplog.at_level(logging.WARNING, logger="dura.ros2"):
+        ddspy_write(peer._info._ref, bad)
+        assert wait_for(lambda: caplog.records)
+    [warning] = caplog.records
+    assert warning.getMessage().startswith("ignored a malformed ros_discovery_info sample: ")
+    assert warning.exc_info is None
+    assert "/lidar" in link.discovery.nodes()
