@@ -47,13 +47,13 @@ _TYPE = re.compile(
 
 
 def normalize_type(name: str) -> str:
-    """``pkg/Name`` or ``pkg/msg/Name`` -> ``pkg/msg/Name``; other names unchanged."""
+    """Normalise a message type name: ``pkg/Name`` -> ``pkg/msg/Name``."""
     parts = name.strip("/").split("/")
     return f"{parts[0]}/msg/{parts[1]}" if len(parts) == 2 else "/".join(parts)
 
 
 def standard_store(distribution: str) -> Typestore:
-    """A fresh store of a distribution's standard messages.
+    """Load a fresh store of a distribution's standard messages.
 
     Raises:
         ConfigError: not a ROS 2 distribution rosbags knows.
@@ -69,7 +69,7 @@ def standard_store(distribution: str) -> Typestore:
 
 
 def message_store(distribution: str, paths: Sequence[Path] = ()) -> Typestore:
-    """A distribution's messages plus the custom files under ``paths``.
+    """Load a distribution's messages plus the custom files under ``paths``.
 
     Raises:
         ConfigError: an unknown distribution or an invalid definition (the first one,
@@ -103,7 +103,7 @@ def register(store: Typestore, definitions: Mapping[str, Definition]) -> None:
 
 
 def message_files(paths: Iterable[Path]) -> list[Path]:
-    """Every definition file under the paths (files or folders), sorted, each once."""
+    """List every definition file under the paths (files or folders), sorted, each once."""
     found: dict[Path, None] = {}
     for path in paths:
         candidates = [path] if path.is_file() else sorted(path.rglob("*"))
@@ -150,7 +150,7 @@ def read_definitions(
 
 
 def _hint(ref: str, names: set[str]) -> str:
-    """A did-you-mean that prefers a type of the same name in another package."""
+    """Suggest a known type, preferring one of the same name in another package."""
     same = sorted(n for n in names if n.rpartition("/")[2] == ref.rpartition("/")[2])
     return f" (did you mean '{same[0]}'?)" if same else did_you_mean(ref, sorted(names))
 
@@ -167,7 +167,7 @@ def _references(desc: tuple[int, Any]) -> list[str]:
 def read_file(
     file: Path, text: str, report: Report
 ) -> list[tuple[str, Definition, dict[str, int]]]:
-    """The types one ``.msg``/``.srv``/``.action`` file defines, with each field's line."""
+    """Read the types one ``.msg``/``.srv``/``.action`` file defines, with each field's line."""
     kind = file.suffix[1:]
     package = file.parent.parent.name
     parts: list[list[tuple[int, str]]] = [[]]
@@ -196,7 +196,7 @@ def read_file(
 
 
 def _action_messages(base: str) -> dict[str, Definition]:
-    """The messages ROS 2 derives from an action for its services and feedback topic."""
+    """Derive the messages of an action's services and feedback topic, as ROS 2 does."""
     uuid = (2, "unique_identifier_msgs/msg/UUID")
     return {
         f"{base}_SendGoal_Request": ([], [("goal_id", uuid), ("goal", (2, f"{base}_Goal"))]),
@@ -258,7 +258,7 @@ def _read_part(
 
 
 def _type(package: str, text: str) -> tuple[int, Any] | str:
-    """A field's description from its type, or the reason it is invalid."""
+    """Describe a field's type, or say why it is invalid."""
     match = _TYPE.match(text)
     if match is None:
         return f"invalid type '{text}'"

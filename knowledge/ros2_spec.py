@@ -83,7 +83,7 @@ class Ros2TopicSpec:
 
     @property
     def observed_as(self) -> str:
-        """The name observers give it (and its bus key's last part): ``scan``."""
+        """Name it as observers do (and its bus key's last part): ``scan``."""
         return self.name.strip("/")
 
 
@@ -102,12 +102,12 @@ class Ros2Spec:
     line: int = 0
 
     def topic(self, observed_as: str) -> Ros2TopicSpec | None:
-        """The ROS 2 topic observers call ``observed_as`` (``scan`` or ``/scan``)."""
+        """Find the ROS 2 topic observers call ``observed_as`` (``scan`` or ``/scan``)."""
         return self.topics.get(observed_as.strip("/"))
 
 
 def topic_name(name: str) -> str:
-    """The fully qualified ROS 2 topic name (relative names are in the root namespace).
+    """Qualify a ROS 2 topic name (relative names are in the root namespace).
 
     Raises:
         ConfigError: not a valid ROS 2 topic name (``~`` and ``{}`` are not supported).
