@@ -15,6 +15,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from knowledge.ros2_spec import Ros2Spec
+
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 
 # Names become file names (knowledge base, logs) and bus keys: no path or key syntax.
@@ -149,6 +151,7 @@ class RobotDescription:
     planner: PlannerSpec = PlannerSpec()
     endpoint: str = DEFAULT_ENDPOINT
     knowledge_base: Path | None = None
+    ros2: Ros2Spec | None = None  # the robot's ROS 2 graph, if it has one
 
     @property
     def components(self) -> dict[str, ComponentSpec]:

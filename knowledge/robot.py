@@ -27,6 +27,7 @@ from knowledge.description import (
 )
 from knowledge.errors import ConfigError
 from knowledge.finding import Finding, Report
+from knowledge.ros2_spec import read_ros2
 from knowledge.yamlsource import Section, compose, describe, line_of, paths, to_python
 
 ENGINES = ("kairos", "aries", "fast-downward", "tamer")
@@ -207,6 +208,7 @@ def read_robot(
         t = _task(action, tnode, tline, report)
         if t is not None:
             tasks[action] = t
+    ros2 = read_ros2(top.section("ros2"), base, report)
     top.close()
     robot = RobotDescription(
         name=name,
@@ -221,6 +223,7 @@ def read_robot(
         planner=planner,
         endpoint=endpoint,
         knowledge_base=kb,
+        ros2=ros2,
     )
     return robot, report.findings
 

@@ -13,7 +13,8 @@ and an observer starts afresh (start-up time, empty filters) each time it become
 active.
 
 Every bus key an observer listens to has one subscription, shared by all observers
-of that key; its handlers only queue. One loop thread runs each active observer at its
+of that key; its handlers only queue. A key that a topic source serves (a ROS 2
+topic: :mod:`executive.bus.topic_source`) is subscribed there instead of on the bus. One loop thread runs each active observer at its
 rate and publishes each result on ``observations``.
 """
 
@@ -22,7 +23,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,6 +32,7 @@ from executive.bus.keys import OBSERVATIONS, component
 from executive.bus.payloads import ComponentState, Lifecycle
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus, Message
+from executive.bus.topic_source import TopicSource
 from executive.bus.verb import Verb
 from knowledge.description import ObserverSpec
 from knowledge.errors import ConfigError, DuraError
@@ -111,8 +113,9 @@ class ObserverManager(Service):
 
     name = "observer-manager"
 
-    def __init__(self, context: Context) -> None:
+    def __init__(self, context: Context, *, sources: Sequence[TopicSource] = ()) -> None:
         super().__init__(context)
+        self._sources = tuple(sources)  # topics not on the bus, e.g. ROS 2 topics
         self._lock = threading.Condition(threading.RLock())
         self._slots: dict[str, _Slot] = {}
         self._feeds: dict[str, _Feed] = {}
@@ -285,7 +288,12 @@ class ObserverManager(Service):
             feed = self._feeds.get(key)
             if feed is None:
                 feed = self._feeds[key] = _Feed()
-                feed.subscriber = self.context.bus.subscribe(key, feed.dispatch, decoded=False)
+                source = next((s for s in self._sources if s.serves(key)), None)
+                feed.subscriber = (
+                    source.subscribe(key, feed.dispatch)
+                    if source is not None
+                    else self.context.bus.subscribe(key, feed.dispatch, decoded=False)
+                )
             feed.users[id(slot)] = slot
         self._refresh(slot)
 

@@ -15,8 +15,9 @@ Configuration::
 
 Axes: ``x, y, z`` (linear) and ``rot_x, rot_y, rot_z`` (angular velocity). A source
 reads each axis from a field path of its JSON payload; ``type`` gives the usual paths:
-``twist`` (``linear.x`` ... ``angular.z``), ``odometry`` (``twist.linear.x`` ...
-``twist.angular.z``), ``imu`` (``linear_acceleration.x`` ... ``angular_velocity.z``);
+``twist`` (``linear.x`` ... ``angular.z``), ``odometry`` (``twist.twist.linear.x`` ...
+``twist.twist.angular.z`` as in nav_msgs/Odometry, else ``twist.linear.x`` ...), ``imu``
+(``linear_acceleration.x`` ... ``angular_velocity.z``);
 ``fields: {rot_z: yaw_rate}`` sets or overrides paths, ``callerid`` restricts the
 publishers. Linear axes hold whatever the fields hold (a twist's velocity, an IMU's
 acceleration): compare them only between sources of the same kind.
@@ -33,6 +34,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+from typing import Any
 
 from executive.bus.keys import topic
 from executive.bus.session import Message
@@ -48,24 +50,27 @@ from monitoring.state import ObserverState, classify, read_states
 AXES = ("x", "y", "z", "rot_x", "rot_y", "rot_z")
 
 
-def _paths(linear: str, angular: str) -> dict[str, str]:
+def _paths(*pairs: tuple[str, str]) -> dict[str, tuple[str, ...]]:
+    """Each axis' field paths (linear, angular) in order: the first with a number wins."""
     return {
-        **{axis: f"{linear}.{axis}" for axis in ("x", "y", "z")},
-        **{f"rot_{axis}": f"{angular}.{axis}" for axis in ("x", "y", "z")},
+        **{axis: tuple(f"{linear}.{axis}" for linear, _ in pairs) for axis in ("x", "y", "z")},
+        **{f"rot_{axis}": tuple(f"{angular}.{axis}" for _, angular in pairs) for axis in "xyz"},
     }
 
 
 SOURCE_TYPES = {
-    "twist": _paths("linear", "angular"),
-    "odometry": _paths("twist.linear", "twist.angular"),
-    "imu": _paths("linear_acceleration", "angular_velocity"),
+    "twist": _paths(("linear", "angular")),
+    "odometry": _paths(  # nav_msgs/Odometry (a ROS 2 topic), or a flat twist
+        ("twist.twist.linear", "twist.twist.angular"), ("twist.linear", "twist.angular")
+    ),
+    "imu": _paths(("linear_acceleration", "angular_velocity")),
 }
 
 
 @dataclass(frozen=True)
 class Source:
     topic: str
-    fields: dict[str, str]  # axis -> field path
+    fields: dict[str, tuple[str, ...]]  # axis -> field paths, the first with a number wins
     callerids: tuple[str, ...] = ()
 
 
@@ -89,7 +94,7 @@ def read_source(entry: Entry | None, axes: list[str]) -> Source | None:
         return None
     name = topic_name(entry, "topic")
     kind = entry.text("type")
-    fields: dict[str, str] = {}
+    fields: dict[str, tuple[str, ...]] = {}
     if kind is not None:
         if kind in SOURCE_TYPES:
             fields.update(SOURCE_TYPES[kind])
@@ -104,7 +109,7 @@ def read_source(entry: Entry | None, axes: list[str]) -> Source | None:
         for axis in AXES:
             path = explicit.text(axis)
             if path is not None:
-                fields[axis] = path
+                fields[axis] = (path,)
         explicit.close()
     callerids = entry.names("callerid")
     entry.close()
@@ -142,6 +147,14 @@ def read_correlation(entry: Entry, owner: str) -> Correlation | None:
     return Correlation(a, b, filters, states, behavior, max_delay)
 
 
+def _number(payload: dict[str, Any], paths: tuple[str, ...]) -> float | None:
+    for path in paths:
+        value = read_number(payload, path)
+        if value is not None:
+            return value
+    return None
+
+
 class _Comparison:
     """The filtered differences of one correlation, from its queued messages."""
 
@@ -174,7 +187,7 @@ class _Comparison:
         for received, is_b, message in batch:
             source = self.config.source_b if is_b else self.config.source_a
             try:
-                reading = {a: read_number(message.payload, source.fields[a]) for a in self.filters}
+                reading = {a: _number(message.payload, source.fields[a]) for a in self.filters}
             except BusError:
                 continue
             if any(v is None for v in reading.values()):
