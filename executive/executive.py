@@ -11,7 +11,7 @@ from __future__ import annotations
 import contextlib
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.service import Context, Service
@@ -27,6 +27,9 @@ from monitoring.diagnosis.service import DiagnosisService
 from monitoring.observer_manager import ObserverManager
 from monitoring.repair.service import RuleService
 from monitoring.resource_monitor import ResourceMonitor
+
+if TYPE_CHECKING:
+    from executive.ros2.link import Ros2Link
 
 
 class Executive:
@@ -74,6 +77,11 @@ class Executive:
             self.launcher = stack.enter_context(
                 Launcher(self.robot, self.bus, self.kb, log_dir=self.log_dir, grace=self.grace)
             )
+            self.ros2: Ros2Link | None = None
+            if self.robot.ros2 is not None:  # Cyclone DDS loads only for a ROS 2 robot
+                from executive.ros2.link import Ros2Link
+
+                self.ros2 = stack.enter_context(Ros2Link(self.robot.ros2))
             for service in self.services(Context(self.robot, self.bus, self.kb)):
                 service.start()
                 stack.callback(service.stop)
@@ -90,12 +98,19 @@ class Executive:
             PlanTasks(self.tasks, self.robot),
             status={"tasks": self.tasks.tasks, "components": self._components},
         )
+        ros2 = self.ros2
+        extra: list[Service] = []
+        if ros2 is not None:
+            from executive.ros2.state import Ros2StatePublisher
+
+            extra.append(Ros2StatePublisher(context, ros2.spec, link=ros2))
         return [
             ComponentApi(context, self.launcher),
             ResourceMonitor(context, rate=self.resource_rate),
-            ObserverManager(context),
+            ObserverManager(context, sources=[ros2.topics] if ros2 is not None else []),
             DiagnosisService(context, learn=True),
             RuleService(context),
+            *extra,
             self.tasks,
             self.high_level,
         ]
