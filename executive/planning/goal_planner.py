@@ -21,7 +21,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 from executive.planning.expression import Signature, WorldState
-from executive.planning.goals import specs
+from executive.planning.goals import RefusalCause, specs
 from executive.planning.oversubscription import plan_goals
 from executive.planning.plan_executer import PlanExecuter
 from executive.planning.planner import Planner, PlanningTask, PlanResult
@@ -147,11 +147,11 @@ class GoalPlanner:
         usable, refused = specs(self.kb.open_goals(), Signature.of(self.domain, objects))
         failed: dict[int, str] = {}
         unreachable: dict[int, str] = {}
-        for goal_id, why in refused.items():
-            if "deadline" in why:
-                failed[goal_id] = why
+        for goal_id, refusal in refused.items():
+            if refusal.cause is RefusalCause.DEADLINE_PASSED:
+                failed[goal_id] = refusal.reason
             else:
-                unreachable[goal_id] = why
+                unreachable[goal_id] = refusal.reason
         state = WorldState(facts)
         achieved = tuple(g.id for g in usable if state.holds(g.expression))
         todo = []
