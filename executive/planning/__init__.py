@@ -1,8 +1,20 @@
 """The high level (thesis 5.1.2): goals, plans and their execution.
 
-It owns the goals and plans: the goal planner, oversubscription, planner engines in
-their worker process, problem building, PDDL expressions, partial-order plans, the
-plan executer and integrity goals. It may import :mod:`executive.bus` and
-:mod:`knowledge`; it never imports the task executor (steps run through the
-:class:`~executive.planning.plan_executer.TaskRunner` port).
+It owns the goals and plans. It may import :mod:`executive.bus` and :mod:`knowledge`;
+it never imports the task executor (steps run through the
+:class:`~executive.planning.task_runner.TaskRunner` port).
+
+- :mod:`.high_level` — the service: composes the parts below and serves
+  :mod:`executive.bus.api.planning`;
+- :mod:`.goals` — goals as the planner reads them (:class:`~.goals.Refusal` for the rest);
+- :mod:`.goal_planner` — planning rounds; the one writer of goal and plan states;
+- :mod:`.oversubscription` — the best subset of goals by priority;
+- :mod:`.planner` (client) and :mod:`.planner_worker` (process) — the engines;
+- :mod:`.problem` — unified-planning problems from the domain and the knowledge base;
+- :mod:`.expression` — ground PDDL expressions: nodes, evaluation, reading;
+- :mod:`.stn`, :mod:`.partial_order` — plans as partial orders of steps;
+- :mod:`.plan_executer` — runs a plan (:mod:`.plan_run` its steps, :mod:`.step_run` one
+  step, :mod:`.task_runner` the port, :mod:`.state_change` what it reports,
+  :mod:`.recovery` after a crash);
+- :mod:`.integrity` — goals that keep the robot going.
 """

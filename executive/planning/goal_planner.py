@@ -1,54 +1,95 @@
-"""The goal planner (thesis 5.1.2, Figure 5.3): plan for every open goal.
+"""The goal planner (thesis 5.1.2, Figure 5.3): plan for every open goal, and own the
+goals' states.
 
 It wakes when a goal is added or cancelled and when the plan executer asks for a new
 plan. Each round it pauses the executer (interruptible tasks pause, critical ones
-finish first), reads the open goals and the facts again from the knowledge base,
-plans for all goals (or the best subset by priority, see
-:mod:`executive.planning.oversubscription`), validates and stores the plan, marks the goals
-planned or unreachable with the reason, and hands the plan to the executer. A goal
-that already holds is achieved without planning; one whose deadline passed fails.
+finish first), reads the open goals and the facts again from the knowledge base, plans
+for all goals (or the best subset by priority, see
+:mod:`executive.planning.oversubscription`), validates and stores the plan, marks the
+goals planned or unreachable with the reason, and hands the plan to the executer. A
+goal that already holds is achieved without planning; one whose deadline passed fails.
 A goal fails once ``max_attempts`` plans for it have failed. Actions whose task cannot
 run (its behavior or every provider of a capability it needs is permanently faulty)
 are left out of the problem, and a goal that needs them is unreachable with that reason.
+
+One owner: the goal planner's thread is the only thread that changes the state of a
+goal or a plan. Its rounds mark goals; a cancel (:meth:`GoalPlanner.cancel`) and the
+plan executer's reports (a plan executing, ended or failed; a goal executing, achieved
+or past its deadline) are posted to it and applied in order. That thread never waits
+long: pausing the executer (which waits for critical tasks) and the search for a plan
+run on a second thread, whose results come back to it as jobs. So a cancel takes
+effect at once, also while a plan is being computed, and a search that included a goal
+cancelled meanwhile is thrown away and done again without it: a cancelled goal is never
+planned or executed afterwards. :meth:`GoalPlanner.status` answers from a snapshot.
 """
 
 from __future__ import annotations
 
+import enum
 import logging
 import threading
+import time
 from collections import Counter, defaultdict
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
 
+from executive.bus.worker import Worker
 from executive.planning.expression import Signature, WorldState
-from executive.planning.goals import specs
-from executive.planning.oversubscription import plan_goals
+from executive.planning.goals import GoalSpec, RefusalCause, specs
+from executive.planning.oversubscription import GoalPlan, plan_goals
 from executive.planning.plan_executer import PlanExecuter
 from executive.planning.planner import Planner, PlanningTask, PlanResult
 from executive.planning.problem import World
+from executive.planning.state_change import Change, apply_change
 from knowledge.domain import DomainInfo
+from knowledge.errors import DuraError, KnowledgeError
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.records import GoalState
+from knowledge.records import Fact, Goal, GoalState, to_plain
 
 log = logging.getLogger("dura.goal_planner")
 
+CANCEL_WAIT = 10.0  # seconds a cancel waits for the goal planner's thread to take it up
+PAUSE_SLICE = 0.5  # seconds between looks at a stop while critical tasks finish
+
+
+class RoundPhase(enum.Enum):
+    """Where a planning round is."""
+
+    PAUSING = "pausing"  # the executer pauses; critical tasks finish first
+    SEARCHING = "searching"  # the planner searches for a plan
+
 
 @dataclass(frozen=True)
-class Round:
-    """What one planning round did."""
+class PlannerStatus:
+    """What the goal planner is doing, as of its last job (for ``dura status``)."""
+
+    planning: bool = False  # a round is under way
+    phase: RoundPhase | None = None
+    reason: str = ""  # why it began
+    goals: tuple[int, ...] = ()  # the goals open when it began
+    since: float | None = None  # when it began (seconds since the epoch)
+    planned: tuple[int, ...] = ()  # the goals of the plan handed to the executer
+
+
+@dataclass
+class _Round:
+    """A planning round under way (the goal planner's thread only)."""
 
     reason: str
-    plan_id: int | None = None
-    planned: tuple[int, ...] = ()
-    achieved: tuple[int, ...] = ()
+    blocked: dict[str, str]
+    goals: tuple[int, ...]
+    began: float = field(default_factory=time.time)
+    phase: RoundPhase = RoundPhase.PAUSING
     unreachable: dict[int, str] = field(default_factory=dict)
-    failed: dict[int, str] = field(default_factory=dict)
-    result: PlanResult | None = None
 
 
 class GoalPlanner:
-    """Plans for the open goals whenever :meth:`wake` is called (on its own thread
-    after :meth:`start`, or synchronously with :meth:`plan_now`)."""
+    """Plans for the open goals whenever :meth:`wake` is called, on its own thread
+    after :meth:`start` (see the module docstring).
+
+    It takes over the goal and plan state changes ``executer`` reports.
+    """
 
     def __init__(
         self,
@@ -68,131 +109,269 @@ class GoalPlanner:
         self.max_attempts = max_attempts
         self.pause_timeout = pause_timeout
         self.blocked = blocked or dict  # action -> why its task cannot run now
+        self._worker = Worker("goal planner", after_each=self._after_each)
+        self._search = Worker("goal planner's search")
+        self._stopping = threading.Event()
+        # the goal planner's thread only:
         self._failures: Counter[int] = Counter()  # failed plans per goal
         self._planned: frozenset[int] | None = None
         self._replan = True
         self._reasons: list[str] = []
-        self._wake = threading.Event()
-        self._stopping = False
-        self._thread: threading.Thread | None = None
-        self._lock = threading.Lock()
+        self._round: _Round | None = None
+        self._snapshot = PlannerStatus()
+        executer.report_to(self._reported)
 
     # --- lifecycle ----------------------------------------------------------------------
 
     def start(self) -> None:
-        if self._thread is None:
-            self._stopping = False
-            self._thread = threading.Thread(target=self._loop, name="goal-planner", daemon=True)
-            self._thread.start()
+        if not self._worker.running:
+            self._stopping.clear()
+            self._worker.start()
+            self._search.start()
             self.wake("the executive started")
 
     def stop(self) -> None:
-        if self._thread is not None:
-            self._stopping = True
-            self._wake.set()
-            self._thread.join()
-            self._thread = None
+        """Stop planning: a search under way ends first (within the planner's timeout)."""
+        if self._worker.running:
+            self._stopping.set()
+            self._search.stop()
+            self._worker.stop()
+
+    def status(self) -> dict[str, Any]:
+        """What the goal planner is doing; never waits for its thread."""
+        return dict(to_plain(self._snapshot))
+
+    def _after_each(self) -> None:
+        r = self._round
+        self._snapshot = PlannerStatus(
+            planning=r is not None,
+            phase=None if r is None else r.phase,
+            reason="" if r is None else r.reason,
+            goals=() if r is None else r.goals,
+            since=None if r is None else r.began,
+            planned=tuple(sorted(self._planned or ())),
+        )
+
+    # --- what others ask (any thread) -----------------------------------------------------
 
     def wake(self, reason: str, *, replan: bool = False) -> None:
         """Plan again soon; ``replan`` even if the open goals did not change."""
-        with self._lock:
-            self._reasons.append(reason)
-            self._replan = self._replan or replan
-        self._wake.set()
+        self._worker.post(lambda: self._want(reason, replan))
 
     def replan(self, reason: str) -> None:
         """The executer's ``on_replan`` callback: the current plan failed."""
-        with self._lock:
-            for goal_id in self._planned or ():
-                self._failures[goal_id] += 1
-        self.wake(reason, replan=True)
+        self._worker.post(lambda: self._plan_failed(reason))
 
-    def cancel(self, goal_id: int) -> None:
-        """Cancel an open goal and plan for the others."""
-        self.kb.set_goal_state(goal_id, GoalState.CANCELLED)
-        self.wake(f"goal {goal_id} cancelled", replan=True)
+    def cancel(self, goal_id: int, timeout: float = CANCEL_WAIT) -> Goal:
+        """Cancel an open goal and plan for the others; returns the cancelled goal.
 
-    def _loop(self) -> None:
-        while True:
-            self._wake.wait()
-            self._wake.clear()
-            if self._stopping:
-                return
+        Raises:
+            KnowledgeError: no such goal, or it is not open (``goal 3 is achieved already``).
+            DuraError: the goal planner did not take the cancel up within ``timeout``
+                seconds; it stays queued and takes effect when the thread is free.
+        """
+        done = threading.Event()
+        answer: list[Goal | Exception] = []
+
+        def job() -> None:
             try:
-                self.plan_now()
-            except Exception:  # a failed round must not stop the planner
-                log.exception("planning round failed")
+                answer.append(self._cancel(goal_id))
+            except Exception as e:  # handed to the caller
+                answer.append(e)
+            finally:
+                done.set()
 
-    # --- one round -----------------------------------------------------------------------
+        self._worker.post(job)
+        if not done.wait(timeout):
+            raise DuraError(
+                f"goal {goal_id}: the goal planner is busy; the cancel is queued and "
+                "takes effect as soon as it is free"
+            )
+        if isinstance(answer[0], Exception):
+            raise answer[0]
+        return answer[0]
 
-    def plan_now(self) -> Round | None:
-        """Run one planning round if something changed; returns what it did."""
-        with self._lock:
-            reasons, self._reasons = self._reasons, []
-            replan, self._replan = self._replan, False
+    def _reported(self, change: Change) -> None:
+        """A goal or plan state change the executer saw (on its thread): apply it here."""
+        self._worker.post(lambda: self._apply(change))
+
+    # --- the goal planner's thread --------------------------------------------------------
+
+    def _apply(self, change: Change) -> None:
+        apply_change(self.kb, change)
+
+    def _cancel(self, goal_id: int) -> Goal:
+        goal = self.kb.goal(goal_id)
+        if not goal.state.is_open:
+            raise KnowledgeError(f"goal {goal.id} is {goal.state.value} already")
+        goal = self.kb.set_goal_state(goal_id, GoalState.CANCELLED)
+        if self._round is None:
+            self._want(f"goal {goal_id} cancelled", replan=True)
+        # else the round under way reads the goals after its pause and looks at them
+        # again after its search: it leaves the cancelled goal out, no new round needed
+        return goal
+
+    def _plan_failed(self, reason: str) -> None:
+        for goal_id in self._planned or ():
+            self._failures[goal_id] += 1
+        self._want(reason, replan=True)
+
+    def _want(self, reason: str, replan: bool) -> None:
+        self._reasons.append(reason)
+        self._replan = self._replan or replan
+        self._begin()
+
+    def _begin(self) -> None:
+        """Begin a round if something changed and none is under way."""
+        if self._round is not None or self._stopping.is_set():
+            return  # a round under way looks again when it ends
+        if not self._reasons and not self._replan:
+            return
+        reasons, self._reasons = self._reasons, []
+        replan, self._replan = self._replan, False
         reason = "; ".join(dict.fromkeys(reasons)) or "asked to plan"
         open_ids = frozenset(g.id for g in self.kb.open_goals())
         if (not replan and open_ids == self._planned) or (not open_ids and not self._planned):
             self._planned = open_ids
-            return None
+            return
         blocked = dict(self.blocked())
         self.kb.log_event(
             "PLANNING",
             "goal planner",
             {"reason": reason, "goals": sorted(open_ids), "blocked": sorted(blocked)},
         )
-        self.executer.pause(self.pause_timeout)
-        facts = self.executer.planning_facts()
+        round_ = self._round = _Round(reason, blocked, tuple(sorted(open_ids)))
+        self._search.post(self._step(round_, lambda: self._pause(round_)))
+
+    def _decide(self, round_: _Round, facts: list[Fact]) -> None:
+        """Settle what needs no plan (achieved, failed, unusable goals); search for the rest."""
+        if self._stopping.is_set():
+            return
         objects = self.kb.objects()
         usable, refused = specs(self.kb.open_goals(), Signature.of(self.domain, objects))
         failed: dict[int, str] = {}
-        unreachable: dict[int, str] = {}
-        for goal_id, why in refused.items():
-            if "deadline" in why:
-                failed[goal_id] = why
+        for goal_id, refusal in refused.items():
+            if refusal.cause is RefusalCause.DEADLINE_PASSED:
+                failed[goal_id] = refusal.reason
             else:
-                unreachable[goal_id] = why
+                round_.unreachable[goal_id] = refusal.reason
         state = WorldState(facts)
-        achieved = tuple(g.id for g in usable if state.holds(g.expression))
+        achieved = [g.id for g in usable if state.holds(g.expression)]
         todo = []
         for g in usable:
             if g.id in achieved:
                 continue
             if self._failures[g.id] >= self.max_attempts:
-                failed[g.id] = f"{self.max_attempts} plans for it failed, the last because {reason}"
+                failed[g.id] = (
+                    f"{self.max_attempts} plans for it failed, the last because {round_.reason}"
+                )
             else:
                 todo.append(g)
         for goal_id in achieved:
             self.kb.set_goal_state(goal_id, GoalState.ACHIEVED)
         for goal_id, why in failed.items():
             self.kb.set_goal_state(goal_id, GoalState.FAILED, why)
-        result = None
-        plan_id = None
-        planned: tuple[int, ...] = ()
-        if todo:
-            world = World(objects, tuple(facts))
-            task = PlanningTask(self.domain.path, world, tuple(todo), frozenset(blocked))
-            outcome = plan_goals(self.planner, task)
-            result = outcome.result
-            unreachable.update(
-                {goal_id: why + _without(blocked) for goal_id, why in outcome.unreachable.items()}
+        if not todo:
+            self._conclude(round_, None, ())
+            return
+        world = World(objects, tuple(facts))
+        task = PlanningTask(self.domain.path, world, tuple(todo), frozenset(round_.blocked))
+        round_.phase = RoundPhase.SEARCHING
+        self._search.post(self._step(round_, lambda: self._solve(round_, task)))
+
+    def _solved(self, round_: _Round, task: PlanningTask, outcome: GoalPlan) -> None:
+        """Store, mark and hand over the plan, unless a goal it searched for was cancelled
+        during the search: then search again without it."""
+        if self._stopping.is_set():
+            return
+        cancelled = [g.id for g in task.goals if self.kb.goal(g.id).state is GoalState.CANCELLED]
+        if cancelled:
+            left = tuple(g for g in task.goals if g.id not in cancelled)
+            self.kb.log_event(
+                "PLANNING",
+                "goal planner",
+                {
+                    "reason": f"goals {', '.join(map(str, cancelled))} cancelled while planning",
+                    "goals": [g.id for g in left],
+                    "blocked": sorted(round_.blocked),
+                },
             )
-            planned = outcome.planned if outcome.ok else ()
-            if outcome.ok and result.plan is not None:
-                stored = self.kb.store_plan(
-                    result.plan.records(), engine=result.engine, goal_ids=planned
-                )
-                plan_id = stored.id
-                for goal_id in planned:
-                    self.kb.set_goal_state(goal_id, GoalState.PLANNED)
-        for goal_id, why in unreachable.items():
-            self.kb.set_goal_state(goal_id, GoalState.UNREACHABLE, why)
+            if left:
+                again = replace(task, goals=left)
+                self._search.post(self._step(round_, lambda: self._solve(round_, again)))
+            else:
+                self._conclude(round_, None, ())
+            return
+        round_.unreachable.update(
+            {g: why + _without(round_.blocked) for g, why in outcome.unreachable.items()}
+        )
+        planned = outcome.planned if outcome.ok else ()
+        self._conclude(round_, outcome.result, [g for g in task.goals if g.id in planned])
+
+    def _conclude(
+        self, round_: _Round, result: PlanResult | None, planned: Sequence[GoalSpec]
+    ) -> None:
+        open_now = {g.id for g in self.kb.open_goals()}
+        # a goal that ended during the search (achieved as the paused plan finished a
+        # critical step, past its deadline) is not planned again
+        planned = [g for g in planned if g.id in open_now]
+        plan_id = None
+        if planned and result is not None and result.plan is not None:
+            ids = [g.id for g in planned]
+            plan_id = self.kb.store_plan(
+                result.plan.records(), engine=result.engine, goal_ids=ids
+            ).id
+            for goal_id in ids:
+                self.kb.set_goal_state(goal_id, GoalState.PLANNED)
+        for goal_id, why in round_.unreachable.items():
+            if goal_id in open_now:
+                self.kb.set_goal_state(goal_id, GoalState.UNREACHABLE, why)
         if plan_id is not None and result is not None and result.plan is not None:
-            self.executer.execute(result.plan, plan_id, [g for g in todo if g.id in planned])
+            self.executer.execute(result.plan, plan_id, planned)
         else:
             self.executer.abandon()
-        self._planned = frozenset(planned)
-        return Round(reason, plan_id, planned, achieved, unreachable, failed, result)
+        self._planned = frozenset(g.id for g in planned)
+        self._round = None
+        self._begin()  # what was asked while the round was under way
+
+    def _step(self, round_: _Round, step: Callable[[], None]) -> Callable[[], None]:
+        """A job of a round, on either thread: a round that fails is over (logged), and
+        the next wake plans again, as it would after a round that ended."""
+
+        def job() -> None:
+            try:
+                step()
+            except Exception:
+                log.exception("planning round failed (%s)", round_.reason)
+                self._worker.post(lambda: self._forget(round_))
+
+        return job
+
+    def _forget(self, round_: _Round) -> None:
+        if self._round is round_:
+            self._round = None
+
+    # --- the search thread ----------------------------------------------------------------
+
+    def _pause(self, round_: _Round) -> None:
+        """Pause the executer (critical tasks finish first) and read the facts to plan from."""
+        limit = None if self.pause_timeout is None else time.monotonic() + self.pause_timeout
+        while not self._stopping.is_set():
+            left = PAUSE_SLICE if limit is None else min(PAUSE_SLICE, limit - time.monotonic())
+            if self.executer.pause(max(0.0, left)):
+                break
+            if limit is not None and time.monotonic() >= limit:
+                break  # plan anyway: the tasks still running are in the facts
+        if self._stopping.is_set():
+            return
+        facts = self.executer.planning_facts()
+        self._worker.post(self._step(round_, lambda: self._decide(round_, facts)))
+
+    def _solve(self, round_: _Round, task: PlanningTask) -> None:
+        if self._stopping.is_set():
+            return
+        outcome = plan_goals(self.planner, task)
+        self._worker.post(self._step(round_, lambda: self._solved(round_, task, outcome)))
 
 
 def _without(blocked: Mapping[str, str]) -> str:

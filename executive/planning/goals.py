@@ -10,6 +10,7 @@ time it plans, so a restarted executive continues them.
 
 from __future__ import annotations
 
+import enum
 import math
 import time
 from dataclasses import dataclass
@@ -31,6 +32,22 @@ class GoalSpec:
     expression: Expression
     priority: int = 0
     deadline: float | None = None
+
+
+class RefusalCause(enum.Enum):
+    """Why a stored goal cannot be planned for: the goal planner fails a goal whose
+    deadline passed and finds the others unreachable."""
+
+    DEADLINE_PASSED = "deadline_passed"
+    INVALID = "invalid"  # no longer fits the domain and objects (an object was removed)
+
+
+@dataclass(frozen=True)
+class Refusal:
+    """A stored goal the planner cannot use, why (typed), and the sentence for users."""
+
+    cause: RefusalCause
+    reason: str
 
 
 def normalized(text: str) -> str:
@@ -70,24 +87,26 @@ def remaining(goal: Goal, now: float | None = None) -> float | None:
 
 def specs(
     goals: list[Goal], signature: Signature, now: float | None = None
-) -> tuple[list[GoalSpec], dict[int, str]]:
-    """Read stored goals for planning: the usable ones, and the reason for each other one.
+) -> tuple[list[GoalSpec], dict[int, Refusal]]:
+    """Read stored goals for planning: the usable ones, and the refusal of each other one.
 
     A goal is unusable when it no longer fits the domain and objects (an object was
     removed) or its deadline has passed.
     """
     now = time.time() if now is None else now
     usable: list[GoalSpec] = []
-    refused: dict[int, str] = {}
+    refused: dict[int, Refusal] = {}
     for goal in goals:
         try:
             expression = parse(goal.expression, signature)
         except DomainError as e:
-            refused[goal.id] = str(e)
+            refused[goal.id] = Refusal(RefusalCause.INVALID, str(e))
             continue
         left = remaining(goal, now)
         if left is not None and left <= 0:
-            refused[goal.id] = f"its deadline of {goal.deadline:g} s passed"
+            refused[goal.id] = Refusal(
+                RefusalCause.DEADLINE_PASSED, f"its deadline of {goal.deadline:g} s passed"
+            )
             continue
         usable.append(GoalSpec(goal.id, expression, goal.priority, left))
     return usable, refused

@@ -2,9 +2,12 @@
 
 It composes the goal planner, the plan executer and the integrity goal generator on the
 robot's knowledge base, with a warm planner worker, and serves the requests of the goal
-submission interface (``executive/api/goal/*``, ``plan/show``, ``state/*``,
-``object/add``, ``events``, ``status``; payloads in :mod:`executive.bus.keys` and :mod:`executive.bus.payloads`). Every
-event logged in the knowledge base is also published on the bus key ``events``.
+submission interface as declared once in :mod:`executive.bus.api.planning` (goals,
+plans, the world's facts and objects, events, status); the declared payload types check
+every request before a handler sees it. Every event logged in the knowledge base is
+also published on the bus key ``events``. ``status`` and ``plan/show`` answer from the
+snapshots the plan executer and the goal planner keep: they never wait behind a step
+being dispatched or a plan being computed.
 
 On start it loads the robot's initial world into an empty knowledge base and plans for
 the goals still open there: an executive restarted after a crash carries on with them.
@@ -19,8 +22,10 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from executive.bus.keys import DIAGNOSES, EVENTS, api
+from executive.bus.api import planning as api
+from executive.bus.keys import DIAGNOSES, EVENTS
 from executive.bus.service import Context, Service
+from executive.bus.verb import Empty
 from executive.planning.expression import Signature, parse_fact
 from executive.planning.goal_planner import GoalPlanner
 from executive.planning.goals import submit
@@ -31,35 +36,13 @@ from executive.planning.problem import seed_world
 from knowledge.availability import blocked_tasks
 from knowledge.domain import read_domain
 from knowledge.errors import DuraError, KnowledgeError
-from knowledge.records import Event, GoalState, to_plain
+from knowledge.records import Event, Fact, to_plain
 
 log = logging.getLogger("dura.high_level")
 FAULT_CHANGES = ("PERMANENT_FAULT", "COMPONENT_RESET")  # events that may block or free tasks
+SECTIONS = ("tasks", "components")  # what other services add to ``status``
 
 MAX_EVENTS = 10_000  # the most events one request returns
-
-
-def _int(request: dict[str, Any], key: str) -> int:
-    value = request.get(key)
-    if not isinstance(value, int) or isinstance(value, bool):
-        raise DuraError(f"the request needs an integer '{key}', not {value!r}")
-    return value
-
-
-def _text(request: dict[str, Any], key: str) -> str:
-    value = request.get(key)
-    if not isinstance(value, str) or not value.strip():
-        raise DuraError(f"the request needs a text '{key}', not {value!r}")
-    return value
-
-
-def _number(request: dict[str, Any], key: str) -> float | None:
-    value = request.get(key)
-    if value is None:
-        return None
-    if not isinstance(value, int | float) or isinstance(value, bool):
-        raise DuraError(f"'{key}' must be a number, not {value!r}")
-    return float(value)
 
 
 class HighLevel(Service):
@@ -68,7 +51,8 @@ class HighLevel(Service):
     Args:
         context: the robot, bus and knowledge base.
         runner: carries out plan steps (the task executor's adapter).
-        status: extra sections for ``status`` (components, tasks, diagnoses), by name.
+        status: the sections other services add to ``status`` (``tasks`` from the task
+            executor, ``components`` from the launcher), by name.
         limits: when a running step times out.
     """
 
@@ -85,6 +69,9 @@ class HighLevel(Service):
         super().__init__(context)
         self.runner = runner
         self.extra_status = dict(status or {})
+        unknown = sorted(set(self.extra_status) - set(SECTIONS))
+        if unknown:
+            raise ValueError(f"status has no section {', '.join(unknown)} (only {SECTIONS})")
         self.limits = limits
         self._declared: list[Any] = []
         self._diagnoses: dict[str, Any] = {}
@@ -114,8 +101,7 @@ class HighLevel(Service):
         self._relaying = True
         kb.add_listener(self._on_event)
         self._declared = [bus.subscribe(DIAGNOSES, self._on_diagnoses)]
-        for verb, handler in self._api().items():
-            self._declared.append(bus.serve(api(verb), handler, threaded=True))
+        self._declared.extend(self._serve())
         self._stopping.clear()
         self._integrity_thread = threading.Thread(
             target=self._integrity_loop, name="integrity-goals", daemon=True
@@ -200,81 +186,63 @@ class HighLevel(Service):
 
     # --- the bus API ---------------------------------------------------------------------
 
-    def _api(self) -> dict[str, Callable[[dict[str, Any]], dict[str, Any]]]:
-        return {
-            "goal/add": self._goal_add,
-            "goal/list": self._goal_list,
-            "goal/show": self._goal_show,
-            "goal/cancel": self._goal_cancel,
-            "plan/show": self._plan_show,
-            "state/get": self._state_get,
-            "state/set": lambda r: self._state_change(r, unset=False),
-            "state/unset": lambda r: self._state_change(r, unset=True),
-            "object/add": self._object_add,
-            "events": self._events,
-            "status": self._status,
-        }
+    def _serve(self) -> list[Any]:
+        """Answer every verb of :mod:`executive.bus.api.planning`; returns the queryables."""
+        bus = self.context.bus
+        return [
+            api.GOAL_ADD.serve(bus, self._goal_add),
+            api.GOAL_LIST.serve(bus, self._goal_list),
+            api.GOAL_SHOW.serve(bus, self._goal_show),
+            api.GOAL_CANCEL.serve(bus, self._goal_cancel),
+            api.PLAN_SHOW.serve(bus, self._plan_show),
+            api.STATE_GET.serve(bus, self._state_get),
+            api.STATE_SET.serve(bus, lambda r: self._state_change(r, unset=False)),
+            api.STATE_UNSET.serve(bus, lambda r: self._state_change(r, unset=True)),
+            api.OBJECT_ADD.serve(bus, self._object_add),
+            api.EVENTS.serve(bus, self._events),
+            api.STATUS.serve(bus, self._status),
+        ]
 
-    def _goal_add(self, request: dict[str, Any]) -> dict[str, Any]:
-        priority = request.get("priority", 0)
-        if not isinstance(priority, int) or isinstance(priority, bool):
-            raise DuraError(f"'priority' must be an integer, not {priority!r}")
-        source = request.get("source", "user")
+    def _goal_add(self, request: api.GoalAdd) -> api.GoalReply:
         goal = submit(
             self.context.kb,
             self.domain,
-            _text(request, "expression"),
-            priority=priority,
-            deadline=_number(request, "deadline"),
-            source=str(source),
+            request.expression,
+            priority=request.priority,
+            deadline=request.deadline,
+            source=request.source,
         )
         self.goals.wake(f"goal {goal.id} added")
-        return {"goal": to_plain(goal)}
+        return api.GoalReply(to_plain(goal))
 
-    def _goal_list(self, request: dict[str, Any]) -> dict[str, Any]:
-        wanted = request.get("states")
-        try:
-            states = None if wanted is None else [GoalState(s) for s in wanted]
-        except (ValueError, TypeError):
-            names = ", ".join(s.value for s in GoalState)
-            raise DuraError(f"'states' must list goal states ({names}), not {wanted!r}") from None
-        return {"goals": to_plain(self.context.kb.goals(states))}
+    def _goal_list(self, request: api.GoalQuery) -> api.GoalsReply:
+        return api.GoalsReply(to_plain(self.context.kb.goals(request.states)))
 
-    def _goal_show(self, request: dict[str, Any]) -> dict[str, Any]:
+    def _goal_show(self, request: api.GoalId) -> api.GoalHistory:
         kb = self.context.kb
-        goal_id = _int(request, "id")
-        goal = kb.goal(goal_id)
-        subject = f"goal {goal_id}"
-        events = [e for e in kb.events() if e.subject == subject or _names_goal(e, goal_id)]
-        return {"goal": to_plain(goal), "events": to_plain(events)}
+        goal = kb.goal(request.id)
+        subject = f"goal {goal.id}"
+        events = [e for e in kb.events() if e.subject == subject or _names_goal(e, goal.id)]
+        return api.GoalHistory(to_plain(goal), to_plain(events))
 
-    def _goal_cancel(self, request: dict[str, Any]) -> dict[str, Any]:
-        kb = self.context.kb
-        goal = kb.goal(_int(request, "id"))
-        if not goal.state.is_open:
-            raise KnowledgeError(f"goal {goal.id} is {goal.state.value} already")
-        self.goals.cancel(goal.id)
-        return {"goal": to_plain(kb.goal(goal.id))}
+    def _goal_cancel(self, request: api.GoalId) -> api.GoalReply:
+        """Cancelled by the goal planner's thread, which owns goal states; the reply is
+        the goal as it left that thread (or the reason it could not be cancelled)."""
+        return api.GoalReply(to_plain(self.goals.cancel(request.id)))
 
-    def _plan_show(self, request: dict[str, Any]) -> dict[str, Any]:
+    def _plan_show(self, request: Empty) -> api.PlanReply:
         plan = self.context.kb.latest_plan()
-        return {
-            "plan": None if plan is None else to_plain(plan),
-            "execution": self.executer.status(),
-        }
+        return api.PlanReply(None if plan is None else to_plain(plan), self.executer.status())
 
-    def _state_get(self, request: dict[str, Any]) -> dict[str, Any]:
-        pattern = request.get("pattern") or ""
-        if not isinstance(pattern, str):
-            raise DuraError(f"'pattern' must be a text, not {pattern!r}")
+    def _state_get(self, request: api.StateQuery) -> api.StateReply:
         kb = self.context.kb
-        words = pattern.strip("() ").split()
+        words = request.pattern.strip("() ").split()
         facts = [f for f in kb.facts() if _matches(words, f.name, f.args)]
-        return {"facts": [_fact(f) for f in facts], "objects": kb.objects()}
+        return api.StateReply([_fact(f) for f in facts], kb.objects())
 
-    def _state_change(self, request: dict[str, Any], *, unset: bool) -> dict[str, Any]:
+    def _state_change(self, request: api.FactChange, *, unset: bool) -> api.FactReply:
         kb = self.context.kb
-        fact = parse_fact(_text(request, "fact"), Signature.of(self.domain, kb.objects()))
+        fact = parse_fact(request.fact, Signature.of(self.domain, kb.objects()))
         with kb.transaction():
             if unset or fact.value is False:
                 kb.update_facts(remove=[fact])
@@ -283,10 +251,10 @@ class HighLevel(Service):
             kb.log_event("STATE_UNSET" if unset else "STATE_SET", str(fact), {"source": "user"})
         self.executer.facts_changed()
         self.goals.wake(f"{fact} {'unset' if unset else 'set'} by the user")
-        return {"fact": _fact(fact)}
+        return api.FactReply(_fact(fact))
 
-    def _object_add(self, request: dict[str, Any]) -> dict[str, Any]:
-        name, type_name = _text(request, "name"), _text(request, "type")
+    def _object_add(self, request: api.ObjectAdd) -> api.ObjectAdd:
+        name, type_name = request.name, request.type
         kb = self.context.kb
         if type_name not in self.domain.types and type_name != "object":
             known = ", ".join(sorted(self.domain.types)) or "none"
@@ -299,37 +267,38 @@ class HighLevel(Service):
         with kb.transaction():
             kb.add_object(name, type_name)
             kb.log_event("OBJECT_ADDED", name, {"type": type_name})
-        return {"name": name, "type": type_name}
+        return api.ObjectAdd(name, type_name)
 
-    def _events(self, request: dict[str, Any]) -> dict[str, Any]:
-        after = request.get("after", 0)
-        limit = request.get("limit", 100)
-        kind = request.get("kind")
-        for key, value in (("after", after), ("limit", limit)):
-            if not isinstance(value, int) or isinstance(value, bool) or value < 0:
-                raise DuraError(f"'{key}' must be a non-negative integer, not {value!r}")
-        if kind is not None and not isinstance(kind, str):
-            raise DuraError(f"'kind' must be a text, not {kind!r}")
-        events = self.context.kb.events(after=after, kind=kind, limit=min(limit, MAX_EVENTS))
-        return {"events": to_plain(events)}
+    def _events(self, request: api.EventQuery) -> api.EventsReply:
+        events = self.context.kb.events(
+            after=request.after, kind=request.kind, limit=min(request.limit, MAX_EVENTS)
+        )
+        return api.EventsReply(to_plain(events))
 
-    def _status(self, request: dict[str, Any]) -> dict[str, Any]:
+    def _status(self, request: Empty) -> api.StatusReply:
         kb = self.context.kb
         plan = kb.latest_plan()
-        status: dict[str, Any] = {
-            "robot": self.context.robot.name,
-            "goals": to_plain(kb.goals()),
-            "plan": None if plan is None else to_plain(plan),
-            "execution": self.executer.status(),
-            "diagnoses": self._diagnoses,
-            "faults": to_plain([c for c in kb.components() if c.fault_count or c.permanent_fault]),
-        }
-        for name, section in self.extra_status.items():
-            try:
-                status[name] = section()
-            except DuraError as e:
-                status[name] = {"error": str(e)}
-        return status
+        return api.StatusReply(
+            robot=self.context.robot.name,
+            goals=to_plain(kb.goals()),
+            plan=None if plan is None else to_plain(plan),
+            execution=self.executer.status(),
+            diagnoses=self._diagnoses,
+            faults=to_plain([c for c in kb.components() if c.fault_count or c.permanent_fault]),
+            tasks=self._section("tasks"),
+            components=self._section("components"),
+            planning=self.goals.status(),
+        )
+
+    def _section(self, name: str) -> Any:
+        """A section another service adds to ``status``; its error if it did not answer."""
+        section = self.extra_status.get(name)
+        if section is None:
+            return None
+        try:
+            return section()
+        except DuraError as e:
+            return {"error": str(e)}
 
 
 def _names_goal(event: Event, goal_id: int) -> bool:
@@ -346,5 +315,5 @@ def _matches(words: list[str], name: str, args: tuple[str, ...]) -> bool:
     return all(w in ("*", a) for w, a in zip(words[1:], args, strict=False))
 
 
-def _fact(fact: Any) -> dict[str, Any]:
+def _fact(fact: Fact) -> dict[str, Any]:
     return {"name": fact.name, "args": list(fact.args), "value": fact.value, "text": str(fact)}

@@ -21,6 +21,7 @@ open, and fires again only after the trigger was false once.
 
 from __future__ import annotations
 
+import enum
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -37,7 +38,16 @@ from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Goal
 from knowledge.yamlsource import Section, compose, did_you_mean, line_of
 
-TRIGGERS = ("permanent_fault", "diagnosis", "condition")
+
+class Trigger(enum.Enum):
+    """What makes a rule fire (the key under ``when:``)."""
+
+    PERMANENT_FAULT = "permanent_fault"  # the subject is a component
+    DIAGNOSIS = "diagnosis"  # the subject is a component
+    CONDITION = "condition"  # the subject is a PDDL condition
+
+
+TRIGGERS = tuple(t.value for t in Trigger)
 
 
 @dataclass(frozen=True)
@@ -45,7 +55,7 @@ class IntegrityRule:
     """One rule: when ``trigger`` on ``subject`` holds for ``hold`` seconds, post ``goal``."""
 
     name: str
-    trigger: str
+    trigger: Trigger
     subject: str  # a component name, or a PDDL condition
     goal: str
     priority: int = 0
@@ -111,13 +121,14 @@ def _rule(
     when = s.section("when", required=True)
     s.close()
     where = f"{report.path}:{s.line}"
-    trigger = subject = None
+    trigger: Trigger | None = None
+    subject = None
     if when is not None and when.valid:
         written = when.written()
         for key in written:
             if key in TRIGGERS:
                 subject = when.text(key, required=True)
-                trigger = key if subject is not None else None
+                trigger = Trigger(key) if subject is not None else None
         if len([k for k in written if k in TRIGGERS]) != 1:
             report.error(
                 when.line, f"'when' of {s.what} needs exactly one of {', '.join(TRIGGERS)}"
@@ -130,15 +141,15 @@ def _rule(
         except DomainError as e:
             report.error(s.key_line("goal"), f"{s.what}: {e}")
             goal = None
-    trigger_line = when.key_line(trigger) if when is not None and trigger else s.line
-    if trigger in ("permanent_fault", "diagnosis") and subject not in robot.components:
+    trigger_line = when.key_line(trigger.value) if when is not None and trigger else s.line
+    if trigger in (Trigger.PERMANENT_FAULT, Trigger.DIAGNOSIS) and subject not in robot.components:
         report.error(
             trigger_line,
             f"{s.what} names unknown component '{subject}'"
             f"{did_you_mean(str(subject), sorted(robot.components))}",
         )
         trigger = None
-    if trigger == "condition" and subject is not None:
+    if trigger is Trigger.CONDITION and subject is not None:
         try:
             parse(subject, signature, "condition")
         except DomainError as e:
@@ -175,9 +186,9 @@ class IntegrityGoals:
         self.diagnoses = tuple(frozenset(str(n) for n in d) for d in found if isinstance(d, list))
 
     def _holds(self, rule: IntegrityRule, state: WorldState, faulty: set[str]) -> bool:
-        if rule.trigger == "permanent_fault":
+        if rule.trigger is Trigger.PERMANENT_FAULT:
             return rule.subject in faulty
-        if rule.trigger == "diagnosis":
+        if rule.trigger is Trigger.DIAGNOSIS:
             return bool(self.diagnoses) and all(rule.subject in d for d in self.diagnoses)
         try:
             condition: Expression = parse(
@@ -213,7 +224,7 @@ class IntegrityGoals:
                 self.kb.log_event("INTEGRITY_REFUSED", rule.name, {"reason": str(e)})
                 continue
             self.kb.log_event(
-                "INTEGRITY_GOAL", rule.name, {"goal": goal.id, "trigger": rule.trigger}
+                "INTEGRITY_GOAL", rule.name, {"goal": goal.id, "trigger": rule.trigger.value}
             )
             open_goals.add(rule.goal)
             posted.append(goal)

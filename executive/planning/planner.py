@@ -1,13 +1,14 @@
 """The one adapter to unified-planning's engines: every engine in a worker process.
 
-:class:`Planner` keeps a warm worker process (``python -m executive.planning.planner``) that
-has unified-planning and the engine loaded, and sends it one job at a time: build the
-problem (:mod:`executive.planning.problem`), solve it, validate the plan with a UP validator,
-and turn it into the executable partial order (:mod:`executive.planning.stn`). The worker runs
-in its own process group, under a hard timeout: when a job runs past the engine's
-timeout plus a grace period (TAMER ignores timeouts), the whole group is killed (the
-Aries and Fast Downward binaries with it) and a new worker is started for the next
-job. The worker's temp dir is private (Aries leaves files behind) and removed with it.
+:class:`Planner` is the client side. It keeps a warm worker process
+(:mod:`executive.planning.planner_worker`, run as ``python -m
+executive.planning.planner_worker``) that has unified-planning and the engine loaded,
+and sends it one job at a time; this module also owns what both sides share: the
+planning task and result types and the framing of messages. The worker runs in its own
+process group, under a hard timeout: when a job runs past the engine's timeout plus a
+grace period (TAMER ignores timeouts), the whole group is killed (the Aries and Fast
+Downward binaries with it) and a new worker is started for the next job. The worker's
+temp dir is private (Aries leaves files behind) and removed with it.
 
 Engines: ``kairos`` (default, up-kairos), ``aries``, ``fast-downward`` (classical
 domains), ``tamer`` (the optional ``tamer`` extra), and plugins: a UP engine class
@@ -30,8 +31,7 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Iterator
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from importlib import metadata
 from pathlib import Path
 from typing import IO, Any
@@ -42,7 +42,7 @@ from executive.planning.goals import GoalSpec
 from executive.planning.partial_order import PartialOrderPlan
 from executive.planning.problem import World
 from knowledge.description import DEFAULT_ENGINE
-from knowledge.errors import DuraError, PlanningError
+from knowledge.errors import PlanningError
 
 log = logging.getLogger("dura.planner")
 
@@ -50,10 +50,10 @@ BUILTIN_ENGINES = ("kairos", "aries", "fast-downward", "tamer")
 PLUGIN_GROUP = "dura.planners"
 TMP_PREFIX = "dura-planner-"  # the worker's temporary folder (engines write there)
 WORKER_PID = "worker.pid"  # in that folder: whose it is
+WORKER_MODULE = "executive.planning.planner_worker"  # run as python -m
 ABANDONED = 3600.0  # seconds after which a folder without a worker pid is left over
 STARTUP_TIMEOUT = 120.0  # seconds for a worker to import unified-planning and the engines
 _HEADER = struct.Struct("!Q")
-_LOG_TAIL = 40  # lines of engine output kept in a result
 
 
 class PlanStatus(enum.Enum):
@@ -181,7 +181,7 @@ class Planner:
         env = {**os.environ, "TMPDIR": str(self._tmp), "PYTHONPATH": path}
         with open(self._tmp / "worker.log", "wb") as stderr:
             self._process = subprocess.Popen(
-                [sys.executable, "-m", "executive.planning.planner"],
+                [sys.executable, "-m", WORKER_MODULE],
                 stdin=subprocess.PIPE,
                 stdout=subprocess.PIPE,
                 stderr=stderr,
@@ -231,7 +231,7 @@ class Planner:
         if self._ready:
             return
         try:
-            _receive(stream, time.monotonic() + STARTUP_TIMEOUT)
+            receive_frame(stream, time.monotonic() + STARTUP_TIMEOUT)
         except (TimeoutError, OSError, EOFError, pickle.UnpicklingError) as e:
             reason = self._worker_log() or str(e) or type(e).__name__
             self._reap()
@@ -250,8 +250,8 @@ class Planner:
             raise PlanningError("the planner worker is not running")
         try:
             self._wait_ready(process.stdout)
-            _send(process.stdin, message)
-            return _receive(process.stdout, time.monotonic() + timeout)
+            send_frame(process.stdin, message)
+            return receive_frame(process.stdout, time.monotonic() + timeout)
         except TimeoutError:
             self._reap()
             raise
@@ -316,10 +316,11 @@ def _sweep(folder: Path) -> None:
             shutil.rmtree(stale, ignore_errors=True)
 
 
-# --- framing --------------------------------------------------------------------------
+# --- framing (both sides) ----------------------------------------------------------------
 
 
-def _send(stream: IO[bytes], message: object) -> None:
+def send_frame(stream: IO[bytes], message: object) -> None:
+    """Write one message: its length, then its pickle."""
     data = pickle.dumps(message, protocol=pickle.HIGHEST_PROTOCOL)
     stream.write(_HEADER.pack(len(data)) + data)
     stream.flush()
@@ -341,214 +342,7 @@ def _read_exactly(stream: IO[bytes], size: int, deadline: float | None) -> bytes
     return b"".join(chunks)
 
 
-def _receive(stream: IO[bytes], deadline: float | None) -> Any:
+def receive_frame(stream: IO[bytes], deadline: float | None) -> Any:
+    """Read one message (``TimeoutError`` past ``deadline``, ``EOFError`` at the end)."""
     (size,) = _HEADER.unpack(_read_exactly(stream, _HEADER.size, deadline))
     return pickle.loads(_read_exactly(stream, size, deadline))  # noqa: S301 (our own worker)
-
-
-# --- the worker process ------------------------------------------------------------------
-
-
-def _capturing_output(method: Any) -> Any:
-    """Run a worker method with the engines' output (fd 1 and 2) going to a file, and put
-    the file's last lines into the result's log."""
-
-    def wrapped(self: _Worker, *args: Any) -> PlanResult:
-        sys.stdout.flush()
-        sys.stderr.flush()
-        saved = [os.dup(1), os.dup(2)]
-        with open(self.output, "w+b") as capture:
-            os.dup2(capture.fileno(), 1)
-            os.dup2(capture.fileno(), 2)
-            try:
-                res: PlanResult = method(self, *args)
-            finally:
-                sys.stdout.flush()
-                sys.stderr.flush()
-                os.dup2(saved[0], 1)
-                os.dup2(saved[1], 2)
-                for fd in saved:
-                    os.close(fd)
-            capture.seek(0)
-            output = capture.read().decode(errors="replace").splitlines()
-        tail = tuple(line for line in output[-_LOG_TAIL:] if line.strip())
-        return replace(res, log=tail + res.log) if res.status is not PlanStatus.SOLVED else res
-
-    return wrapped
-
-
-@dataclass
-class _Worker:
-    """The worker's state: UP's environment, engines and parsed domains, kept warm."""
-
-    output: Path
-    engines: dict[str, Any] = field(default_factory=dict)
-    domains: dict[Path, tuple[float, Any]] = field(default_factory=dict)
-    env: Any = None
-
-    def setup(self) -> None:
-        import warnings
-
-        from unified_planning.environment import get_environment
-
-        warnings.simplefilter("ignore")  # UP warns about what it cannot establish; we check
-        self.env = get_environment()
-        self.env.credits_stream = None
-        import up_kairos
-
-        up_kairos.register(self.env)
-        for name, ep in plugins().items():
-            if name in self.env.factory.engines:
-                continue
-            module, _, attr = ep.value.partition(":")
-            try:
-                self.env.factory.add_engine(name, module, attr)
-            except Exception as e:
-                print(f"planner plugin '{name}' ({ep.value}) failed to load: {e}", file=sys.stderr)
-
-    def domain(self, path: Path) -> Any:
-        from knowledge.domain import parse
-
-        mtime = path.stat().st_mtime
-        cached = self.domains.get(path)
-        if cached is None or cached[0] != mtime:
-            cached = (mtime, parse(path))
-            self.domains[path] = cached
-        return cached[1]
-
-    def engine(self, name: str) -> Any:
-        if name not in self.engines:
-            from unified_planning.shortcuts import OneshotPlanner
-
-            if name not in self.env.factory.engines:
-                raise PlanningError(f"engine '{name}' is not installed")
-            self.engines[name] = OneshotPlanner(name=name)
-        return self.engines[name]
-
-    def prepare(self, engine: str, domain: Path) -> bool:
-        self.domain(domain)
-        self.engine(engine)
-        return True
-
-    @_capturing_output
-    def solve(self, engine_name: str, task: PlanningTask, timeout: float) -> PlanResult:
-        from executive.planning.problem import build
-
-        def result(status: PlanStatus, *lines: str, **more: Any) -> PlanResult:
-            return PlanResult(status, more.get("plan"), engine_name, tuple(lines), 0.0,
-                              more.get("validator", ""))  # fmt: skip
-
-        try:
-            problem = build(self.domain(task.domain), task.world, task.goals, task.blocked)
-            engine = self.engine(engine_name)
-        except DuraError as e:
-            return result(PlanStatus.ERROR, str(e))
-        missing = _missing_features(engine, problem)
-        if missing:
-            return result(PlanStatus.UNSUPPORTED, f"unsupported features: {missing}")
-        try:
-            answer = engine.solve(problem, timeout=timeout)
-        except Exception as e:  # an engine's own failure is a result, not a crash
-            return result(PlanStatus.ERROR, f"{type(e).__name__}: {e}")
-        lines = [str(m.message).splitlines()[0] for m in answer.log_messages or () if m.message]
-        status = _status(answer.status.name)
-        if answer.plan is None or status is not PlanStatus.SOLVED:
-            return result(PlanStatus.ERROR if status is PlanStatus.SOLVED else status, *lines)
-        valid, validator, reason = _validate(problem, answer.plan)
-        if not valid:
-            return result(PlanStatus.INVALID_PLAN, *lines, reason, validator=validator)
-        from executive.planning.stn import partial_order
-
-        try:
-            plan = partial_order(problem, answer.plan)
-        except DuraError as e:
-            return result(PlanStatus.ERROR, *lines, str(e))
-        return result(PlanStatus.SOLVED, *lines, plan=plan, validator=validator)
-
-
-def _status(name: str) -> PlanStatus:
-    return {
-        "SOLVED_SATISFICING": PlanStatus.SOLVED,
-        "SOLVED_OPTIMALLY": PlanStatus.SOLVED,
-        "INTERMEDIATE": PlanStatus.SOLVED,
-        "UNSOLVABLE_PROVEN": PlanStatus.UNSOLVABLE,
-        "UNSOLVABLE_INCOMPLETELY": PlanStatus.NOT_FOUND,
-        "TIMEOUT": PlanStatus.TIMEOUT,
-        "UNSUPPORTED_PROBLEM": PlanStatus.UNSUPPORTED,
-    }.get(name, PlanStatus.ERROR)
-
-
-def _missing_features(engine: Any, problem: Any) -> str:
-    """The features of a problem an engine declares it does not support ('' if none)."""
-    supported = engine.supported_kind().features
-    missing = sorted(f.lower() for f in problem.kind.features if f not in supported)
-    return ", ".join(missing)
-
-
-_VALIDATORS = {
-    "TimeTriggeredPlan": ("up_time_triggered_validator", "kairos-val"),
-    "SequentialPlan": ("sequential_plan_validator", "kairos-val"),
-}
-
-
-def _validate(problem: Any, plan: Any) -> tuple[bool, str, str]:
-    """Check a plan with the first UP validator that supports the problem (UP's own
-    before Kairos', so that a Kairos plan gets an independent check).
-
-    Returns (valid, validator name, reason if invalid).
-    """
-    from unified_planning.engines import ValidationResultStatus
-    from unified_planning.shortcuts import PlanValidator
-
-    names = _VALIDATORS.get(type(plan).__name__, ())
-    if not names:
-        return False, "", f"no validator for a {type(plan).__name__}"
-    chosen = next((n for n in names if PlanValidator(name=n).supports(problem.kind)), names[0])
-    with PlanValidator(name=chosen) as validator:
-        answer = validator.validate(problem, plan)
-    if answer.status == ValidationResultStatus.VALID:
-        return True, chosen, ""
-    messages = [str(m.message).splitlines()[0] for m in answer.log_messages or ()]
-    reason = answer.reason.name.lower() if answer.reason is not None else "unknown"
-    return False, chosen, f"{chosen}: {reason} {'; '.join(messages)}".strip()
-
-
-def _frames(stream: IO[bytes]) -> Iterator[Any]:
-    while True:
-        try:
-            yield _receive(stream, None)
-        except EOFError:
-            return
-
-
-def serve() -> None:
-    """The worker's main loop: answer messages on stdin until it closes."""
-    protocol_in = os.fdopen(os.dup(0), "rb")
-    protocol_out = os.fdopen(os.dup(1), "wb")
-    devnull = os.open(os.devnull, os.O_RDWR)
-    os.dup2(devnull, 0)
-    os.dup2(2, 1)  # stray prints go to the worker log, never into the protocol
-    worker = _Worker(Path(tempfile.gettempdir()) / "engine-output.txt")
-    worker.setup()
-    _send(protocol_out, "ready")
-    with contextlib.suppress(BrokenPipeError):  # dura died while the worker planned
-        for message in _frames(protocol_in):
-            kind, engine, *args = message
-            try:
-                answer = getattr(worker, kind)(engine, *args)
-            except DuraError as e:
-                answer = PlanResult(PlanStatus.ERROR, None, engine, (str(e),))
-            _send(protocol_out, answer)
-    # the input closed: dura is done with this worker, or died without cleaning up
-    # (SIGKILL); either way the engines' temporary files go with it
-    own = Path(tempfile.gettempdir())
-    if own.name.startswith(TMP_PREFIX):
-        shutil.rmtree(own, ignore_errors=True)
-
-
-if __name__ == "__main__":
-    from executive.planning.planner import (
-        serve as _serve,  # so pickled classes are executive.planning.planner's
-    )
-
-    _serve()

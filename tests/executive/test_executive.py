@@ -175,7 +175,7 @@ def test_sigkill_of_the_executive_takes_all_its_components_with_it(
         # every child goes: the three components and the planner's worker
         children = psutil.Process(process.pid).children(recursive=True)
         assert components <= {c.pid for c in children}
-        (planner,) = [c for c in children if "executive.planning.planner" in c.cmdline()]
+        (planner,) = [c for c in children if "executive.planning.planner_worker" in c.cmdline()]
         scratch = Path(planner.environ()["TMPDIR"])  # the engines' temporary files
         assert scratch.is_dir()
         process.kill()

@@ -14,7 +14,14 @@ import pytest
 
 from knowledge.errors import KnowledgeError
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.records import Fact, GoalState, PlanState, PlanStep, TaskState
+from knowledge.records import (
+    GOAL_TRANSITIONS,
+    Fact,
+    GoalState,
+    PlanState,
+    PlanStep,
+    TaskState,
+)
 from knowledge.schema import VERSION
 from tests.conftest import ROOT
 
@@ -56,6 +63,59 @@ def test_an_unknown_goal_is_an_error_and_changes_nothing(kb: KnowledgeBase) -> N
     with pytest.raises(KnowledgeError, match="no goal 42"):
         kb.set_goal_state(42, GoalState.CANCELLED)
     assert kb.events() == []
+
+
+def test_a_cancelled_goal_cannot_be_planned_again(kb: KnowledgeBase) -> None:
+    goal = kb.add_goal("(picture_taken lab)")
+    kb.set_goal_state(goal.id, GoalState.CANCELLED)
+    with pytest.raises(KnowledgeError, match=r"^goal 1: cannot go from cancelled to planned$"):
+        kb.set_goal_state(goal.id, GoalState.PLANNED)
+    assert kb.goal(goal.id).state is GoalState.CANCELLED
+    assert [e.kind for e in kb.events()] == ["GOAL_ADDED", "GOAL_CANCELLED"]
+
+
+@pytest.mark.parametrize("end", [s for s in GoalState if not s.is_open])
+def test_a_goal_that_ended_stays_as_it_ended(kb: KnowledgeBase, end: GoalState) -> None:
+    goal = kb.add_goal("(a)")
+    kb.set_goal_state(goal.id, end)
+    for state in GoalState:
+        with pytest.raises(KnowledgeError, match=f"cannot go from {end.value} to {state.value}"):
+            kb.set_goal_state(goal.id, state)
+    assert GOAL_TRANSITIONS[end] == frozenset()
+
+
+def test_an_open_goal_is_planned_before_it_executes_and_may_be_planned_again(
+    kb: KnowledgeBase,
+) -> None:
+    goal = kb.add_goal("(a)")
+    with pytest.raises(KnowledgeError, match="goal 1: cannot go from pending to executing"):
+        kb.set_goal_state(goal.id, GoalState.EXECUTING)
+    for state in (GoalState.PLANNED, GoalState.EXECUTING, GoalState.PLANNED, GoalState.PLANNED):
+        assert kb.set_goal_state(goal.id, state).state is state
+    assert kb.set_goal_state(goal.id, GoalState.UNREACHABLE, "no plan").reason == "no plan"
+
+
+def test_a_superseded_plan_cannot_fail_or_succeed_afterwards(kb: KnowledgeBase) -> None:
+    first = kb.store_plan([PlanStep(0, "move_to", ("dock", "lab"), 0.0, 4.0)])
+    kb.set_plan_state(first.id, PlanState.EXECUTING)
+    kb.store_plan([])
+    for state in (PlanState.FAILED, PlanState.SUCCEEDED, PlanState.EXECUTING):
+        with pytest.raises(
+            KnowledgeError, match=f"^plan 1: cannot go from superseded to {state.value}$"
+        ):
+            kb.set_plan_state(first.id, state, "too late")
+    assert kb.plan(first.id).state is PlanState.SUPERSEDED and kb.plan(first.id).reason == ""
+    with pytest.raises(KnowledgeError, match="no plan 9"):
+        kb.set_plan_state(9, PlanState.FAILED)
+
+
+def test_a_refused_transition_rolls_back_its_whole_transaction(kb: KnowledgeBase) -> None:
+    goal = kb.add_goal("(a)")
+    kb.set_goal_state(goal.id, GoalState.ACHIEVED)
+    with pytest.raises(KnowledgeError, match="cannot go from achieved to failed"), kb.transaction():
+        kb.set_fact(Fact("b"))
+        kb.set_goal_state(goal.id, GoalState.FAILED, "too late")
+    assert kb.facts() == [] and kb.goal(goal.id).state is GoalState.ACHIEVED
 
 
 def test_a_failed_transaction_leaves_nothing_behind(kb: KnowledgeBase) -> None:

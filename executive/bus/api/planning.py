@@ -113,7 +113,8 @@ class EventsReply(Payload):
 @dataclass(frozen=True)
 class StatusReply(Payload):
     """Everything at a glance. ``tasks`` and ``components`` come from the task executor
-    and the launcher: a list, or ``{"error": reason}`` when that service did not answer."""
+    and the launcher: a list, or ``{"error": reason}`` when that service did not answer.
+    ``planning`` says whether the goal planner is computing a plan, since when and why."""
 
     robot: str
     goals: list[dict[str, Any]]
@@ -123,6 +124,7 @@ class StatusReply(Payload):
     faults: list[dict[str, Any]]
     tasks: Any = None
     components: Any = None
+    planning: dict[str, Any] | None = None
 
 
 GOAL_ADD = Verb(api("goal/add"), GoalAdd, GoalReply)

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import os
+import threading
+import time
 from collections.abc import Callable, Iterator
+from pathlib import Path
 
 import pytest
 
@@ -11,9 +15,13 @@ from executive.planning.goals import submit
 from executive.planning.partial_order import Step
 from executive.planning.plan_executer import PlanExecuter, StepReport, StepTask
 from executive.planning.planner import Planner
+from knowledge.errors import KnowledgeError
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Goal, GoalState
+from tests.conftest import ROOT
+from tests.executive.planning import slow_engine
 from tests.executive.planning.planning_cases import (
+    USECASE_DOMAIN,
     kairos_fixture,  # noqa: F401 (a fixture)
     usecase_domain,
     usecase_kb_fixture,  # noqa: F401 (a fixture)
@@ -221,3 +229,90 @@ def test_a_goal_fails_once_its_plans_failed_too_often(
     assert record.state is GoalState.FAILED
     assert record.reason.startswith("2 plans for it failed, the last because step take_picture")
     assert len(ex.kb.plans()) == 2
+
+
+@pytest.fixture
+def slow_kairos(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Planner]:
+    """Kairos as a plugin that takes 2 s for every plan (tests/executive/planning/slow_engine.py)."""
+    plugins = slow_engine.register(tmp_path / "plugins")
+    monkeypatch.syspath_prepend(str(plugins))
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join((str(plugins), str(ROOT))))
+    with Planner(slow_engine.NAME, timeout=10.0) as planner:
+        planner.start(USECASE_DOMAIN)
+        yield planner
+
+
+def test_a_goal_cancelled_during_the_search_is_cancelled_at_once_and_never_planned(
+    usecase_kb: KnowledgeBase, slow_kairos: Planner
+) -> None:
+    ex = Executive(usecase_kb, slow_kairos, ScriptedRunner())
+    try:
+        with ex.kb.transaction():  # both goals in the same round
+            office = submit(ex.kb, usecase_domain(), "(picture_taken office)", priority=5)
+            lab = submit(ex.kb, usecase_domain(), "(robot_at lab)")
+        ex.goals.wake("two goals added")
+        eventually(lambda: ex.goals.status()["phase"] == "searching")
+
+        began = time.monotonic()
+        cancelled = ex.goals.cancel(office.id)
+        took = time.monotonic() - began
+
+        assert cancelled.state is GoalState.CANCELLED
+        assert took < 1.0  # the goal planner's thread does not wait for the search
+        assert ex.goals.status()["phase"] == "searching"
+        eventually(lambda: ex.state(lab) is GoalState.ACHIEVED)
+        first, again = ex.kb.events(kind="PLANNING")
+        assert first.data["goals"] == [office.id, lab.id]
+        assert again.data == {
+            "reason": f"goals {office.id} cancelled while planning",
+            "goals": [lab.id],
+            "blocked": [],
+        }
+        assert again.stamp - first.stamp >= slow_engine.THINK
+        assert ex.state(office) is GoalState.CANCELLED
+        history = [e.kind for e in ex.kb.events() if e.subject == f"goal {office.id}"]
+        assert history == ["GOAL_ADDED", "GOAL_CANCELLED"]
+        assert [p.goal_ids for p in ex.kb.plans()] == [(lab.id,)]
+        assert ex.runner.labels() == ["move_to(dock, lab)"]
+        assert [e.data["goals"] for e in ex.kb.events(kind="PLAN_START")] == [[lab.id]]
+        eventually(lambda: not ex.goals.status()["planning"])
+        print(f"search with the cancel: {again.stamp - first.stamp:.2f} s")
+    finally:
+        ex.stop()
+
+
+def test_a_cancelled_goal_stays_cancelled_and_a_second_cancel_says_so(
+    executive: Callable[..., Executive],
+) -> None:
+    ex = executive(ScriptedRunner(held={"move_to"}))
+    goal = ex.submit("(robot_at office)")
+    ex.runner.wait_for("move_to(dock, office)")
+    assert ex.goals.cancel(goal.id).state is GoalState.CANCELLED
+    with pytest.raises(KnowledgeError, match=f"^goal {goal.id} is cancelled already$"):
+        ex.goals.cancel(goal.id)
+    with pytest.raises(KnowledgeError, match=r"^no goal 99$"):
+        ex.goals.cancel(99)
+    eventually(lambda: not ex.goals.status()["planning"])
+    assert ex.state(goal) is GoalState.CANCELLED
+    kinds = [e.kind for e in ex.kb.events() if e.subject == f"goal {goal.id}"]
+    assert kinds[-1] == "GOAL_CANCELLED" and kinds.count("GOAL_CANCELLED") == 1
+
+
+def test_the_executer_reports_and_the_goal_planner_writes_every_goal_state(
+    executive: Callable[..., Executive],
+) -> None:
+    ex = executive()
+    writers: list[str] = []
+    original = ex.kb.set_goal_state
+
+    def set_goal_state(goal_id: int, state: GoalState, reason: str = "") -> Goal:
+        writers.append(threading.current_thread().name)
+        return original(goal_id, state, reason)
+
+    ex.kb.set_goal_state = set_goal_state  # type: ignore[method-assign]
+    goal = ex.submit("(picture_taken lab)")
+    eventually(ex.settled)
+    assert ex.state(goal) is GoalState.ACHIEVED
+    kinds = [e.kind for e in ex.kb.events() if e.subject == f"goal {goal.id}"]
+    assert kinds == ["GOAL_ADDED", "GOAL_PLANNED", "GOAL_EXECUTING", "GOAL_ACHIEVED"]
+    assert set(writers) == {"goal planner"}

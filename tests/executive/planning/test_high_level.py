@@ -7,6 +7,7 @@ task executor (tested on its own), so these tests are about the goal interface.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import time
@@ -16,14 +17,20 @@ from pathlib import Path
 
 import pytest
 
+from executive.bus.api.planning import EVENTS as EVENTS_API
+from executive.bus.api.planning import GOAL_LIST, GOAL_SHOW, GoalQuery
 from executive.bus.keys import EVENTS
 from executive.bus.service import Context
 from executive.bus.session import Bus
+from executive.planning.goals import submit
 from executive.planning.high_level import HighLevel
+from executive.testing.harness import robot_variant
+from knowledge.errors import DuraError
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Fact, GoalState
 from knowledge.robot import load_robot
-from tests.conftest import USECASE, run_dura, wait_for
+from tests.conftest import ROOT, USECASE, run_dura, wait_for
+from tests.executive.planning import slow_engine
 from tests.executive.planning.scripted_runner import ScriptedRunner
 
 Run = Callable[..., subprocess.CompletedProcess[str]]
@@ -188,3 +195,90 @@ def test_without_an_executive_goal_commands_say_so(endpoint: str) -> None:
     done = run_dura("goal", "list", "--robot", str(USECASE), "--endpoint", endpoint)
     assert done.returncode == 1
     assert done.stderr.startswith(f"dura: no executive for robot 'usecase' at {endpoint}")
+
+
+CLI_THINK = 4.0  # seconds a plan takes when the cancel comes from ``dura``: a fresh
+# interpreter needs up to 2 s to start on a busy machine
+
+
+@pytest.fixture
+def slow_robot(tmp_path: Path, endpoint: str, monkeypatch: pytest.MonkeyPatch) -> Iterator[Robot]:
+    """The use-case robot planning with a Kairos that takes CLI_THINK s for every plan."""
+    plugins = slow_engine.register(tmp_path / "plugins")
+    monkeypatch.syspath_prepend(str(plugins))
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join((str(plugins), str(ROOT))))
+    monkeypatch.setenv(slow_engine.THINK_VARIABLE, str(CLI_THINK))
+    variant = robot_variant(USECASE, tmp_path / "robot", {"planner": {"engine": slow_engine.NAME}})
+    description = load_robot(variant)
+    runner = ScriptedRunner(delay=0.05)
+    with (
+        Bus(description.name, name="executive", endpoint=endpoint, listen=True) as bus,
+        KnowledgeBase(tmp_path / "kb.db") as kb,
+    ):
+        high = HighLevel(Context(description, bus, kb), runner)
+        high.start()
+        try:
+
+            def dura(*args: str) -> subprocess.CompletedProcess[str]:
+                return run_dura(*args, "--robot", str(USECASE), "--endpoint", endpoint)
+
+            yield Robot(kb, bus, runner, high, dura)
+        finally:
+            high.stop()
+
+
+def test_a_goal_cancelled_while_its_plan_is_computed_is_never_planned_or_executed(
+    slow_robot: Robot,
+) -> None:
+    robot = slow_robot
+    domain = robot.high.domain
+    with robot.kb.transaction():  # both goals in the same round
+        office = submit(robot.kb, domain, "(picture_taken office)", priority=5)
+        lab = submit(robot.kb, domain, "(robot_at lab)")
+    robot.high.goals.wake("two goals added")
+    assert wait_for(lambda: robot.high.goals.status()["phase"] == "searching", 30)
+    assert robot.kb.events(kind="PLANNING")[0].data["goals"] == [office.id, lab.id]
+
+    cancel = robot.dura("goal", "cancel", str(office.id))  # while kairos-slow plans
+
+    assert cancel.returncode == 0, cancel.stderr
+    assert cancel.stdout.strip() == f"goal {office.id}: cancelled"
+    assert wait_for(lambda: state_of(robot, lab.id) is GoalState.ACHIEVED, 60)
+    first, again = robot.kb.events(kind="PLANNING")
+    (cancelled,) = robot.kb.events(kind="GOAL_CANCELLED")
+    assert first.stamp < cancelled.stamp < again.stamp  # the cancel came during the search
+    assert again.data["reason"] == f"goals {office.id} cancelled while planning"
+    assert again.data["goals"] == [lab.id]
+    assert again.stamp - first.stamp >= CLI_THINK
+    # the cancelled goal was never planned or executed: one plan, for the other goal
+    assert state_of(robot, office.id) is GoalState.CANCELLED
+    history = [e.kind for e in robot.kb.events() if e.subject == f"goal {office.id}"]
+    assert history == ["GOAL_ADDED", "GOAL_CANCELLED"]
+    assert [p.goal_ids for p in robot.kb.plans()] == [(lab.id,)]
+    assert robot.runner.labels() == ["move_to(dock, lab)"]
+    assert [e.data["goals"] for e in robot.kb.events(kind="PLAN_START")] == [[lab.id]]
+    status = json.loads(robot.dura("status", "--json").stdout)
+    assert status["planning"]["planning"] is False
+    print(
+        f"search {again.stamp - first.stamp:.2f} s, cancel after {cancelled.stamp - first.stamp:.2f} s"
+    )
+
+
+def test_cancelling_a_goal_that_ended_says_so_and_changes_nothing(robot: Robot) -> None:
+    goal = json.loads(robot.dura("goal", "add", "(robot_at lab)", "--json").stdout)
+    assert wait_for(lambda: state_of(robot, goal["id"]) is GoalState.ACHIEVED, 60)
+    done = robot.dura("goal", "cancel", str(goal["id"]))
+    assert done.returncode == 1
+    assert done.stderr.strip() == f"dura: goal {goal['id']} is achieved already"
+    missing = robot.dura("goal", "cancel", "99")
+    assert (missing.returncode, missing.stderr.strip()) == (1, "dura: no goal 99")
+    assert state_of(robot, goal["id"]) is GoalState.ACHIEVED
+
+
+def test_a_malformed_request_is_refused_by_its_declared_type(robot: Robot) -> None:
+    with pytest.raises(DuraError, match=r"goal/show: 'id' must be an integer, not \"one\""):
+        robot.bus.request(GOAL_SHOW.key, {"id": "one"})
+    with pytest.raises(DuraError, match=r"events: 'limit' must be from 0 to"):
+        robot.bus.request(EVENTS_API.key, {"limit": -1})
+    listed = GOAL_LIST.call(robot.bus, GoalQuery([GoalState.PENDING]))
+    assert listed.goals == []

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable, Iterator
 
@@ -10,9 +11,15 @@ import pytest
 from executive.planning.expression import Atom, Const
 from executive.planning.goals import GoalSpec, submit
 from executive.planning.partial_order import Effect, PartialOrderPlan, Step
-from executive.planning.plan_executer import ExecutionLimits, PlanExecuter
+from executive.planning.plan_executer import (
+    ExecutionLimits,
+    PlanExecuter,
+    StepReport,
+    StepTask,
+)
 from executive.planning.planner import Planner, PlanningTask
 from executive.planning.problem import World
+from executive.planning.state_change import Change, GoalChange, PlanChange
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Fact, GoalState, PlanState
 from tests.executive.planning.planning_cases import (
@@ -55,6 +62,8 @@ class Run:
         stored = self.kb.store_plan(
             result.plan.records(), engine="kairos", goal_ids=[g.id for g in specs]
         )
+        for spec in specs:  # as the goal planner does before it hands a plan over
+            self.kb.set_goal_state(spec.id, GoalState.PLANNED)
         return result.plan, stored.id, specs
 
     def execute(self, kairos: Planner, *goals: str) -> tuple[PartialOrderPlan, int, list[GoalSpec]]:
@@ -226,3 +235,60 @@ def test_a_step_that_cannot_start_makes_the_plan_fail(
     eventually(lambda: bool(r.replans))
     assert r.replans == ["step move_to(dock, lab) cannot start: (robot_at dock) does not hold"]
     assert r.runner.tasks == []
+
+
+class Blocking(ScriptedRunner):
+    """A runner whose ``run`` does not return until released (a slow task executor)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.entered = threading.Event()
+        self.release = threading.Event()
+
+    def run(self, step: Step, plan_id: int, report: StepReport) -> StepTask:
+        self.entered.set()
+        self.release.wait(30)
+        return super().run(step, plan_id, report)
+
+
+def test_status_answers_from_a_snapshot_while_the_executer_is_busy(
+    run: Callable[..., Run], kairos: Planner
+) -> None:
+    runner = Blocking()
+    r = run(runner)
+    plan, plan_id, goals = r.plan(kairos, "(robot_at lab)")
+    handing_over = threading.Thread(target=r.executer.execute, args=(plan, plan_id, goals))
+    handing_over.start()
+    try:
+        assert runner.entered.wait(10)  # the executer's thread waits in the runner
+        began = time.monotonic()
+        status = r.executer.status()
+        assert time.monotonic() - began < 0.5
+        assert status["plan"] is None  # as of the last job: the plan is not handed over yet
+    finally:
+        runner.release.set()
+        handing_over.join(10)
+    eventually(lambda: r.executer.status()["plan"] == plan_id)
+    eventually(lambda: r.kb.plan(plan_id).state is PlanState.SUCCEEDED)
+    assert r.executer.status()["steps"] == [
+        {"index": 0, "step": "move_to(dock, lab)", "state": "ended"}
+    ]
+
+
+def test_an_executer_with_an_owner_reports_goal_and_plan_changes_instead_of_writing_them(
+    run: Callable[..., Run], kairos: Planner
+) -> None:
+    r = run()
+    told: list[Change] = []
+    r.executer.report_to(told.append)
+    _plan, plan_id, goals = r.execute(kairos, "(robot_at lab)")
+    eventually(lambda: PlanChange(plan_id, PlanState.SUCCEEDED) in told)
+    goal = goals[0].id
+    assert told == [
+        PlanChange(plan_id, PlanState.EXECUTING),
+        GoalChange(goal, GoalState.EXECUTING),
+        GoalChange(goal, GoalState.ACHIEVED),
+        PlanChange(plan_id, PlanState.SUCCEEDED),
+    ]
+    assert r.kb.goal(goal).state is GoalState.PLANNED  # the owner had not applied them
+    assert r.kb.plan(plan_id).state is PlanState.PENDING

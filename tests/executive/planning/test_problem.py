@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from executive.planning.goals import GoalSpec, remaining, specs, submit
+from executive.planning.goals import GoalSpec, Refusal, RefusalCause, remaining, specs, submit
 from executive.planning.problem import build, read_world, seed_world
 from knowledge.domain import parse
 from knowledge.errors import DomainError
@@ -65,8 +65,9 @@ def test_goals_whose_deadline_passed_or_whose_objects_are_gone_are_not_planned(
     now = time.time() + 11
     usable, refused = specs(usecase_kb.open_goals(), signature_of(usecase_kb), now)
     assert [(g.id, g.priority) for g in usable] == [(fine.id, 2)]
-    assert refused[late.id] == "its deadline of 10 s passed"
-    assert "unknown object 'office'" in refused[gone.id]
+    assert refused[late.id] == Refusal(RefusalCause.DEADLINE_PASSED, "its deadline of 10 s passed")
+    assert refused[gone.id].cause is RefusalCause.INVALID
+    assert "unknown object 'office'" in refused[gone.id].reason
     assert remaining(late, late.created + 4) == pytest.approx(6)
 
 

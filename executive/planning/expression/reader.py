@@ -1,221 +1,37 @@
-"""Ground PDDL expressions over the knowledge base's facts: goals, conditions, effects.
+"""Reading expressions from PDDL text against a :class:`Signature`.
 
-Goals, the conditions of plan steps and the conditions of integrity rules are all
-ground expressions: a small tree of frozen nodes with no unified-planning objects in
-it, so the plan executer and the CLI evaluate them without loading a planner.
-Quantifiers are expanded over the objects known when the text is read.
-
-Text is read against a :class:`Signature` (the domain's predicates, functions and
-types, and the objects), so an unknown name, a wrong arity or an object of the wrong
-type is refused with a one-line reason: ``goal '(picture_taken lob)': unknown object
-'lob' (did you mean 'lab'?)``.
+Text is read against a signature (the domain's predicates, functions and types, and
+the objects), so an unknown name, a wrong arity or an object of the wrong type is
+refused with a one-line reason: ``goal '(picture_taken lob)': unknown object 'lob' (did
+you mean 'lab'?)``. Quantifiers are expanded over the objects known when the text is
+read.
 """
 
 from __future__ import annotations
 
-import operator
 import re
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Union
 
+from executive.planning.expression.nodes import (
+    COMPARISONS,
+    FALSE,
+    TRUE,
+    Arith,
+    Atom,
+    Compare,
+    Const,
+    Expression,
+    Not,
+    Or,
+    Value,
+    conjunction,
+)
 from knowledge.domain import DomainInfo
 from knowledge.errors import DomainError
 from knowledge.records import Fact
 from knowledge.yamlsource import did_you_mean
-
-# --- the tree ------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Const:
-    """A truth value or a number."""
-
-    value: bool | float
-
-    def __str__(self) -> str:
-        if isinstance(self.value, bool):
-            return "(and)" if self.value else "(or)"
-        return f"{self.value:g}"
-
-
-@dataclass(frozen=True)
-class Atom:
-    """A ground predicate: true when the knowledge base holds the fact."""
-
-    name: str
-    args: tuple[str, ...] = ()
-
-    def __str__(self) -> str:
-        return "(" + " ".join((self.name, *self.args)) + ")"
-
-
-@dataclass(frozen=True)
-class Value:
-    """A ground numeric function: the number the knowledge base holds for it."""
-
-    name: str
-    args: tuple[str, ...] = ()
-
-    def __str__(self) -> str:
-        return "(" + " ".join((self.name, *self.args)) + ")"
-
-
-@dataclass(frozen=True)
-class Not:
-    arg: Expression
-
-    def __str__(self) -> str:
-        return f"(not {self.arg})"
-
-
-@dataclass(frozen=True)
-class And:
-    args: tuple[Expression, ...]
-
-    def __str__(self) -> str:
-        return "(and" + "".join(f" {a}" for a in self.args) + ")"
-
-
-@dataclass(frozen=True)
-class Or:
-    args: tuple[Expression, ...]
-
-    def __str__(self) -> str:
-        return "(or" + "".join(f" {a}" for a in self.args) + ")"
-
-
-@dataclass(frozen=True)
-class Compare:
-    """A numeric comparison: ``op`` is one of ``< <= > >= =``."""
-
-    op: str
-    left: Expression
-    right: Expression
-
-    def __str__(self) -> str:
-        return f"({self.op} {self.left} {self.right})"
-
-
-@dataclass(frozen=True)
-class Arith:
-    """Numeric arithmetic: ``op`` is one of ``+ - * /``; ``(- x)`` negates."""
-
-    op: str
-    args: tuple[Expression, ...]
-
-    def __str__(self) -> str:
-        return f"({self.op}" + "".join(f" {a}" for a in self.args) + ")"
-
-
-Expression = Union[Const, Atom, Value, Not, And, Or, Compare, Arith]  # noqa: UP007 (runtime alias)
-
-TRUE = Const(True)
-FALSE = Const(False)
-
-COMPARISONS: Mapping[str, Callable[[float, float], bool]] = {
-    "<": operator.lt,
-    "<=": operator.le,
-    ">": operator.gt,
-    ">=": operator.ge,
-    "=": operator.eq,
-}
-
-
-def conjunction(parts: Iterable[Expression]) -> Expression:
-    """The conjunction of parts, flattened; ``TRUE`` for none."""
-    flat: list[Expression] = []
-    for p in parts:
-        if isinstance(p, And):
-            flat.extend(p.args)
-        elif p != TRUE:
-            flat.append(p)
-    if not flat:
-        return TRUE
-    return flat[0] if len(flat) == 1 else And(tuple(flat))
-
-
-def atoms(expression: Expression) -> frozenset[tuple[str, tuple[str, ...]]]:
-    """The ground atoms and functions an expression mentions, as (name, args)."""
-    found: set[tuple[str, tuple[str, ...]]] = set()
-
-    def walk(e: Expression) -> None:
-        if isinstance(e, (Atom, Value)):
-            found.add((e.name, e.args))
-        elif isinstance(e, Not):
-            walk(e.arg)
-        elif isinstance(e, (And, Or, Arith)):
-            for a in e.args:
-                walk(a)
-        elif isinstance(e, Compare):
-            walk(e.left)
-            walk(e.right)
-
-    walk(expression)
-    return frozenset(found)
-
-
-# --- evaluation ----------------------------------------------------------------------
-
-
-class WorldState:
-    """The facts of the knowledge base, for evaluating expressions (closed world)."""
-
-    def __init__(self, facts: Iterable[Fact] = ()) -> None:
-        self._values: dict[tuple[str, tuple[str, ...]], bool | float] = {
-            (f.name, f.args): f.value for f in facts if f.value is not False
-        }
-
-    def holds(self, expression: Expression) -> bool:
-        """Whether a condition is true; a comparison with an unknown number is false."""
-        e = expression
-        if isinstance(e, Const):
-            return bool(e.value)
-        if isinstance(e, Atom):
-            return self._values.get((e.name, e.args)) is True
-        if isinstance(e, Not):
-            return not self.holds(e.arg)
-        if isinstance(e, And):
-            return all(self.holds(a) for a in e.args)
-        if isinstance(e, Or):
-            return any(self.holds(a) for a in e.args)
-        if isinstance(e, Compare):
-            left, right = self.number(e.left), self.number(e.right)
-            return left is not None and right is not None and COMPARISONS[e.op](left, right)
-        raise TypeError(f"{e} is a number, not a condition")
-
-    def number(self, expression: Expression) -> float | None:
-        """The value of a numeric expression; ``None`` if a function has no value."""
-        e = expression
-        if isinstance(e, Const) and not isinstance(e.value, bool):
-            return float(e.value)
-        if isinstance(e, Value):
-            v = self._values.get((e.name, e.args))
-            return None if v is None or isinstance(v, bool) else float(v)
-        if isinstance(e, Arith):
-            values = [self.number(a) for a in e.args]
-            if any(v is None for v in values):
-                return None
-            nums = [v for v in values if v is not None]
-            if e.op == "-" and len(nums) == 1:
-                return -nums[0]
-            result = nums[0]
-            for v in nums[1:]:
-                if e.op == "+":
-                    result += v
-                elif e.op == "-":
-                    result -= v
-                elif e.op == "*":
-                    result *= v
-                elif v == 0:
-                    return None
-                else:
-                    result /= v
-            return result
-        raise TypeError(f"{e} is a condition, not a number")
-
-
-# --- reading text --------------------------------------------------------------------
 
 
 @dataclass(frozen=True)

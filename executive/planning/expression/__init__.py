@@ -1,0 +1,54 @@
+"""Ground PDDL expressions over the knowledge base's facts: goals, conditions, effects.
+
+- :mod:`.nodes` — the tree: frozen nodes (``Atom``, ``And``, ``Compare``, ...) with no
+  unified-planning objects in them, so the plan executer and the CLI evaluate them
+  without loading a planner;
+- :mod:`.world_state` — :class:`WorldState`, evaluating them over facts;
+- :mod:`.reader` — reading them from PDDL text against a :class:`Signature`, with a
+  one-line reason for anything unknown or ill-typed.
+
+Everything is importable from this package, as it was from the one module it grew from.
+"""
+
+from __future__ import annotations
+
+from executive.planning.expression.nodes import (
+    COMPARISONS,
+    FALSE,
+    TRUE,
+    And,
+    Arith,
+    Atom,
+    Compare,
+    Const,
+    Expression,
+    Not,
+    Or,
+    Value,
+    atoms,
+    conjunction,
+)
+from executive.planning.expression.reader import Sexp, Signature, parse, parse_fact
+from executive.planning.expression.world_state import WorldState
+
+__all__ = [
+    "COMPARISONS",
+    "FALSE",
+    "TRUE",
+    "And",
+    "Arith",
+    "Atom",
+    "Compare",
+    "Const",
+    "Expression",
+    "Not",
+    "Or",
+    "Sexp",
+    "Signature",
+    "Value",
+    "WorldState",
+    "atoms",
+    "conjunction",
+    "parse",
+    "parse_fact",
+]

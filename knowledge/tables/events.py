@@ -1,0 +1,47 @@
+"""The execution trace: an append-only log of events, heard by listeners on commit."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from typing import Any
+
+from knowledge.records import Event
+from knowledge.tables.database import Database, dump, load
+
+
+class EventLog(Database):
+    """The ``events`` table."""
+
+    def log_event(self, kind: str, subject: str = "", data: Mapping[str, Any] | None = None) -> int:
+        """Append an event to the execution trace; returns its id."""
+        stamp = time.time()
+        payload = dict(data or {})
+        with self.transaction() as db:
+            cursor = db.execute(
+                "INSERT INTO events(stamp, kind, subject, data) VALUES (?, ?, ?, ?)",
+                (stamp, kind, subject, dump(payload)),
+            )
+            event_id = int(cursor.lastrowid or 0)
+            if self._listeners:
+                self._logged.append(Event(event_id, stamp, kind, subject, payload))
+            return event_id
+
+    def events(
+        self, *, after: int = 0, kind: str | None = None, limit: int | None = None
+    ) -> list[Event]:
+        """Events with an id above ``after``, oldest first (the newest ``limit`` ones)."""
+        sql = "SELECT * FROM events WHERE id > ?"
+        params: list[Any] = [after]
+        if kind is not None:
+            sql += " AND kind = ?"
+            params.append(kind)
+        if limit is not None:
+            sql = f"SELECT * FROM ({sql} ORDER BY id DESC LIMIT ?) ORDER BY id"
+            params.append(limit)
+        else:
+            sql += " ORDER BY id"
+        return [
+            Event(r["id"], r["stamp"], r["kind"], r["subject"], load(r["data"]))
+            for r in self._query(sql, params)
+        ]
