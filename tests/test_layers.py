@@ -27,7 +27,7 @@ ALLOWED: dict[str, set[str]] = {
         "executive.bus",
         "executive.runtime",
         "executive.sdk",
-        "executive.planning.runner",
+        "executive.planning.task_runner",
         "executive.planning.partial_order",
         "executive.planning.expression",
         "knowledge",

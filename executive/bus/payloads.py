@@ -272,6 +272,9 @@ class GoalResult:
 # activated, hz, value, velocity), or a plugin's type.
 
 
+DIAGNOSIS_STATUSES = ("OK", "DIAGNOSED", "INCONSISTENT", "TIMEOUT")
+
+
 @dataclass(frozen=True)
 class DiagnosisInfo:
     """The payload of ``diagnoses``: the newest diagnosis result.
@@ -307,15 +310,25 @@ class DiagnosisInfo:
 
     @classmethod
     def from_payload(cls, payload: dict[str, Any]) -> DiagnosisInfo:
-        """Read a payload; raises ``KeyError``/``ValueError``/``TypeError`` if malformed."""
+        """Read a payload; raises ``KeyError``/``ValueError``/``TypeError`` if malformed
+        (a status that is none of the four, a diagnosis that is not a list of names)."""
+        status = payload["status"]
+        if status not in DIAGNOSIS_STATUSES:
+            raise ValueError(f"'status' must be one of {', '.join(DIAGNOSIS_STATUSES)}")
         diagnoses = payload["diagnoses"]
-        if not isinstance(diagnoses, list):
-            raise TypeError("'diagnoses' must be a list")
+        if not isinstance(diagnoses, list) or not all(
+            isinstance(d, list) and all(isinstance(n, str) for n in d) for d in diagnoses
+        ):
+            raise TypeError("'diagnoses' must be a list of lists of names")
+        conflicts, failed = payload.get("conflicts", []), payload.get("failed", [])
+        for key, value in (("conflicts", conflicts), ("failed", failed)):
+            if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+                raise TypeError(f"'{key}' must be a list of observers")
         return cls(
-            status=str(payload["status"]),
-            diagnoses=tuple(tuple(str(n) for n in d) for d in diagnoses),
-            conflicts=tuple(dict(c) for c in payload.get("conflicts", ())),
-            failed=tuple(dict(f) for f in payload.get("failed", ())),
+            status=status,
+            diagnoses=tuple(tuple(d) for d in diagnoses),
+            conflicts=tuple(conflicts),
+            failed=tuple(failed),
             elapsed=float(payload.get("elapsed", 0.0)),
             stamp=float(payload.get("stamp", 0.0)),
         )

@@ -24,6 +24,7 @@ from typing import Any
 
 from executive.bus.api import planning as api
 from executive.bus.keys import DIAGNOSES, EVENTS
+from executive.bus.payloads import DiagnosisInfo
 from executive.bus.service import Context, Service
 from executive.bus.verb import Empty
 from executive.planning.expression import Signature, parse_fact
@@ -141,8 +142,12 @@ class HighLevel(Service):
             self._check.set()
 
     def _on_diagnoses(self, message: Any) -> None:
-        payload = message.payload
-        self._diagnoses = dict(payload)
+        try:
+            payload = DiagnosisInfo.from_payload(message.payload).to_payload()
+        except (KeyError, ValueError, TypeError) as e:
+            log.warning("ignored a malformed diagnosis on %s: %s", message.key, e)
+            return
+        self._diagnoses = payload
         self.integrity.diagnosed(payload)
         self._check.set()
 
@@ -271,7 +276,10 @@ class HighLevel(Service):
 
     def _events(self, request: api.EventQuery) -> api.EventsReply:
         events = self.context.kb.events(
-            after=request.after, kind=request.kind, limit=min(request.limit, MAX_EVENTS)
+            after=request.after,
+            kind=request.kind,
+            limit=min(request.limit, MAX_EVENTS),
+            oldest=request.oldest,
         )
         return api.EventsReply(to_plain(events))
 

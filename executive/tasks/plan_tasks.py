@@ -14,7 +14,7 @@ import contextlib
 from typing import Any
 
 from executive.planning.partial_order import Step
-from executive.planning.plan_executer import StepReport, StepTask, TaskRunner
+from executive.planning.task_runner import StepReport, StepTask, TaskRunner
 from executive.tasks.executor import TaskExecutor
 from executive.tasks.task import TaskEnd, TaskHandle, TaskPhase
 from knowledge.description import RobotDescription

@@ -28,16 +28,25 @@ class EventLog(Database):
             return event_id
 
     def events(
-        self, *, after: int = 0, kind: str | None = None, limit: int | None = None
+        self,
+        *,
+        after: int = 0,
+        kind: str | None = None,
+        limit: int | None = None,
+        oldest: bool = False,
     ) -> list[Event]:
-        """Events with an id above ``after``, oldest first (the newest ``limit`` ones)."""
+        """Events with an id above ``after``, oldest first: the newest ``limit`` ones, or
+        with ``oldest`` the oldest ``limit`` ones (to page forward through the log)."""
         sql = "SELECT * FROM events WHERE id > ?"
         params: list[Any] = [after]
         if kind is not None:
             sql += " AND kind = ?"
             params.append(kind)
-        if limit is not None:
+        if limit is not None and not oldest:
             sql = f"SELECT * FROM ({sql} ORDER BY id DESC LIMIT ?) ORDER BY id"
+            params.append(limit)
+        elif limit is not None:
+            sql += " ORDER BY id LIMIT ?"
             params.append(limit)
         else:
             sql += " ORDER BY id"
