@@ -46,6 +46,10 @@ if TYPE_CHECKING:
 EXECUTIVE_GONE_DEADLINE = 1.5
 # How long a stop waits for a running goal to publish its (cancelled) result.
 GOAL_STOP_TIMEOUT = 2.0
+# CPython runs signal handlers on the main thread, but the kernel may hand SIGTERM to
+# another thread (Zenoh's), which does not wake a main thread blocked on the job queue:
+# it wakes this often to let a pending handler run.
+SIGNAL_POLL = 0.1
 
 
 class Framework:
@@ -266,7 +270,11 @@ class Framework:
         bus.watch_alive(keys.EXECUTIVE_ALIVE, self._on_executive)
         bus.declare_alive(keys.component_alive(name, instance))
         while self.exit_code is None:
-            self._jobs.get()()
+            try:
+                job = self._jobs.get(timeout=SIGNAL_POLL)
+            except queue.Empty:
+                continue  # back in Python, so that a pending signal handler runs
+            job()
         with self.changed:  # let the last command (stop) be answered
             self.changed.wait_for(lambda: self._pending == 0, timeout=1.0)
         return self.exit_code
