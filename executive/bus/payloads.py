@@ -7,6 +7,8 @@ import enum
 from dataclasses import dataclass
 from typing import Any
 
+from executive.bus.schema import Payload, Text
+
 
 class Lifecycle(enum.Enum):
     """Where a component process is in its life (published by the launcher)."""
@@ -188,12 +190,8 @@ class ResourceInfo:
 class Command(enum.Enum):
     """The verbs of a request on ``component/<name>/cmd``: ``{"cmd": verb, ...}``.
 
-    Fields per verb: configure ``{"params": {}, "achievements": {}}``; reconfigure
-    ``{"params": {}}``; goal ``{"goal_id": str, "goal": {}}`` (behaviors; the reply
-    comes at once, the result later on ``component/<name>/result``); cancel
-    ``{"goal_id": str}``; inject_fault ``{"fault": "crash" | {"mode": "crash", ...}}``
-    (see :mod:`executive.sdk.fault_injection`). start, pause, resume and stop have no fields. The
-    reply is ``{"phase": ComponentPhase value}``; a refused command is an error reply.
+    Each verb's fields, and the reply, are declared in :mod:`executive.bus.api.components`
+    (:class:`~executive.bus.api.components.ComponentCommand`).
     """
 
     CONFIGURE = "configure"
@@ -264,8 +262,14 @@ class GoalResult:
         )
 
 
-# The payload of ``component/<name>/feedback`` (behaviors, while a goal runs):
-#   {"component": str, "goal_id": str, "feedback": {...}, "stamp": float}
+@dataclass(frozen=True)
+class GoalFeedback(Payload):
+    """The payload of ``component/<name>/feedback``, published while a goal runs."""
+
+    component: Text
+    goal_id: Text
+    feedback: dict[str, Any]
+
 
 # ``ObservationInfo.type`` is an observer type's canonical name: resources, component,
 # frequency, timeout, timing, timestamp, scores, movement (configurations may also say

@@ -203,7 +203,9 @@ class Bus:
             if self._session.is_closed():
                 return
             for entity in reversed(self._declared):
-                with contextlib.suppress(zenoh.ZError):
+                # RuntimeError "Already borrowed": another thread is using it right now
+                # (a publisher mid-put); closing the session undeclares it all the same
+                with contextlib.suppress(zenoh.ZError, RuntimeError):
                     entity.undeclare()
             self._declared.clear()
             self._publishers.clear()

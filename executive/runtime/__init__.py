@@ -1,7 +1,11 @@
 """The runtime: component processes on this machine.
 
-It owns the launcher (spawning, reaping and log files of component processes; their
-lifecycle commands; the goal protocol of behaviors), the component API on the bus, and
-the translators that carry lifecycle commands to programs not written with the SDK.
+It owns the launcher, a facade (:mod:`.launcher`) over three concerns: the launcher
+thread that forks, pumps and reaps component processes (:mod:`.processes`, with
+:mod:`.spawn` and :mod:`.logfile`); their lifecycle commands and states
+(:mod:`.lifecycle`, :mod:`.states`); and the goal protocol of behaviors
+(:mod:`.behavior_goals`). It also owns the component API on the bus
+(:mod:`.component_api`) and the translators that carry lifecycle commands to programs
+not written with the SDK (:mod:`.translator`, :mod:`.translators`).
 It may import :mod:`executive.bus`, :mod:`executive.sdk` and :mod:`knowledge`.
 """

@@ -1,6 +1,9 @@
-"""The launcher's bus API for the command line: ``executive/api/component/*``.
+"""The launcher's bus API for the command line: list, start, stop and logs of components.
 
-Payloads are documented in :mod:`executive.bus.keys` and :mod:`executive.bus.payloads`.
+The verbs are declared in :mod:`executive.bus.api.components`; requests are checked
+there. Achievements (``component/achieve``) are served by the launcher itself
+(:mod:`executive.runtime.behavior_goals`): behaviors store them while the launcher runs,
+with or without this API.
 """
 
 from __future__ import annotations
@@ -8,19 +11,20 @@ from __future__ import annotations
 import contextlib
 from typing import Any
 
-from executive.bus.keys import api
+from executive.bus.api.components import (
+    COMPONENT_LIST,
+    COMPONENT_LOGS,
+    COMPONENT_START,
+    COMPONENT_STOP,
+    ComponentName,
+    ComponentsReply,
+    LogQuery,
+    LogReply,
+)
+from executive.bus.payloads import ComponentState
 from executive.bus.service import Context, Service
+from executive.bus.verb import Empty
 from executive.runtime.launcher import Launcher
-from knowledge.errors import ComponentError
-
-MAX_LOG_LINES = 10_000
-
-
-def _name(request: dict[str, Any]) -> str:
-    name = request.get("name")
-    if not isinstance(name, str) or not name:
-        raise ComponentError(f"the request needs a component 'name', not {name!r}")
-    return name
 
 
 class ComponentApi(Service):
@@ -35,20 +39,12 @@ class ComponentApi(Service):
         self._declared: list[Any] = []
 
     def start(self) -> None:
-        bus, launcher = self.context.bus, self.launcher
+        bus = self.context.bus
         self._declared = [
-            bus.serve(api("component/list"), self._list),
-            bus.serve(api("component/logs"), self._logs),
-            bus.serve(
-                api("component/start"),
-                lambda r: launcher.start(_name(r)).to_payload(),
-                threaded=True,
-            ),
-            bus.serve(
-                api("component/stop"),
-                lambda r: launcher.stop(_name(r)).to_payload(),
-                threaded=True,
-            ),
+            COMPONENT_LIST.serve(bus, self._list),
+            COMPONENT_LOGS.serve(bus, self._logs),
+            COMPONENT_START.serve(bus, self._start),
+            COMPONENT_STOP.serve(bus, self._stop),
         ]
 
     def stop(self) -> None:
@@ -57,10 +53,10 @@ class ComponentApi(Service):
                 entity.undeclare()
         self._declared = []
 
-    def _list(self, request: dict[str, Any]) -> dict[str, Any]:
+    def _list(self, request: Empty) -> ComponentsReply:
         launcher = self.launcher
-        return {
-            "components": [
+        return ComponentsReply(
+            [
                 {
                     "kind": launcher.kind(state.component).value,
                     "log": str(launcher.log_path(state.component)),
@@ -68,15 +64,16 @@ class ComponentApi(Service):
                 }
                 for state in launcher.states()
             ]
-        }
+        )
 
-    def _logs(self, request: dict[str, Any]) -> dict[str, Any]:
-        name = _name(request)
-        lines = request.get("lines", 50)
-        if not isinstance(lines, int) or isinstance(lines, bool) or not 0 <= lines <= MAX_LOG_LINES:
-            raise ComponentError(f"'lines' must be a whole number from 0 to {MAX_LOG_LINES}")
-        return {
-            "name": name,
-            "path": str(self.launcher.log_path(name)),
-            "lines": self.launcher.logs(name, lines),
-        }
+    def _start(self, request: ComponentName) -> ComponentState:
+        return self.launcher.start(request.name)
+
+    def _stop(self, request: ComponentName) -> ComponentState:
+        return self.launcher.stop(request.name)
+
+    def _logs(self, request: LogQuery) -> LogReply:
+        name = request.name
+        return LogReply(
+            name, str(self.launcher.log_path(name)), self.launcher.logs(name, request.lines)
+        )

@@ -25,7 +25,8 @@ from typing import Any
 
 from executive.bus import keys
 from executive.bus.session import Bus
-from executive.sdk.component import Behavior, Component, Functionality
+from executive.sdk import Behavior, Functionality
+from executive.sdk.component import Component
 from knowledge.description import Kind
 from knowledge.errors import ComponentError
 
@@ -123,10 +124,9 @@ class _Host(Component):
                 with contextlib.suppress(OSError, ValueError):  # SIGKILL has no handler
                     signal.signal(-returncode, signal.SIG_DFL)
                 os.kill(os.getpid(), -returncode)
-            self.stop()
-            self._exit_code = returncode
+            self._framework.end(returncode)
 
-        self._jobs.put(end)
+        self._framework.post(end)
 
 
 class TranslatedFunctionality(_Host, Functionality):

@@ -19,7 +19,7 @@ from typing import Any
 
 from executive.runtime.spawn import describe_exit, exit_status, spawn
 from executive.runtime.translator import Translator
-from executive.sdk.component import Behavior, GoalCancelled, GoalFailed
+from executive.sdk import Behavior, GoalCancelled, GoalFailed
 
 STOP_GRACE = 2.0
 POLL = 0.05  # how often a running goal looks for a cancellation

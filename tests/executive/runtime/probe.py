@@ -11,7 +11,7 @@ import os
 from typing import Any
 
 from executive.bus import keys
-from executive.sdk.component import Functionality
+from executive.sdk import Functionality
 
 ENVIRONMENT = (
     keys.ENV_ROBOT,

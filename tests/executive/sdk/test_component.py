@@ -8,6 +8,7 @@ import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -15,6 +16,7 @@ from executive.bus import keys
 from executive.bus.keys import component, topic
 from executive.bus.payloads import Lifecycle
 from executive.bus.session import Bus
+from executive.sdk import Behavior, Functionality, Message
 from executive.sdk.fault_injection import Fault, FaultMode
 from knowledge.description import ComponentSpec
 from knowledge.errors import BusError, ComponentError
@@ -117,6 +119,18 @@ def test_commands_out_of_order_or_unknown_are_refused_with_the_reason(
     assert bus.request(cmd, {"cmd": "start"}) == {"phase": "running"}
 
 
+def test_a_command_with_a_bad_field_is_refused_by_its_declared_type(
+    lone_probe: tuple[Bus, subprocess.Popen[bytes]],
+) -> None:
+    bus, _ = lone_probe
+    cmd = component("probe", "cmd")
+    with pytest.raises(BusError, match=r"^'achievements' must be an object, not \"all\"$"):
+        bus.request(cmd, {"cmd": "configure", "achievements": "all"})
+    with pytest.raises(BusError, match=r"^'goal_id' must be a non-empty string, not null$"):
+        bus.request(cmd, {"cmd": "cancel"})
+    assert bus.request(cmd, {"cmd": "configure"}) == {"phase": "configured"}
+
+
 def test_a_component_ends_when_the_executive_vanishes(
     lone_probe: tuple[Bus, subprocess.Popen[bytes]], endpoint: str
 ) -> None:
@@ -142,6 +156,78 @@ def test_a_component_started_by_hand_says_what_it_needs() -> None:
     )
     assert done.returncode == 2
     assert "DURA_ROBOT, DURA_COMPONENT, DURA_ENDPOINT not set" in done.stderr
+
+
+# --- hooks and the framework ------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("method", "hook"),
+    [
+        ("configure", "on_configure"),
+        ("start", "on_start"),
+        ("pause", "on_pause"),
+        ("resume", "on_resume"),
+        ("reconfigure", "on_reconfigure"),
+        ("stop", "on_stop"),
+        ("run", "on_start"),
+        ("main", "on_start"),
+        ("run_process", "on_start"),
+    ],
+)
+def test_a_component_that_defines_a_framework_method_is_refused_with_the_hook_to_override(
+    method: str, hook: str
+) -> None:
+    def defined(self: object) -> None:
+        pass
+
+    for base in (Functionality, Behavior):
+        with pytest.raises(TypeError) as refused:
+            type("Lidar", (base,), {method: defined})
+        assert str(refused.value) == f"Lidar defines {method}(): override {hook}() instead"
+
+
+def test_a_behavior_that_takes_goals_itself_is_told_to_override_execute() -> None:
+    with pytest.raises(
+        TypeError, match=r"^MoveTo defines take_goal\(\): override execute\(\) instead$"
+    ):
+
+        class MoveTo(Behavior):
+            def execute(self, goal: dict[str, Any]) -> dict[str, Any]:
+                return {}
+
+            def take_goal(self, goal_id: str, goal: dict[str, Any]) -> None:
+                pass
+
+    with pytest.raises(
+        TypeError,
+        match=r"^Lidar defines cancel_goal\(\): goals are for a Behavior, which overrides execute\(\)$",
+    ):
+
+        class Lidar(Functionality):
+            def on_start(self) -> None:
+                pass
+
+            def cancel_goal(self, goal_id: str) -> None:
+                pass
+
+
+def test_a_component_with_hooks_and_methods_of_its_own_is_accepted() -> None:
+    class Base(Functionality):
+        def on_configure(self, params: dict[str, Any], achievements: dict[str, Any]) -> None:
+            pass
+
+        def on_start(self) -> None:
+            pass
+
+        def command(self, message: Message) -> None:  # a topic handler, not the framework's
+            pass
+
+    class Spin(Base):
+        def on_stop(self) -> None:
+            pass
+
+    assert Spin.kind.value == "functionality"
 
 
 # --- faults ------------------------------------------------------------------------------

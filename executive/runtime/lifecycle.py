@@ -1,0 +1,385 @@
+"""Component lifecycles: start, stop, pause, resume, reconfigure and other commands.
+
+A start waits until the component is ready: its process declared its liveliness
+token, was configured (parameters from the robot description and the KB, achievements
+from the KB) and started, all within the component's start-up timeout; else it is
+killed and FAILED. A stop asks the component to stop, then sends SIGTERM to its
+process group after a grace period, then SIGKILL. When a process ends, this module
+decides what its end means (STOPPED, EXITED or FAILED) and tells the owner of its goals.
+
+Each component's state changes under one lock, so that states are recorded
+(:mod:`executive.runtime.states`) in the order they happen; one lifecycle operation
+runs at a time per component.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import signal
+import threading
+import time
+import uuid
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from executive.bus import keys
+from executive.bus.api.components import COMMANDS, ComponentCommand, Configure, Start, Stop
+from executive.bus.payloads import Command, ComponentState, Lifecycle
+from executive.bus.session import Bus
+from executive.runtime.processes import ComponentProcess, ProcessThread
+from executive.runtime.spawn import command, describe_exit, signal_group
+from executive.runtime.states import StateRecords
+from knowledge.description import ComponentSpec, RobotDescription
+from knowledge.errors import BusError, ComponentError
+from knowledge.knowledge_base import KnowledgeBase
+
+log = logging.getLogger("dura.launcher")
+
+ProcessEnded = Callable[[str, bool, str], None]
+"""Told ``(component, stopping, how)`` when a component's process has ended."""
+
+
+def local_endpoint(endpoint: str) -> str:
+    """Where a child on this machine reaches an executive listening on ``endpoint``."""
+    return endpoint.replace("/0.0.0.0:", "/127.0.0.1:").replace("/[::]:", "/[::1]:")
+
+
+@dataclass(eq=False)
+class _Run:
+    """One started process, as its lifecycle sees it."""
+
+    process: ComponentProcess
+    instance: str  # names its liveliness token
+    woken: threading.Event = field(default_factory=threading.Event)  # token seen, or exited
+    exited: threading.Event = field(default_factory=threading.Event)
+    announced: bool = False  # its liveliness token was seen
+    ready: bool = False
+    stopping: bool = False
+    failure: str = ""
+
+
+@dataclass(eq=False)
+class _Slot:
+    """One component of the robot and where it is in its lifecycle."""
+
+    spec: ComponentSpec
+    state: ComponentState
+    run: _Run | None = None
+    lock: threading.Lock = field(default_factory=threading.Lock)  # one operation at a time
+
+
+class LifecycleControl:
+    """Drives the robot's components through their lifecycles and records their states.
+
+    Args:
+        robot: the robot; commands run in its description's folder.
+        bus: the executive's bus session (components connect to its endpoint).
+        kb: parameters and achievements come from here; states go here.
+        log_dir, log_max_bytes, log_backups: the components' log files.
+        grace: seconds a component gets to answer a command, and to exit after a stop
+            command and again after SIGTERM.
+        on_process_end: told when a component's process has ended (on the launcher
+            thread, after its state is recorded).
+    """
+
+    def __init__(
+        self,
+        robot: RobotDescription,
+        bus: Bus,
+        kb: KnowledgeBase,
+        *,
+        log_dir: Path,
+        grace: float,
+        log_max_bytes: int,
+        log_backups: int,
+        on_process_end: ProcessEnded,
+    ) -> None:
+        self.robot = robot
+        self.bus = bus
+        self.kb = kb
+        self.grace = grace
+        self._on_process_end = on_process_end
+        self._slots = {
+            name: _Slot(spec, ComponentState(name, Lifecycle.STOPPED, reason="not started"))
+            for name, spec in robot.components.items()
+        }
+        self._lock = threading.Lock()
+        self._tokens: set[str] = set()  # instances whose liveliness token is there
+        self._closing = False
+        self._watch: Any = None
+        self.records = StateRecords(bus, kb)
+        self.processes = ProcessThread(
+            log_dir, log_max_bytes=log_max_bytes, log_backups=log_backups, on_exit=self._exited
+        )
+
+    def open(self) -> None:
+        self.processes.open()
+        self.records.open()
+        self._watch = self.bus.watch_alive(keys.component_alive("*", "*"), self._on_token)
+
+    def stop_all(self) -> None:
+        """Stop every component, all at once; refuse starts from now on."""
+        self._closing = True
+        stoppers = [
+            threading.Thread(target=self.stop, args=(name,), name=f"stop-{name}")
+            for name, slot in self._slots.items()
+            if slot.run is not None
+        ]
+        for thread in stoppers:
+            thread.start()
+        for thread in stoppers:
+            thread.join()
+
+    def close(self) -> None:
+        """End the threads (after :meth:`stop_all`)."""
+        with contextlib.suppress(Exception):
+            self._watch.undeclare()
+        self.processes.close()
+        self.records.close()
+
+    # --- queries ----------------------------------------------------------------------
+
+    def spec(self, name: str) -> ComponentSpec:
+        """The component's description.
+
+        Raises:
+            ComponentError: the robot has no such component.
+        """
+        return self._slot(name).spec
+
+    def _slot(self, name: str) -> _Slot:
+        slot = self._slots.get(name)
+        if slot is None:
+            known = ", ".join(self._slots) or "none"
+            raise ComponentError(f"no component '{name}' in robot '{self.robot.name}' ({known})")
+        return slot
+
+    def state(self, name: str) -> ComponentState:
+        return self._slot(name).state
+
+    def states(self) -> list[ComponentState]:
+        """The state of every component, in the robot description's order."""
+        return [slot.state for slot in self._slots.values()]
+
+    # --- starting ---------------------------------------------------------------------
+
+    def start(self, name: str) -> ComponentState:
+        """Start a component and wait until it is ready, or failed (a result)."""
+        slot = self._slot(name)
+        with slot.lock:
+            if slot.state.state.is_alive:
+                return slot.state
+            if self._closing:
+                raise ComponentError(f"cannot start '{name}': the launcher is closing")
+            deadline = time.monotonic() + slot.spec.startup_timeout
+            try:
+                run = self.processes.call(lambda: self._spawn(slot))
+            except OSError as e:
+                program = command(slot.spec.command)[0]
+                reason = f"cannot run {program!r}: {e.strerror or e}"
+                with self._lock:
+                    return self._set(slot, Lifecycle.FAILED, reason=reason)
+            failure = self._bring_up(slot, run, deadline)
+            with self._lock:
+                if not run.exited.is_set() and not failure:
+                    run.ready = True
+                    return self._set(slot, Lifecycle.READY, pid=run.process.pid)
+            if failure:
+                run.failure = failure
+                self._terminate(run)
+            run.exited.wait()
+            return slot.state
+
+    def _spawn(self, slot: _Slot) -> _Run:
+        """Fork the process and record it STARTING (on the launcher thread, so that its
+        exit cannot be handled before)."""
+        spec = slot.spec
+        instance = uuid.uuid4().hex[:12]
+        env = {
+            **os.environ,
+            keys.ENV_ROBOT: self.robot.name,
+            keys.ENV_COMPONENT: spec.name,
+            keys.ENV_ENDPOINT: local_endpoint(self.bus.endpoint),
+            keys.ENV_KIND: spec.kind.value,
+            keys.ENV_INSTANCE: instance,
+        }
+        process = self.processes.fork(spec.name, spec.command, cwd=self.robot.path.parent, env=env)
+        run = _Run(process, instance)
+        with self._lock:
+            slot.run = run
+            self._set(slot, Lifecycle.STARTING, pid=process.pid)
+            self._announce(run)  # in case its token came first
+        return run
+
+    def _bring_up(self, slot: _Slot, run: _Run, deadline: float) -> str:
+        """Wait for the process's token, configure and start it; the failure, if any."""
+        timeout = slot.spec.startup_timeout
+        if not run.woken.wait(max(0.0, deadline - time.monotonic())):
+            return f"not ready within {timeout:g} s (no answer)"
+        if run.exited.is_set():
+            return ""
+        name = slot.spec.name
+        params = {**slot.spec.params, **self.kb.parameters(name)}
+        configure = Configure(params=params, achievements=self.kb.achievements(name))
+        for request in (configure, Start()):
+            verb = request.verb.value
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return f"not ready within {timeout:g} s (no answer to {verb})"
+            try:
+                self._request(name, request, remaining)
+            except BusError as e:
+                if run.exited.is_set():
+                    return ""
+                return f"{verb} failed: {e}"
+        return ""
+
+    def _on_token(self, key: str, alive: bool) -> None:
+        """A component process declared (or dropped) its liveliness token."""
+        parts = key.split("/")
+        if len(parts) != 4:
+            return
+        with self._lock:
+            if not alive:
+                self._tokens.discard(parts[3])
+                return
+            self._tokens.add(parts[3])
+            slot = self._slots.get(parts[2])
+            if slot is not None and slot.run is not None:
+                self._announce(slot.run)
+
+    def _announce(self, run: _Run) -> None:
+        """Wake the start of a process whose token is there (with ``self._lock`` held)."""
+        if run.instance in self._tokens:
+            run.announced = True
+            run.woken.set()
+
+    # --- stopping ---------------------------------------------------------------------
+
+    def stop(self, name: str, reason: str = "stopped") -> ComponentState:
+        """Stop a component and wait until its process is gone; returns its final state."""
+        slot = self._slot(name)
+        with slot.lock:
+            with self._lock:
+                run = slot.run
+                if run is None or run.exited.is_set():
+                    return slot.state
+                run.stopping = True
+                self._set(slot, Lifecycle.STOPPING, pid=run.process.pid, reason=reason)
+            if run.announced:
+                with contextlib.suppress(BusError):
+                    self._request(name, Stop(), self.grace)
+            if not run.exited.wait(self.grace):
+                self._terminate(run)
+            run.exited.wait()
+            return slot.state
+
+    def _terminate(self, run: _Run) -> None:
+        """SIGTERM to the process group, SIGKILL after the grace period (returns at once
+        once it is gone)."""
+        signal_group(run.process.pid, signal.SIGTERM)
+        if not run.exited.wait(self.grace):
+            log.warning("'%s' ignored SIGTERM: SIGKILL", run.process.name)
+            signal_group(run.process.pid, signal.SIGKILL)
+
+    def _exited(self, process: ComponentProcess, exit_code: int | None, signum: int | None) -> None:
+        """A process was reaped: record what its end means (on the launcher thread)."""
+        slot = self._slots[process.name]
+        run = slot.run
+        if run is None or run.process is not process:
+            raise ComponentError(f"'{process.name}' (pid {process.pid}) was not started here")
+        how = describe_exit(exit_code, signum)
+        with self._lock:
+            if run.failure:
+                state, reason = Lifecycle.FAILED, run.failure
+            elif run.stopping:
+                state, reason = Lifecycle.STOPPED, slot.state.reason or "stopped"
+            elif not run.ready:
+                state, reason = Lifecycle.FAILED, f"{how} before it was ready"
+            else:
+                state, reason = Lifecycle.EXITED, how
+            process.finish(f"{state.value}: {how}")
+            self._set(
+                slot, state, pid=process.pid, exit_code=exit_code, signum=signum, reason=reason
+            )
+            slot.run = None
+            run.exited.set()
+            run.woken.set()
+        self._on_process_end(process.name, run.stopping, how)
+
+    # --- commands ---------------------------------------------------------------------
+
+    def _request(self, name: str, request: ComponentCommand, timeout: float) -> dict[str, Any]:
+        return self.bus.request(keys.component(name, "cmd"), request.to_request(), timeout=timeout)
+
+    def command(self, name: str, verb: Command, **fields: Any) -> dict[str, Any]:
+        """Send a lifecycle command to a running component and return its reply.
+
+        Raises:
+            ComponentError: the component is not running, refused or did not answer.
+        """
+        slot = self._slot(name)
+        run = slot.run
+        if run is None or not run.ready:
+            raise ComponentError(f"'{name}' is {slot.state.state.value}, not running")
+        request = next(c for c in COMMANDS if c.verb is verb)(**fields)
+        try:
+            return self._request(name, request, self.grace)
+        except BusError as e:
+            raise ComponentError(f"'{name}' refused {verb.value}: {e}") from e
+
+    def pause(self, name: str) -> ComponentState:
+        return self._switch(name, Command.PAUSE, Lifecycle.READY, Lifecycle.PAUSED)
+
+    def resume(self, name: str) -> ComponentState:
+        return self._switch(name, Command.RESUME, Lifecycle.PAUSED, Lifecycle.READY)
+
+    def _switch(
+        self, name: str, verb: Command, before: Lifecycle, after: Lifecycle
+    ) -> ComponentState:
+        slot = self._slot(name)
+        with slot.lock:
+            if slot.state.state is after:
+                return slot.state
+            if slot.state.state is not before:
+                raise ComponentError(
+                    f"cannot {verb.value} '{name}': it is {slot.state.state.value}"
+                )
+            self.command(name, verb)
+            with self._lock:
+                run = slot.run
+                if run is None or run.exited.is_set():
+                    return slot.state
+                return self._set(slot, after, pid=run.process.pid)
+
+    def reconfigure(self, name: str, params: Mapping[str, Any]) -> None:
+        """Hand changed parameters to a running component."""
+        self.command(name, Command.RECONFIGURE, params=dict(params))
+
+    def inject_fault(self, name: str, fault: str | Mapping[str, Any]) -> None:
+        """Make a running component misbehave (see :mod:`executive.sdk.fault_injection`)."""
+        self.command(name, Command.INJECT_FAULT, fault=fault)
+
+    # --- state ------------------------------------------------------------------------
+
+    def _set(
+        self,
+        slot: _Slot,
+        state: Lifecycle,
+        *,
+        pid: int | None = None,
+        exit_code: int | None = None,
+        signum: int | None = None,
+        reason: str = "",
+    ) -> ComponentState:
+        """Record a new state (with ``self._lock`` held: keeps the order)."""
+        new = ComponentState(
+            slot.spec.name, state, pid, exit_code, signum, reason, stamp=time.time()
+        )
+        slot.state = new
+        self.records.record(new)
+        return new
