@@ -13,6 +13,7 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from executive.bus import security
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus
@@ -42,6 +43,8 @@ class Executive:
         log_dir: where component logs go (default ``./.dura/logs``).
         resource_rate: how often the resource monitor publishes, in Hz.
         grace: seconds a component gets at each step of a stop.
+        folder: the working folder whose ``.dura/`` holds the bus credentials (created on
+            the first run, user-only) and the logs (default: the current folder).
     """
 
     def __init__(
@@ -53,19 +56,33 @@ class Executive:
         log_dir: Path | None = None,
         resource_rate: float = 1.0,
         grace: float = 3.0,
+        folder: Path | None = None,
     ) -> None:
         self.robot = robot
         self.endpoint = endpoint or robot.endpoint
         self.kb_path = kb_path or robot.kb_path()
-        self.log_dir = log_dir or Path.cwd() / ".dura" / "logs"
+        self.folder = folder or Path.cwd()
+        self.log_dir = log_dir or self.folder / ".dura" / "logs"
+        self.credentials_path = security.credentials_file(self.folder, robot.name)
         self.resource_rate = resource_rate
         self.grace = grace
         self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> Executive:
         with contextlib.ExitStack() as stack:
+            robot, components = self.robot, list(self.robot.components)
+            credentials = security.ensure_credentials(self.credentials_path, robot.name, components)
+            users = self.credentials_path.with_suffix(".users")
             self.bus = stack.enter_context(
-                Bus(self.robot.name, name="executive", endpoint=self.endpoint, listen=True)
+                Bus(
+                    robot.name,
+                    name="executive",
+                    endpoint=self.endpoint,
+                    listen=True,
+                    login=credentials.login(security.EXECUTIVE),
+                    dictionary=security.dictionary(credentials, users),
+                    access=security.access_control(robot.name, components),
+                )
             )
             self.kb = stack.enter_context(KnowledgeBase(self.kb_path))
             self.kb.log_event(
@@ -75,7 +92,14 @@ class Executive:
             )
             stack.callback(self.kb.log_event, "EXECUTIVE_STOPPED", self.robot.name)
             self.launcher = stack.enter_context(
-                Launcher(self.robot, self.bus, self.kb, log_dir=self.log_dir, grace=self.grace)
+                Launcher(
+                    self.robot,
+                    self.bus,
+                    self.kb,
+                    log_dir=self.log_dir,
+                    grace=self.grace,
+                    credentials=credentials,
+                )
             )
             self.ros2: Ros2Link | None = None
             if self.robot.ros2 is not None:  # Cyclone DDS loads only for a ROS 2 robot

@@ -13,6 +13,8 @@ import os
 from pathlib import Path
 from typing import Any, TypeVar
 
+from executive.bus import security
+from executive.bus.security import Login
 from executive.bus.session import Bus
 from executive.bus.verb import Codec, Verb
 from knowledge.errors import DuraError
@@ -34,11 +36,12 @@ def add_client_options(parser: Any) -> None:
     parser.add_argument("--endpoint", help="where that executive listens (default: the robot's)")
 
 
-def write_run_file(robot: str, endpoint: str, description: Path) -> None:
+def write_run_file(robot: str, endpoint: str, description: Path, credentials: Path) -> None:
     RUN_FILE.parent.mkdir(parents=True, exist_ok=True)
     text = json.dumps(
-        {"robot": robot, "endpoint": endpoint, "pid": os.getpid(), "description": str(description)}
-    )
+        {"robot": robot, "endpoint": endpoint, "pid": os.getpid(),
+         "description": str(description), "credentials": str(credentials.resolve())}
+    )  # fmt: skip
     RUN_FILE.write_text(text + "\n")
 
 
@@ -51,17 +54,19 @@ def remove_run_file() -> None:
         pass
 
 
-def _target(args: argparse.Namespace) -> tuple[str, str]:
-    """The robot's name and the endpoint of its executive."""
+def _target(args: argparse.Namespace) -> tuple[str, str, Login | None]:
+    """The robot's name, the endpoint of its executive and the operator's login."""
     if args.robot is not None:
         robot, findings = read_robot(args.robot)
         if robot is None:
             errors = [f for f in findings if f.is_error]
             raise DuraError(str(errors[0]) if errors else f"{args.robot}: unusable")
-        return robot.name, args.endpoint or robot.endpoint
+        login = security.find_login(robot.name, security.OPERATOR, [Path.cwd()])
+        return robot.name, args.endpoint or robot.endpoint, login
     try:
         found = json.loads(RUN_FILE.read_text())
         name, endpoint = str(found["robot"]), str(found["endpoint"])
+        credentials = found.get("credentials")
     except FileNotFoundError:
         raise DuraError(
             f"no executive runs in this folder (no {RUN_FILE}): start one with "
@@ -69,7 +74,17 @@ def _target(args: argparse.Namespace) -> tuple[str, str]:
         ) from None
     except (OSError, ValueError, KeyError, TypeError) as e:
         raise DuraError(f"{RUN_FILE}: unreadable ({e}); name the robot with --robot") from e
-    return name, args.endpoint or endpoint
+    if isinstance(credentials, str) and not os.environ.get(security.ENV_CREDENTIALS):
+        return (
+            name,
+            args.endpoint or endpoint,
+            security.read_credentials(Path(credentials)).login(security.OPERATOR),
+        )
+    return (
+        name,
+        args.endpoint or endpoint,
+        security.find_login(name, security.OPERATOR, [Path.cwd()]),
+    )
 
 
 def connect(args: argparse.Namespace) -> Bus:
@@ -78,8 +93,8 @@ def connect(args: argparse.Namespace) -> Bus:
     Raises:
         DuraError: no executive is named, or none answers at its endpoint.
     """
-    name, endpoint = _target(args)
-    return Bus(name, name="cli", endpoint=endpoint)
+    name, endpoint, login = _target(args)
+    return Bus(name, name="cli", endpoint=endpoint, login=login)
 
 
 def ask(

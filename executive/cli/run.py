@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     )
     with executive:
         endpoint = local_endpoint(executive.endpoint)
-        write_run_file(robot.name, endpoint, robot.path)
+        write_run_file(robot.name, endpoint, robot.path, executive.credentials_path)
         try:
             if args.json:
                 print_json({"robot": robot.name, "endpoint": endpoint, "pid": os.getpid()})

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from executive.bus.payloads import Command, ComponentState
+from executive.bus.security import Credentials
 from executive.bus.session import Bus
 from executive.runtime.behavior_goals import BehaviorGoals, GoalHandle
 from executive.runtime.lifecycle import LifecycleControl, local_endpoint
@@ -54,6 +55,7 @@ class Launcher:
         grace: float = 3.0,
         log_max_bytes: int = 1 << 20,
         log_backups: int = 3,
+        credentials: Credentials | None = None,
     ) -> None:
         self.robot = robot
         self.bus = bus
@@ -70,6 +72,7 @@ class Launcher:
             log_max_bytes=log_max_bytes,
             log_backups=log_backups,
             on_process_end=self._goals.process_ended,
+            credentials=credentials,
         )
         self._running = False
 

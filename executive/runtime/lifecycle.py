@@ -26,9 +26,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from executive.bus import keys
+from executive.bus import keys, security
 from executive.bus.api.components import COMMANDS, ComponentCommand, Configure, Start, Stop
 from executive.bus.payloads import Command, ComponentState, Lifecycle
+from executive.bus.security import Credentials
 from executive.bus.session import Bus
 from executive.runtime.processes import ComponentProcess, ProcessThread
 from executive.runtime.spawn import command, describe_exit, signal_group
@@ -97,11 +98,13 @@ class LifecycleControl:
         log_max_bytes: int,
         log_backups: int,
         on_process_end: ProcessEnded,
+        credentials: Credentials | None = None,
     ) -> None:
         self.robot = robot
         self.bus = bus
         self.kb = kb
         self.grace = grace
+        self.credentials = credentials
         self._on_process_end = on_process_end
         self._slots = {
             name: _Slot(spec, ComponentState(name, Lifecycle.STOPPED, reason="not started"))
@@ -207,6 +210,9 @@ class LifecycleControl:
             keys.ENV_KIND: spec.kind.value,
             keys.ENV_INSTANCE: instance,
         }
+        if self.credentials is not None:  # its own user: it may do only a component's part
+            login = self.credentials.login(security.component_user(spec.name))
+            env[security.ENV_USER], env[security.ENV_PASSWORD] = login.user, login.password
         process = self.processes.fork(spec.name, spec.command, cwd=self.robot.path.parent, env=env)
         run = _Run(process, instance)
         with self._lock:

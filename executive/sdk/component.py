@@ -41,6 +41,7 @@ from executive.bus import keys
 from executive.bus.api.components import COMPONENT_ACHIEVE, Achievement
 from executive.bus.api.planning import STATE_SET, STATE_UNSET, FactChange
 from executive.bus.payloads import ComponentPhase
+from executive.bus.security import ENV_PASSWORD, ENV_USER, Login
 from executive.bus.session import Bus, Message
 from executive.sdk.fault_injection import FaultInjector
 from executive.sdk.framework import Framework
@@ -269,11 +270,15 @@ class Component:
         logging.basicConfig(
             level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
         )
+        # the bus login is the component's alone: its own children do not inherit it
+        user, password = os.environ.pop(ENV_USER, None), os.environ.pop(ENV_PASSWORD, None)
+        login = Login(user, password) if user is not None and password is not None else None
         try:
             with Bus(
                 os.environ[keys.ENV_ROBOT],
                 name=name,
                 endpoint=os.environ[keys.ENV_ENDPOINT],
+                login=login,
             ) as bus:
                 instance = os.environ.get(keys.ENV_INSTANCE) or str(os.getpid())
                 return cls(name, bus, *args)._framework.run(instance)

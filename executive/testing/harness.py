@@ -25,9 +25,11 @@ from typing import Any
 
 import yaml
 
+from executive.bus import security
 from executive.bus.api import planning
 from executive.bus.keys import api, component
 from executive.bus.payloads import Command
+from executive.bus.security import Login
 from executive.bus.session import Bus
 from knowledge.errors import BusError, DuraError
 from knowledge.records import GoalState
@@ -128,7 +130,9 @@ class RobotProcess:
                 raise DuraError(f"the executive exited with {code} at start:\n{self.log_tail()}")
             try:
                 if self._bus is None:
-                    self._bus = Bus(self.robot.name, name="harness", endpoint=self.endpoint)
+                    self._bus = Bus(
+                        self.robot.name, name="harness", endpoint=self.endpoint, login=self.login()
+                    )
                 self.request("status", timeout=2.0)
                 return
             except BusError:
@@ -161,6 +165,10 @@ class RobotProcess:
             process.kill()
             process.wait()
         self._close()
+
+    def login(self) -> Login | None:
+        """The operator's login to this robot's bus (its credentials are in the folder)."""
+        return security.find_login(self.robot.name, security.OPERATOR, [self.folder])
 
     def _close(self) -> None:
         if self._bus is not None:

@@ -14,8 +14,10 @@ from pathlib import Path
 import psutil
 import pytest
 
+from executive.bus import security
 from executive.bus.keys import component, topic
 from executive.bus.payloads import ComponentState, Lifecycle
+from executive.bus.security import Login
 from executive.bus.session import Bus
 from tests.conftest import ROOT, USECASE, run_dura, wait_for
 from tests.executive.runtime.rig import Recorder
@@ -30,6 +32,11 @@ COMPONENTS = (
     "take_picture",
 )
 RATES = {"scan": 10.0, "odom": 20.0, "imu": 20.0, "image": 15.0, "scan_filtered": 25.0}
+
+
+def operator(folder: Path) -> Login | None:
+    """The operator's login to the executive that runs in ``folder``."""
+    return security.find_login("usecase", security.OPERATOR, [folder])
 
 
 def gone(process: psutil.Process) -> bool:
@@ -143,7 +150,10 @@ def test_all_use_case_components_start_through_the_cli_and_publish_at_their_rate
     tmp_path: Path, endpoint: str
 ) -> None:
     dura = dura_in(tmp_path)
-    with executive(tmp_path, endpoint), Bus("usecase", name="test", endpoint=endpoint) as bus:
+    with (
+        executive(tmp_path, endpoint),
+        Bus("usecase", name="test", endpoint=endpoint, login=operator(tmp_path)) as bus,
+    ):
         recorders = {name: Recorder(bus, topic(name)) for name in RATES}
         states = Recorder(bus, component("*", "state"))
         for name in COMPONENTS:

@@ -23,7 +23,7 @@ def test_following_events_misses_none_under_load(tmp_path: Path) -> None:
         follower = subprocess.Popen(
             [sys.executable, "-m", "executive.cli", "events", "--follow", "--json", "-n", "0",
              "--robot", str(USECASE), "--endpoint", robot.endpoint],
-            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            cwd=robot.folder, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
             env={**os.environ, "PYTHONPATH": str(ROOT)},
         )  # fmt: skip
         printed: list[int] = []
