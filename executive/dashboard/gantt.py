@@ -197,6 +197,9 @@ def render(gantt: Gantt, width: float = WIDTH) -> str:
     height = TOP + ROW * max(1, len(gantt.steps)) + BOTTOM
     body: list[str] = [svg.label(12, 20, gantt.title, font_size=14, font_weight="600")]
     axis_y = TOP + ROW * max(1, len(gantt.steps))
+    for row in range(1, len(gantt.steps), 2):  # stripes under the grid, the marks and the bars
+        body.append(svg.element("rect", x=0, y=TOP + row * ROW, width=width, height=ROW,
+                                fill="#f7f8fa"))  # fmt: skip
     for t in ticks(low, high):
         body.append(svg.element("line", x1=x(t), y1=TOP - 4, x2=x(t), y2=axis_y, stroke=svg.GRID))
         body.append(svg.label(x(t), axis_y + 16, f"{t:g} s", font_size=10, fill=svg.MUTED,
@@ -217,8 +220,6 @@ def render(gantt: Gantt, width: float = WIDTH) -> str:
         y = TOP + row * ROW
         fill = svg.colour(step.state)
         parts = [svg.title("\n".join(step.details or (step.label,)))]
-        if row % 2:
-            parts.append(svg.element("rect", x=0, y=y, width=width, height=ROW, fill="#f7f8fa"))
         parts.append(svg.label(12, y + 17, text))
         bar_width = max(3.0, (step.duration or 0.0) * scale)
         parts.append(

@@ -68,7 +68,7 @@ class GraphState:
     """What a running robot draws over its graph.
 
     ``states`` maps a component to one of :data:`COMPONENT_STATES`; ``faults`` to its
-    fault count and ``max_faults``; ``tasks`` to the active tasks it serves; ``used``
+    fault count and ``max_faults`` (0: none, a behavior's); ``tasks`` to the active tasks it serves; ``used``
     holds the ``(capability, provider)`` pairs of the active configurations.
     """
 
@@ -350,9 +350,9 @@ def _node(node: Node, info: tuple[str, ...], state: GraphState | None) -> str:
                                      f"M{x + w - 4},{y + 4} L{x + 4},{y + h - 4}",
                                      stroke="#ffffff", stroke_width=1.5, opacity=0.5))  # fmt: skip
         if state is not None and count is not None and count[0]:
-            lines.append(f"faults {count[0]} of {count[1]}")
+            lines.append(f"faults {count[0]} of {count[1]}" if count[1] else f"faults {count[0]}")
             attrs["data_faults"] = count[0]
-            badge = f"{count[0]}/{count[1]}"
+            badge = f"{count[0]}/{count[1]}" if count[1] else str(count[0])
             bw = svg.text_width(badge, 10) + 10
             parts.append(
                 svg.element("g", [

@@ -249,7 +249,7 @@ class LiveState:
             )
             limit = spec.max_faults if isinstance(spec, FunctionalitySpec) else 0
             if record.get("fault_count"):
-                faults[name] = (int(record["fault_count"]), limit or int(record["fault_count"]))
+                faults[name] = (int(record["fault_count"]), limit)
         serves: dict[str, list[str]] = {}
         used = set()
         for task in self.active_tasks():
