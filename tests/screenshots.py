@@ -100,12 +100,10 @@ def main(argv: list[str] | None = None) -> int:
             wait_for(lines, r"PERMANENT_FAULT\s+lidar")
             wait_for(lines, r"CONFIGURATION\s+.*cam_to_lidar")
             time.sleep(1.5)
-            saved += shoot(browser, folder, "2-on-the-camera")
-            if args.readme:
-                browser.evaluate("location.hash = '#all'")
-                time.sleep(0.4)
+            if args.readme:  # first: the demo ends a few seconds after the switch
                 shutil.copy(browser.screenshot(folder / "readme.png"), README)
                 saved.append(README)
+            saved += shoot(browser, folder, "2-on-the-camera")
             errors = list(browser.errors)
         demo.wait(180)
     finally:
