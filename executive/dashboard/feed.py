@@ -209,10 +209,11 @@ class Feed:
             for query in [q for q in EVERYTHING if q in todo]:
                 try:
                     answer = await asyncio.to_thread(self._fetch, query)
+                    self._apply(query, answer)
                 except DuraError as e:
                     problems.append(str(e))
-                    continue
-                self._apply(query, answer)
+                except Exception:  # a reply of an unexpected shape must not stop the feed
+                    log.exception("the dashboard could not take the answer to '%s'", query)
             problem = problems[0] if problems else ""
             if problem != self.state.problem:
                 self.state.problem = problem
@@ -279,9 +280,11 @@ class Feed:
                 self._dirty.add("plan")
                 last_clock = now
             messages = []
-            for name in VIEWS:
-                if name in self._dirty:
+            for name in [v for v in VIEWS if v in self._dirty]:
+                try:
                     messages.append(sse(name, self.state.view(name, now)))
+                except Exception:  # one view that cannot be drawn must not stop the others
+                    log.exception("the dashboard could not draw its '%s' view", name)
             self._dirty.clear()
             if self._new_events:
                 messages.append(sse("event", {"events": self._new_events}))

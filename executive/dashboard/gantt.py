@@ -13,10 +13,12 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from executive.dashboard import svg
-from executive.planning.partial_order import PartialOrderPlan
+
+if TYPE_CHECKING:
+    from executive.planning.partial_order import PartialOrderPlan
 
 HISTORY = 60.0  # seconds before the current plan's start whose plans and replans are marked
 STATES = ("pending", "dispatched", "running", "paused", "done", "failed", "cancelled")

@@ -15,8 +15,6 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
-import networkx as nx
-
 from executive.dashboard import svg
 from knowledge.description import FunctionalitySpec, RobotDescription
 
@@ -195,9 +193,10 @@ def _order(
     column: Mapping[str, int], edges: Iterable[Edge], names: Mapping[str, tuple[str, str]]
 ) -> list[list[str]]:
     """The nodes of each used column, ordered by a few barycenter sweeps."""
-    graph = nx.Graph()
-    graph.add_nodes_from(column)
-    graph.add_edges_from((e.source, e.target) for e in edges)
+    neighbours: dict[str, list[str]] = {key: [] for key in column}
+    for edge in edges:
+        neighbours[edge.source].append(edge.target)
+        neighbours[edge.target].append(edge.source)
     used = sorted(set(column.values()))
     rank = {c: i for i, c in enumerate(used)}
     kinds = {COMPONENT: 0, BEHAVIOR: 1, CAPABILITY: 2, TOPIC: 3}
@@ -210,7 +209,7 @@ def _order(
         for keys in sequence:
             centre = {}
             for key in keys:
-                around = [position[n] for n in graph.neighbors(key)]
+                around = [position[n] for n in neighbours[key]]
                 centre[key] = sum(around) / len(around) if around else position[key]
             keys.sort(key=lambda k: (centre[k], position[k]))
             for i, key in enumerate(keys):
