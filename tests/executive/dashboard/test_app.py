@@ -7,7 +7,7 @@ import json
 import threading
 import urllib.error
 import urllib.request
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -113,8 +113,14 @@ def request(
             return e.code, raw.decode()
 
 
-def stream(dashboard: Dashboard, until: str, timeout: float = 10.0) -> dict[str, Any]:
-    """The first server-sent event called ``until`` (its data)."""
+def stream(
+    dashboard: Dashboard,
+    until: str,
+    where: Callable[[dict[str, Any]], bool] = lambda _: True,
+    timeout: float = 10.0,
+) -> dict[str, Any]:
+    """The first server-sent event called ``until`` whose data fits ``where`` (the
+    dashboard may still be asking the executive when a page connects)."""
     url = f"http://127.0.0.1:{dashboard.port}/api/stream"
     with urllib.request.urlopen(url, timeout=timeout) as response:
         name = ""
@@ -124,7 +130,8 @@ def stream(dashboard: Dashboard, until: str, timeout: float = 10.0) -> dict[str,
                 name = line[7:]
             elif line.startswith("data: ") and name == until:
                 data: dict[str, Any] = json.loads(line[6:])
-                return data
+                if where(data):
+                    return data
     raise AssertionError(f"the stream ended before a '{until}' event")
 
 
@@ -141,15 +148,17 @@ def test_the_stream_starts_with_every_view_of_the_robot(served: Any) -> None:
     _, dashboard = served
     status = stream(dashboard, "status")
     assert status["robot"] == "usecase"
-    goals = stream(dashboard, "goals")
+    goals = stream(dashboard, "goals", lambda view: bool(view["goals"]))
     assert [g["expression"] for g in goals["goals"]][:1] == ["(picture_taken lab)"]
-    plan = stream(dashboard, "plan")
+    plan = stream(dashboard, "plan", lambda view: view["plan"] is not None)
     assert plan["plan"] == 1 and [s["label"] for s in plan["steps"]] == [
         "move_to(dock, lab)",
         "take_picture(lab)",
     ]
     assert plan["svg"].startswith("<svg") and "move_to(dock, lab)" in plan["svg"]
-    components_view = stream(dashboard, "components")
+    components_view = stream(
+        dashboard, "components", lambda view: any(c["faults"] for c in view["components"])
+    )
     lidar = next(c for c in components_view["components"] if c["name"] == "lidar")
     assert lidar["faults"] == 1 and 'data-node="lidar"' in components_view["svg"]
 
@@ -226,6 +235,7 @@ def test_an_event_published_on_the_bus_reaches_the_page_live(served: Any) -> Non
 
 def test_the_pictures_are_served_as_svg_files(served: Any) -> None:
     _, dashboard = served
+    stream(dashboard, "plan", lambda view: view["plan"] is not None)
     status, picture = request(dashboard, "/api/graph.svg")
     assert status == 200 and picture.startswith("<?xml") and "cam_to_lidar" in picture
     status, picture = request(dashboard, "/api/plan.svg")
