@@ -97,11 +97,16 @@ def live_gantt(
     executing = execution.get("plan") == plan_id
     states = {s["index"]: s["state"] for s in execution.get("steps", [])} if executing else {}
     ran: dict[int, tuple[float, float | None]] = {}
+    unended: dict[str, float] = {}  # a step a new plan adopts ran since an older plan's dispatch
     for event in events:
         data = event.get("data") or {}
+        kind, at = event.get("kind"), float(event.get("stamp", 0.0)) - origin
+        if kind == "DISPATCH":
+            unended[str(event.get("subject"))] = at
+        elif kind in _ENDS:
+            unended.pop(str(event.get("subject")), None)
         if data.get("plan") != plan_id or not isinstance(data.get("step"), int):
             continue
-        kind, at = event.get("kind"), float(event.get("stamp", 0.0)) - origin
         if kind == "DISPATCH":
             ran[data["step"]] = (at, None)
         elif kind in _ENDS and data["step"] in ran:
@@ -113,6 +118,8 @@ def live_gantt(
         label = f"{step['action']}({', '.join(step['args'])})"
         state = _state(states.get(step["index"]), plan.get("state", ""))
         span = ran.get(step["index"])
+        if span is None and state in ("dispatched", "running", "paused") and label in unended:
+            span = (unended[label], None)
         details = [label, f"state {state}", _planned(step["start"], step["duration"])]
         task = by_name.get(label)
         if task is not None and span is not None:

@@ -16,7 +16,7 @@ import pytest
 from executive.bus.api import components, monitoring, planning, tasks
 from executive.bus.keys import EVENTS
 from executive.bus.session import Bus
-from executive.dashboard.server import Dashboard
+from executive.dashboard.server import Dashboard, DashboardError
 from knowledge.errors import DomainError
 from knowledge.robot import load_robot
 from tests.conftest import USECASE, free_endpoint
@@ -231,6 +231,13 @@ def test_an_event_published_on_the_bus_reaches_the_page_live(served: Any) -> Non
             break
     reader.join(10)
     assert found["events"][0]["kind"] == "FAULT" and found["events"][0]["subject"] == "lidar"
+
+
+def test_a_dashboard_beyond_loopback_needs_the_robots_credentials(served: Any) -> None:
+    executive, _ = served
+    anywhere = "0.0.0.0"  # noqa: S104 - asked for, and refused
+    with pytest.raises(DashboardError, match=r"\(beyond loopback\) only with the robot's bus"):
+        Dashboard(load_robot(USECASE), executive.bus, host=anywhere, port=0)
 
 
 def test_the_pictures_are_served_as_svg_files(served: Any) -> None:

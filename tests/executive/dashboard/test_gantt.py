@@ -112,3 +112,15 @@ def test_text_from_the_robot_is_escaped_in_the_picture() -> None:
 def test_ticks_are_round_numbers_across_the_span() -> None:
     assert gantt.ticks(0, 10) == [0, 2, 4, 6, 8, 10]
     assert gantt.ticks(-21, 12)[:2] == [-20, -15]
+
+
+def test_a_step_adopted_from_the_plan_before_ran_since_that_plans_dispatch() -> None:
+    events = [
+        {"id": 1, "stamp": 990.0, "kind": "DISPATCH", "subject": "move_to(dock, lab)",
+         "data": {"plan": 1, "step": 0}},
+        {"id": 2, "stamp": 1000.0, "kind": "PLAN_START", "subject": "plan 2", "data": {}},
+    ]  # fmt: skip
+    execution = {"plan": 2, "steps": [{"index": 0, "state": "running"}]}
+    plan = {**PLAN, "steps": PLAN["steps"][:1]}
+    (step,) = gantt.live_gantt(plan, execution, events, [], now=1004.0).steps
+    assert step.ran == (-10.0, None)
