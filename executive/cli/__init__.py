@@ -10,9 +10,11 @@ from types import ModuleType
 
 from executive.cli import (
     component,
+    dashboard,
     demo,
     diagnose,
     goal,
+    graph,
     kb,
     observe,
     plan,
@@ -38,6 +40,8 @@ COMMANDS: tuple[ModuleType, ...] = (
     task,
     component,
     observe,
+    dashboard,
+    graph,
     diagnose,
     rules,
     kb,

@@ -11,7 +11,9 @@ is achieved: exit 0, or 1 with the reason if the robot did not get there.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import queue
+import sys
 import tempfile
 import threading
 import time
@@ -22,9 +24,11 @@ from executive.bus.api.planning import PLAN_SHOW
 from executive.bus.api.tasks import TASK_LIST
 from executive.bus.keys import DIAGNOSES, EVENTS
 from executive.bus.session import Message
+from executive.cli.dashboard import port
 from executive.cli.goal import details
 from executive.cli.output import add_json_flag, print_json, section, table
 from executive.cli.plan import bar
+from executive.dashboard.access import DEFAULT_PORT
 from executive.testing.harness import RobotProcess
 from knowledge.errors import DuraError
 
@@ -57,6 +61,15 @@ def register(sub: Any) -> None:
     )
     p.add_argument("--keep", type=Path, metavar="DIR", help="run in DIR and keep its files")
     p.add_argument("--all-events", action="store_true", help="show every event")
+    p.add_argument(
+        "--dashboard",
+        nargs="?",
+        type=port,
+        const=DEFAULT_PORT,
+        metavar="PORT",
+        help=f"serve the live dashboard while the demo runs (default port {DEFAULT_PORT}) and "
+        "print its address",
+    )
     add_json_flag(p)
     p.set_defaults(run=run)
 
@@ -131,7 +144,16 @@ def _demo(args: argparse.Namespace, folder: Path) -> int:
     timeline = Timeline(quiet=args.json, everything=args.all_events)
     say = timeline.say
     say(f"starting the executive of the thesis use case in {folder}")
-    with RobotProcess(EXAMPLE, folder) as robot:
+    with RobotProcess(EXAMPLE, folder) as robot, contextlib.ExitStack() as page:
+        if args.dashboard is not None:
+            from executive.dashboard.server import Dashboard  # the web stack only when asked
+
+            dashboard = page.enter_context(
+                Dashboard.connect(robot.robot, robot.endpoint, port=args.dashboard,
+                                  folders=[folder])
+            )  # fmt: skip
+            print(f"dura demo: dashboard on {dashboard.url}", flush=True,
+                  file=sys.stderr if args.json else sys.stdout)  # fmt: skip
         robot.bus.subscribe(EVENTS, timeline.on_event)
         robot.bus.subscribe(DIAGNOSES, timeline.on_diagnoses)
         ids = []

@@ -5,18 +5,22 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
 from executive.bus.api import planning as api
+from executive.bus.api import tasks
 from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, shown, table
+from executive.dashboard import gantt
 from executive.planning.goals import GoalSpec
 from executive.planning.partial_order import PartialOrderPlan, Step
 from executive.planning.planner import Planner, PlanningTask, PlanResult, engine_names
 from executive.planning.problem import read_world
 from knowledge.description import DEFAULT_ENGINE
+from knowledge.errors import DuraError
 
 BAR = 40  # characters of the timeline
 
@@ -47,6 +51,12 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--timeout", type=seconds(), default=30.0, metavar="S", help="seconds to search (30)"
     )
+    p.add_argument(
+        "--svg",
+        metavar="FILE",
+        help="also draw the plan as a Gantt chart into an SVG file ('-': stdout, nothing else); "
+        "with 'show', each step's progress, task and configuration and the replans before it",
+    )
     add_client_options(p)
     add_json_flag(p)
     p.set_defaults(run=run, parser=p)
@@ -62,6 +72,10 @@ def run(args: argparse.Namespace) -> int:
     task = PlanningTask(domain.resolve(), world, (GoalSpec(0, goal),))
     with Planner(args.engine, args.timeout) as planner:
         result = planner.solve(task)
+    if args.svg is not None and result.plan is not None:
+        title = f"{problem.name}: {len(result.plan.steps)} steps, makespan {result.plan.makespan:g} s, by {result.engine}"
+        if write_svg(args.svg, gantt.render(gantt.offline_gantt(result.plan, title))):
+            return 0
     if args.json:
         print_json(as_json(result))
         return 0 if result.ok else 1
@@ -78,6 +92,14 @@ def run(args: argparse.Namespace) -> int:
 
 def run_show(args: argparse.Namespace) -> int:
     reply = ask(args, api.PLAN_SHOW)
+    if args.svg is not None and reply.plan is None:
+        raise DuraError("no plan yet: no picture written")
+    if args.svg is not None and reply.plan is not None:
+        events = ask(args, api.EVENTS, api.EventQuery(limit=2000)).events
+        found = ask(args, tasks.TASK_LIST).tasks
+        chart = gantt.live_gantt(reply.plan, reply.execution, events, found, time.time())
+        if write_svg(args.svg, gantt.render(chart)):
+            return 0
     if args.json:
         print_json(reply.to_payload())
         return 0
@@ -98,6 +120,17 @@ def run_show(args: argparse.Namespace) -> int:
     ]  # fmt: skip
     table(["#", "start", "duration", "step", "state", "timeline"], rows)
     return 0
+
+
+def write_svg(target: str, picture: str) -> bool:
+    """Write a picture to a file, or to stdout for '-'; whether stdout took it (then
+    nothing else is printed)."""
+    if target == "-":
+        sys.stdout.write(picture)
+        return True
+    Path(target).write_text(picture, encoding="utf-8")
+    print(f"{shown(target)}: the plan as a Gantt chart", file=sys.stderr)
+    return False
 
 
 def _duration(duration: float | None) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import signal
 import sys
@@ -12,6 +13,7 @@ from typing import Any
 
 from executive.cli.arguments import rate, seconds
 from executive.cli.client import remove_run_file, write_run_file
+from executive.cli.dashboard import add_dashboard_address, port
 from executive.cli.output import add_json_flag, print_json, shown
 from executive.executive import Executive
 from executive.runtime.launcher import local_endpoint
@@ -51,6 +53,13 @@ def register(sub: Any) -> None:
         metavar="SECONDS",
         help="time a component gets to stop, before SIGTERM and again before SIGKILL (default 3)",
     )
+    p.add_argument(
+        "--dashboard",
+        type=port,
+        metavar="PORT",
+        help="also serve the live dashboard on this port (see 'dura dashboard --help')",
+    )
+    add_dashboard_address(p, "dashboard-")
     add_json_flag(p)
     p.set_defaults(run=run)
 
@@ -68,17 +77,27 @@ def run(args: argparse.Namespace) -> int:
         resource_rate=args.resource_rate,
         grace=args.grace,
     )
-    with executive:
+    with executive, contextlib.ExitStack() as dashboard:
         endpoint = local_endpoint(executive.endpoint)
         write_run_file(robot.name, endpoint, robot.path, executive.credentials_path)
         try:
+            url = None
+            if args.dashboard is not None:
+                from executive.dashboard.server import Dashboard
+
+                page = Dashboard.connect(robot, endpoint, host=args.dashboard_host,
+                                         port=args.dashboard)  # fmt: skip
+                url = dashboard.enter_context(page).url
             if args.json:
-                print_json({"robot": robot.name, "endpoint": endpoint, "pid": os.getpid()})
+                print_json({"robot": robot.name, "endpoint": endpoint, "pid": os.getpid(),
+                            **({"dashboard": url} if url else {})})  # fmt: skip
             else:
                 print(
                     f"dura: executive of robot '{robot.name}' runs on {endpoint} (pid "
                     f"{os.getpid()}, knowledge base {shown(executive.kb_path)}); Ctrl-C stops it"
                 )
+                if url:
+                    print(f"dura: dashboard on {url}")
             sys.stdout.flush()
             stop.wait()
         finally:

@@ -1,0 +1,103 @@
+"""``dura dashboard``: the live web page of a running robot."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import signal
+import threading
+from pathlib import Path
+from typing import Any
+
+from executive.cli.client import RUN_FILE
+from executive.dashboard.access import DEFAULT_HOST, DEFAULT_PORT
+from knowledge.description import RobotDescription
+from knowledge.errors import DuraError
+from knowledge.robot import load_robot
+
+
+def add_dashboard_address(parser: Any, prefix: str = "") -> None:
+    """``--host`` and ``--port`` (``--dashboard-host`` with a prefix)."""
+    parser.add_argument(
+        f"--{prefix}host",
+        default=DEFAULT_HOST,
+        metavar="HOST",
+        help=f"the address the page listens on (default {DEFAULT_HOST}, this machine only; "
+        "any other needs the robot's bus credentials: visitors log in as 'operator')",
+    )
+
+
+def port(text: str) -> int:
+    """A TCP port: 0 (a free one) to 65535."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a port number") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"must be a port from 0 to 65535, not {text}")
+    return value
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser(
+        "dashboard",
+        help="serve a live web page of the running robot",
+        description="Serve the dashboard of a running robot: goals (add and cancel them), the "
+        "plan as a Gantt chart with live progress, the component graph coloured by state with "
+        "the diagnoses, the observations with their recent values, and the event log, updated "
+        "live. It listens on 127.0.0.1 by default; with --host another address, only visitors "
+        "with the robot's bus credentials get in (HTTP basic authentication as 'operator', or "
+        "the link printed at start). Ctrl-C stops it.",
+    )
+    p.add_argument(
+        "--robot",
+        metavar="ROBOT.yaml",
+        type=Path,
+        help="the robot whose executive to show (default: the one 'dura run' runs in this folder)",
+    )
+    p.add_argument("--endpoint", help="where that executive listens (default: the robot's)")
+    add_dashboard_address(p)
+    p.add_argument(
+        "--port",
+        type=port,
+        default=DEFAULT_PORT,
+        metavar="PORT",
+        help=f"the page's port (default {DEFAULT_PORT}; 0: any free one)",
+    )
+    p.set_defaults(run=run)
+
+
+def target(args: argparse.Namespace) -> tuple[RobotDescription, str]:
+    """The robot description and the endpoint of the executive to show."""
+    if args.robot is not None:
+        robot = load_robot(args.robot)
+        return robot, args.endpoint or robot.endpoint
+    try:
+        found = json.loads(RUN_FILE.read_text())
+        description, endpoint = Path(found["description"]), str(found["endpoint"])
+    except FileNotFoundError:
+        raise DuraError(
+            f"no executive runs in this folder (no {RUN_FILE}): start one with "
+            "'dura run ROBOT.yaml' or name its robot with --robot ROBOT.yaml"
+        ) from None
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise DuraError(f"{RUN_FILE}: unreadable ({e}); name the robot with --robot") from e
+    return load_robot(description), args.endpoint or endpoint
+
+
+def run(args: argparse.Namespace) -> int:
+    from executive.dashboard.server import Dashboard  # the web stack loads only when needed
+
+    robot, endpoint = target(args)
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+    with Dashboard.connect(robot, endpoint, host=args.host, port=args.port) as dashboard:
+        print(
+            f"dura: dashboard of robot '{robot.name}' on {dashboard.url} (executive at "
+            f"{endpoint}); Ctrl-C stops it",
+            flush=True,
+        )
+        stop.wait()
+    print("dura: dashboard stopped")
+    return 0

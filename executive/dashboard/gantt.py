@@ -1,0 +1,267 @@
+"""A plan as a Gantt chart: the data (one row per step, marks on the time axis) and its
+SVG picture.
+
+Two sources give the data: a plan found offline (:func:`offline_gantt`, times from the
+plan's start) and the running robot's plan with its execution (:func:`live_gantt`:
+planned and actual times from the event log, step states, each step's task and
+configuration, and the plans and replans before it on the same time axis, 0 being the
+current plan's start). :func:`render` draws either.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from executive.dashboard import svg
+
+if TYPE_CHECKING:
+    from executive.planning.partial_order import PartialOrderPlan
+
+HISTORY = 60.0  # seconds before the current plan's start whose plans and replans are marked
+STATES = ("pending", "dispatched", "running", "paused", "done", "failed", "cancelled")
+_ENDS = {"END": "done", "FAIL": "failed", "CANCEL": "cancelled"}
+
+
+@dataclass(frozen=True)
+class GanttStep:
+    """One row: a step's planned place, its state and, once dispatched, when it ran
+    (``ran``: from dispatch to its end, ``None`` for an end not reached yet)."""
+
+    index: int
+    label: str
+    start: float
+    duration: float | None
+    state: str = "pending"
+    ran: tuple[float, float | None] | None = None
+    details: tuple[str, ...] = ()
+
+    @property
+    def end(self) -> float:
+        return self.start + (self.duration or 0.0)
+
+
+@dataclass(frozen=True)
+class Mark:
+    """A moment on the time axis: a plan started (``plan``) or asked for a new one
+    (``replan``)."""
+
+    at: float
+    kind: str
+    text: str
+
+
+@dataclass(frozen=True)
+class Gantt:
+    """What the chart shows; times are seconds on one axis."""
+
+    title: str
+    steps: tuple[GanttStep, ...]
+    marks: tuple[Mark, ...] = ()
+    now: float | None = None
+
+
+def offline_gantt(plan: PartialOrderPlan, title: str) -> Gantt:
+    """The chart of a plan found offline (every step planned, nothing ran)."""
+    steps = []
+    for step in plan.steps:
+        after = ", ".join(
+            f"{p.step}{'' if p.at.value == 'end' else ' (its start)'}" for p in step.after
+        )
+        details = [step.label, _planned(step.start, step.duration)]
+        if after:
+            details.append(f"after step {after}")
+        steps.append(
+            GanttStep(step.index, step.label, step.start, step.duration, "pending",
+                      details=tuple(details))
+        )  # fmt: skip
+    return Gantt(title, tuple(steps))
+
+
+def live_gantt(
+    plan: Mapping[str, Any],
+    execution: Mapping[str, Any],
+    events: Sequence[Mapping[str, Any]],
+    tasks: Sequence[Mapping[str, Any]],
+    now: float,
+) -> Gantt:
+    """The chart of the running robot's plan (a ``plan/show`` reply's ``plan`` and
+    ``execution``), its events (``events``, oldest first) and tasks (``task/list``)."""
+    plan_id = plan["id"]
+    origin = float(plan.get("created") or now)
+    for event in events:
+        if event.get("kind") == "PLAN_START" and event.get("subject") == f"plan {plan_id}":
+            origin = float(event["stamp"])
+    executing = execution.get("plan") == plan_id
+    states = {s["index"]: s["state"] for s in execution.get("steps", [])} if executing else {}
+    ran: dict[int, tuple[float, float | None]] = {}
+    unended: dict[str, float] = {}  # a step a new plan adopts ran since an older plan's dispatch
+    for event in events:
+        data = event.get("data") or {}
+        kind, at = event.get("kind"), float(event.get("stamp", 0.0)) - origin
+        if kind == "DISPATCH":
+            unended[str(event.get("subject"))] = at
+        elif kind in _ENDS:
+            unended.pop(str(event.get("subject")), None)
+        if data.get("plan") != plan_id or not isinstance(data.get("step"), int):
+            continue
+        if kind == "DISPATCH":
+            ran[data["step"]] = (at, None)
+        elif kind in _ENDS and data["step"] in ran:
+            ran[data["step"]] = (ran[data["step"]][0], at)
+    # the newest task of a step (a restarted step has several)
+    by_name = {str(t.get("name")): t for t in sorted(tasks, key=lambda t: _number(t.get("id")))}
+    steps = []
+    for step in plan.get("steps", []):
+        label = f"{step['action']}({', '.join(step['args'])})"
+        state = _state(states.get(step["index"]), plan.get("state", ""))
+        span = ran.get(step["index"])
+        if span is None and state in ("dispatched", "running", "paused") and label in unended:
+            span = (unended[label], None)
+        details = [label, f"state {state}", _planned(step["start"], step["duration"])]
+        task = by_name.get(label)
+        if task is not None and span is not None:
+            details.append(f"task {task['id']}: {task.get('behavior', '')} {task.get('state', '')}")
+            providers = task.get("providers") or {}
+            if providers:
+                uses = ", ".join(f"{c} → {p}" for c, p in sorted(providers.items()))
+                details.append(f"configuration: {uses}")
+            if task.get("reason"):
+                details.append(f"reason: {task['reason']}")
+        steps.append(
+            GanttStep(step["index"], label, float(step["start"]), step["duration"], state,
+                      span, tuple(details))
+        )  # fmt: skip
+    marks = []
+    for event in events:
+        kind, at = event.get("kind"), float(event.get("stamp", 0.0)) - origin
+        if at < -HISTORY or kind not in ("PLAN_START", "REPLAN"):
+            continue
+        if kind == "PLAN_START":
+            marks.append(Mark(at, "plan", str(event.get("subject", "plan"))))
+        else:
+            reason = (event.get("data") or {}).get("reason", "")
+            marks.append(Mark(at, "replan", f"replan: {reason}" if reason else "replan"))
+    goals = ", ".join(str(g) for g in plan.get("goal_ids", [])) or "-"
+    title = (
+        f"plan {plan_id}: {plan.get('state', '')}, by {plan.get('engine', '')}, for goals {goals}"
+    )
+    return Gantt(title, tuple(steps), tuple(marks), now - origin)
+
+
+def _number(value: Any) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.inf
+
+
+def _state(step_state: str | None, plan_state: str) -> str:
+    if step_state is None:
+        return "done" if plan_state == "succeeded" else "pending"
+    return "done" if step_state == "ended" else step_state
+
+
+def _planned(start: float, duration: float | None) -> str:
+    length = "unknown duration" if duration is None else f"{duration:g} s"
+    return f"planned at {start:g} s for {length}"
+
+
+# --- the picture ------------------------------------------------------------------------
+
+WIDTH = 960.0
+ROW = 26.0
+TOP = 58.0  # title and marks
+BOTTOM = 56.0  # axis labels and legend
+
+
+def ticks(low: float, high: float, count: int = 8) -> list[float]:
+    """Round numbers from ``low`` to ``high``, about ``count`` of them."""
+    span = max(high - low, 1e-9)
+    raw = span / count
+    magnitude = 10 ** math.floor(math.log10(raw))
+    step = next(m * magnitude for m in (1, 2, 5, 10) if m * magnitude >= raw)
+    first = math.ceil(low / step) * step
+    return [round(first + i * step, 9) for i in range(int((high - first) / step + 1e-9) + 1)]
+
+
+def render(gantt: Gantt, width: float = WIDTH) -> str:
+    """The chart as an SVG document."""
+    labels = [f"{s.index}  {s.label}" for s in gantt.steps]
+    left = max(140.0, max((svg.text_width(t) for t in labels), default=0.0) + 24.0)
+    right = width - 84.0  # room for the last step's state
+    low = min([0.0, *(m.at for m in gantt.marks), *(s.ran[0] for s in gantt.steps if s.ran)])
+    ends = [s.end for s in gantt.steps]
+    ends += [s.ran[1] for s in gantt.steps if s.ran and s.ran[1] is not None]
+    if gantt.now is not None and any(s.ran for s in gantt.steps):
+        ends.append(gantt.now)
+    high = max([low + 1.0, *ends])
+    scale = (right - left) / (high - low)
+
+    def x(t: float) -> float:
+        return left + (t - low) * scale
+
+    height = TOP + ROW * max(1, len(gantt.steps)) + BOTTOM
+    body: list[str] = [svg.label(12, 20, gantt.title, font_size=14, font_weight="600")]
+    axis_y = TOP + ROW * max(1, len(gantt.steps))
+    for row in range(1, len(gantt.steps), 2):  # stripes under the grid, the marks and the bars
+        body.append(svg.element("rect", x=0, y=TOP + row * ROW, width=width, height=ROW,
+                                fill="#f7f8fa"))  # fmt: skip
+    for t in ticks(low, high):
+        body.append(svg.element("line", x1=x(t), y1=TOP - 4, x2=x(t), y2=axis_y, stroke=svg.GRID))
+        body.append(svg.label(x(t), axis_y + 16, f"{t:g} s", font_size=10, fill=svg.MUTED,
+                              text_anchor="middle"))  # fmt: skip
+    for i, mark in enumerate(gantt.marks):
+        colour = svg.ALERT if mark.kind == "replan" else svg.CAPABILITY
+        line = svg.element(
+            "line", x1=x(mark.at), y1=TOP - 14 + (i % 2) * 8, x2=x(mark.at), y2=axis_y,
+            stroke=colour, stroke_width=1.5, stroke_dasharray="4 3",
+        )  # fmt: skip
+        short = mark.text if len(mark.text) <= 28 else mark.text[:27] + "…"
+        tag = svg.label(x(mark.at) + 3, TOP - 16 + (i % 2) * 8, short, font_size=10, fill=colour)
+        body.append(
+            svg.element("g", [svg.title(f"{mark.at:+.1f} s  {mark.text}"), line, tag],
+                        class_="mark", data_kind=mark.kind)
+        )  # fmt: skip
+    for row, (step, text) in enumerate(zip(gantt.steps, labels, strict=True)):
+        y = TOP + row * ROW
+        fill = svg.colour(step.state)
+        parts = [svg.title("\n".join(step.details or (step.label,)))]
+        parts.append(svg.label(12, y + 17, text))
+        bar_width = max(3.0, (step.duration or 0.0) * scale)
+        parts.append(
+            svg.element("rect", x=x(step.start), y=y + 5, width=bar_width, height=ROW - 10, rx=3,
+                        fill=fill, fill_opacity=0.45, stroke=fill, class_="planned")
+        )  # fmt: skip
+        last = x(step.start) + bar_width
+        if step.ran is not None:
+            begin, end = step.ran
+            stop = end if end is not None else (gantt.now if gantt.now is not None else begin)
+            last = max(last, x(stop))
+            parts.append(
+                svg.element("rect", x=x(begin), y=y + 9, width=max(3.0, (stop - begin) * scale),
+                            height=ROW - 18, rx=2, fill=fill, class_="ran")
+            )  # fmt: skip
+        parts.append(
+            svg.label(last + 6, y + 17, step.state, font_size=10,
+                      fill=svg.MUTED)
+        )  # fmt: skip
+        body.append(
+            svg.element("g", parts, class_="step", data_step=step.index, data_state=step.state,
+                        data_label=step.label)
+        )  # fmt: skip
+    if gantt.now is not None and any(s.ran for s in gantt.steps):
+        body.append(
+            svg.element("line", x1=x(gantt.now), y1=TOP - 4, x2=x(gantt.now), y2=axis_y,
+                        stroke=svg.INK, stroke_width=1.5, class_="now")
+        )  # fmt: skip
+        body.append(svg.label(x(gantt.now), TOP - 6, "now", font_size=10, text_anchor="middle"))
+    legend_x = 12.0
+    for state in STATES:
+        body.append(svg.element("rect", x=legend_x, y=height - 20, width=10, height=10, rx=2,
+                                fill=svg.colour(state)))  # fmt: skip
+        body.append(svg.label(legend_x + 14, height - 11, state, font_size=10, fill=svg.MUTED))
+        legend_x += 24 + svg.text_width(state, 10)
+    return svg.document(width, height, body, name="gantt", caption=gantt.title)

@@ -1,0 +1,126 @@
+"""The plan as a Gantt chart: what each row, mark and tooltip of the picture says."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from executive.dashboard import gantt
+from executive.planning.partial_order import PartialOrderPlan, Precedence, Step, Timepoint
+from tests.executive.dashboard.pictures import groups, parse, texts, tooltip
+
+PLAN: dict[str, Any] = {
+    "id": 2, "state": "executing", "engine": "kairos", "goal_ids": [1, 3], "created": 1000.0,
+    "steps": [
+        {"index": 0, "action": "move_to", "args": ["dock", "lab"], "start": 0.0, "duration": 5.0},
+        {"index": 1, "action": "take_picture", "args": ["lab"], "start": 5.0, "duration": 2.0},
+        {"index": 2, "action": "move_to", "args": ["lab", "dock"], "start": 7.0, "duration": 5.0},
+    ],
+}  # fmt: skip
+EXECUTION = {"plan": 2, "steps": [{"index": 0, "state": "ended"}, {"index": 1, "state": "running"},
+                                  {"index": 2, "state": "pending"}]}  # fmt: skip
+EVENTS = [
+    {"id": 1, "stamp": 980.0, "kind": "PLAN_START", "subject": "plan 1", "data": {}},
+    {"id": 2, "stamp": 990.0, "kind": "REPLAN", "subject": "plan 1",
+     "data": {"reason": "move_to(dock, lab) failed"}},
+    {"id": 3, "stamp": 1001.0, "kind": "PLAN_START", "subject": "plan 2", "data": {}},
+    {"id": 4, "stamp": 1001.1, "kind": "DISPATCH", "subject": "move_to(dock, lab)",
+     "data": {"plan": 2, "step": 0}},
+    {"id": 5, "stamp": 1007.0, "kind": "END", "subject": "move_to(dock, lab)",
+     "data": {"plan": 2, "step": 0}},
+    {"id": 6, "stamp": 1007.1, "kind": "DISPATCH", "subject": "take_picture(lab)",
+     "data": {"plan": 2, "step": 1}},
+]  # fmt: skip
+TASKS = [
+    {"id": "7", "name": "take_picture(lab)", "behavior": "take_picture", "state": "failed",
+     "providers": {"camera": "cam"}},
+    {"id": "9", "name": "take_picture(lab)", "behavior": "take_picture", "state": "running",
+     "providers": {"camera": "cam"}},
+]  # fmt: skip
+
+
+def live() -> gantt.Gantt:
+    return gantt.live_gantt(PLAN, EXECUTION, EVENTS, TASKS, now=1008.0)
+
+
+def test_a_live_chart_has_a_row_per_step_with_its_state() -> None:
+    chart = live()
+    assert [(s.label, s.state) for s in chart.steps] == [
+        ("move_to(dock, lab)", "done"),
+        ("take_picture(lab)", "running"),
+        ("move_to(lab, dock)", "pending"),
+    ]
+    assert chart.title == "plan 2: executing, by kairos, for goals 1, 3"
+
+
+def test_times_count_from_the_current_plans_start_and_steps_ran_from_dispatch_to_end() -> None:
+    chart = live()
+    assert chart.now == 7.0
+    assert chart.steps[0].ran == pytest.approx((0.1, 6.0))
+    assert chart.steps[1].ran is not None and chart.steps[1].ran[1] is None  # running
+    assert chart.steps[2].ran is None
+
+
+def test_earlier_plans_and_replans_are_marked_on_the_time_axis() -> None:
+    marks = live().marks
+    assert [(m.at, m.kind) for m in marks] == [(-21.0, "plan"), (-11.0, "replan"), (0.0, "plan")]
+    assert marks[1].text == "replan: move_to(dock, lab) failed"
+
+
+def test_a_step_shows_its_newest_task_and_configuration_on_hover() -> None:
+    step = live().steps[1]
+    assert "task 9: take_picture running" in step.details
+    assert "configuration: camera → cam" in step.details
+    root = parse(gantt.render(live()))
+    rows = groups(root, "step")
+    assert [r.get("data-state") for r in rows] == ["done", "running", "pending"]
+    assert "configuration: camera → cam" in tooltip(rows[1])
+
+
+def test_the_picture_draws_the_marks_the_now_line_and_a_legend() -> None:
+    root = parse(gantt.render(live()))
+    assert [m.get("data-kind") for m in groups(root, "mark")] == ["plan", "replan", "plan"]
+    assert any(line.get("class") == "now" for line in root.iter("{http://www.w3.org/2000/svg}line"))
+    drawn = texts(root)
+    assert "plan 2: executing, by kairos, for goals 1, 3" in drawn
+    assert {"pending", "running", "done", "failed"} <= set(drawn)
+
+
+def test_an_offline_plan_is_drawn_with_its_precedences_on_hover() -> None:
+    plan = PartialOrderPlan(
+        (
+            Step(0, "drive", ("dock", "store"), (), 0.0, 5.0),
+            Step(1, "pick", ("parcel", "store"), (), 5.0, 3.0,
+                 after=(Precedence(0, Timepoint.END),)),
+        )
+    )  # fmt: skip
+    root = parse(gantt.render(gantt.offline_gantt(plan, "parcel.pddl: 2 steps")))
+    rows = groups(root, "step")
+    assert [r.get("data-label") for r in rows] == ["drive(dock, store)", "pick(parcel, store)"]
+    assert "after step 0" in tooltip(rows[1])
+    assert not groups(root, "mark")
+
+
+def test_text_from_the_robot_is_escaped_in_the_picture() -> None:
+    plan = {**PLAN, "steps": [{"index": 0, "action": "a<b>&", "args": ['"x"'], "start": 0.0,
+                               "duration": None}]}  # fmt: skip
+    root = parse(gantt.render(gantt.live_gantt(plan, {}, [], [], now=1000.0)))
+    assert groups(root, "step")[0].get("data-label") == 'a<b>&("x")'
+
+
+def test_ticks_are_round_numbers_across_the_span() -> None:
+    assert gantt.ticks(0, 10) == [0, 2, 4, 6, 8, 10]
+    assert gantt.ticks(-21, 12)[:2] == [-20, -15]
+
+
+def test_a_step_adopted_from_the_plan_before_ran_since_that_plans_dispatch() -> None:
+    events = [
+        {"id": 1, "stamp": 990.0, "kind": "DISPATCH", "subject": "move_to(dock, lab)",
+         "data": {"plan": 1, "step": 0}},
+        {"id": 2, "stamp": 1000.0, "kind": "PLAN_START", "subject": "plan 2", "data": {}},
+    ]  # fmt: skip
+    execution = {"plan": 2, "steps": [{"index": 0, "state": "running"}]}
+    plan = {**PLAN, "steps": PLAN["steps"][:1]}
+    (step,) = gantt.live_gantt(plan, execution, events, [], now=1004.0).steps
+    assert step.ran == (-10.0, None)
