@@ -13,9 +13,11 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from knowledge.ros2_spec import Ros2Spec
+if TYPE_CHECKING:  # read only for a ROS 2 robot: the command line stays quick to start
+    from knowledge.ros2_spec import Ros2Spec
+
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 
