@@ -188,7 +188,7 @@ def access_control(robot: str, components: Iterable[str]) -> dict[str, Any]:
         {"id": "operators", "usernames": [OPERATOR]},
     ]
     policies = [
-        {"rules": ["everything"], "subjects": ["trusted"]},
+        {"rules": ["everything", "deliver"], "subjects": ["trusted"]},
         {"rules": ["deliver", "ask", "listen"], "subjects": ["operators"]},
     ]
     for name in components:
