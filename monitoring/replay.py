@@ -61,6 +61,22 @@ log = logging.getLogger("dura.replay")
 STOPPED = (Lifecycle.STOPPING, Lifecycle.STOPPED, Lifecycle.EXITED, Lifecycle.FAILED)
 
 
+def watched_topics(robot: RobotDescription) -> set[str]:
+    """The topics the robot's observers listen to.
+
+    Raises:
+        ConfigError: an observer of the robot description is invalid.
+    """
+    found: set[str] = set()
+    for component in robot.components.values():
+        for spec in component.observers:
+            observer = make_observer(config_of(spec, path=str(robot.path)))
+            found.update(
+                k.removeprefix("topic/") for k, _ in observer.inputs() if k.startswith("topic/")
+            )
+    return found
+
+
 def state_component(key: str) -> str | None:
     """The component of a ``component/<name>/state`` key, else ``None``."""
     parts = key.split("/")
@@ -167,6 +183,17 @@ class Replay:
     def observers(self) -> list[str]:
         """The ids of the observers that are replayed."""
         return [slot.id for slot in self._slots]
+
+    @property
+    def skipped(self) -> list[str]:
+        """The observers that are not replayed, each with the reason."""
+        return list(self._skipped)
+
+    @property
+    def listened(self) -> set[str]:
+        """The keys whose messages matter: the replayed observers' inputs, component
+        states, and what the recording says was diagnosed and repaired."""
+        return {key for slot in self._slots for key, _ in slot.inputs} | {DIAGNOSES, EVENTS}
 
     # --- input ----------------------------------------------------------------------
 
