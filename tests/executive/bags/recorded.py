@@ -8,6 +8,7 @@ import sqlite3
 from pathlib import Path
 
 import numpy as np
+from mcap.writer import Writer as McapWriter
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
@@ -74,4 +75,26 @@ def write_unknown_type_bag(path: Path) -> Path:
     (database,) = path.glob("*.db3")
     with contextlib.closing(sqlite3.connect(database)) as db, db:
         db.execute("DELETE FROM message_definitions")
+    return path
+
+
+def write_mcap(
+    path: Path,
+    records: list[tuple[int, int]],
+    *,
+    topic: str = "/scan",
+    metadata: dict[str, str] | None = None,
+    schema: bool = True,
+) -> Path:
+    """A rosbag2-profile MCAP file of scans, each record (receive ns, publish ns), as
+    ROS 2 Jazzy records them; ``metadata`` goes on the channel."""
+    text, _ = TYPES.generate_msgdef(SCAN, ros_version=2)
+    with path.open("wb") as stream:
+        writer = McapWriter(stream)
+        writer.start(profile="ros2", library="tests")
+        schema_id = writer.register_schema(SCAN, "ros2msg", text.encode()) if schema else 0
+        channel = writer.register_channel(topic, "cdr", schema_id, metadata or {})
+        for received, published in records:
+            writer.add_message(channel, received, scan(published), published)
+        writer.finish()
     return path
