@@ -13,6 +13,7 @@ import os
 from pathlib import Path
 from typing import Any
 
+from executive.bags.recording import DEFAULT_MAX_SIZE, Recording
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus
@@ -39,6 +40,8 @@ class Executive:
         log_dir: where component logs go (default ``./.dura/logs``).
         resource_rate: how often the resource monitor publishes, in Hz.
         grace: seconds a component gets at each step of a stop.
+        record: record the bus traffic to this MCAP file (``dura run --record``).
+        record_max_size: bytes at which the recording is rotated.
     """
 
     def __init__(
@@ -50,6 +53,8 @@ class Executive:
         log_dir: Path | None = None,
         resource_rate: float = 1.0,
         grace: float = 3.0,
+        record: Path | None = None,
+        record_max_size: int = DEFAULT_MAX_SIZE,
     ) -> None:
         self.robot = robot
         self.endpoint = endpoint or robot.endpoint
@@ -57,6 +62,8 @@ class Executive:
         self.log_dir = log_dir or Path.cwd() / ".dura" / "logs"
         self.resource_rate = resource_rate
         self.grace = grace
+        self.record = record
+        self.record_max_size = record_max_size
         self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> Executive:
@@ -90,7 +97,11 @@ class Executive:
             PlanTasks(self.tasks, self.robot),
             status={"tasks": self.tasks.tasks, "components": self._components},
         )
+        recording: list[Service] = []
+        if self.record is not None:  # first: it sees every other service's traffic
+            recording.append(Recording(context, self.record, max_size=self.record_max_size))
         return [
+            *recording,
             ComponentApi(context, self.launcher),
             ResourceMonitor(context, rate=self.resource_rate),
             ObserverManager(context),

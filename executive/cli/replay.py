@@ -13,12 +13,12 @@ from typing import Any, TextIO
 from executive.bags.bag import Bag, Route, routes
 from executive.bags.reader import open_bag
 from executive.bus.session import Message
-from executive.cli.arguments import rate, seconds
+from executive.cli.arguments import factor, seconds
 from executive.cli.output import add_json_flag, print_json, shown
 from knowledge.errors import BagError
 from knowledge.robot import load_robot
 from monitoring.replay import Replay, state_component, watched_topics
-from monitoring.timeline import Entry, Timeline
+from monitoring.timeline import Entry, RepairEntry, Timeline
 
 PROGRESS_AFTER = 1.0  # seconds of replay before progress shows (on a terminal only)
 PROGRESS_EVERY = 0.25  # seconds between two progress lines
@@ -43,7 +43,7 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         "--rate",
-        type=rate,
+        type=factor,
         metavar="R",
         help="play at R times the recorded speed (default: at once)",
     )
@@ -79,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     with open_bag(args.bag) as bag:
         start, end = window(bag, args.begin, args.end)
         found = routes(bag, robot, args.map, watched=watched_topics(robot))
-        printer = None if args.json else Printer(sys.stdout, bag, found)
+        printer = None if args.json else Printer(sys.stdout, bag)
         replay = Replay(
             robot,
             provided={r.key for r in found.values()},
@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
         }
         bag.check(used)
         if printer is not None:
-            printer.header(robot.name, replay, start, end)
+            printer.header(robot.name, replay, used, start, end)
         messages: Iterable[Message] = bag.messages(used, start, end)
         if args.rate:
             messages = paced(messages, replay, start, args.rate)
@@ -109,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
                 "bag": str(args.bag),
                 "format": bag.format,
                 "robot": robot.name,
-                "routes": {name: vars(route) for name, route in found.items()},
+                "routes": {name: vars(route) for name, route in used.items()},
                 **timeline.to_payload(),
             }
         )
@@ -167,15 +167,17 @@ class Progress:
 class Printer:
     """The timeline for people: a header, each entry as it happens, a summary."""
 
-    def __init__(self, out: TextIO, bag: Bag, found: dict[str, Route]) -> None:
-        self.out, self.bag, self.routes = out, bag, found
+    def __init__(self, out: TextIO, bag: Bag) -> None:
+        self.out, self.bag = out, bag
 
-    def header(self, robot: str, replay: Replay, start: float, end: float) -> None:
+    def header(
+        self, robot: str, replay: Replay, used: dict[str, Route], start: float, end: float
+    ) -> None:
         bag = self.bag
         mapped = ", ".join(
             f"{name} → {route.key.removeprefix('topic/')}"
             + (f" (from {route.caller})" if route.caller else "")
-            for name, route in self.routes.items()
+            for name, route in used.items()
             if route.key.startswith("topic/")
         )
         self.out.write(
@@ -212,9 +214,14 @@ class Printer:
         for (rule, action), times in fired.items():
             when = ", ".join(f"{t:.3f}" for t in times)
             out.write(f"  rule {rule} would {action}: {len(times)} time(s) ({when})\n")
-        recorded = timeline.recorded_holds()
-        for hold in recorded:
+        for hold in timeline.recorded_holds():
             periods = ", ".join(f"{a:.3f}-{b:.3f}" for a, b in hold.periods)
             out.write(
-                f"  recorded diagnosis {', '.join(hold.diagnosis)}: held {hold.total:.3f} s ({periods})\n"
+                f"  recorded (live) diagnosis {', '.join(hold.diagnosis)}: held {hold.total:.3f} s "
+                f"({periods})\n"
             )
+        for entry in timeline.recorded:
+            if isinstance(entry, RepairEntry):
+                out.write(
+                    f"  recorded (live) rule {entry.rule} fired: {entry.action} ({entry.time:.3f})\n"
+                )

@@ -10,7 +10,8 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from executive.cli.arguments import rate, seconds
+from executive.bags.recording import DEFAULT_MAX_SIZE, MB
+from executive.cli.arguments import megabytes, rate, seconds
 from executive.cli.client import remove_run_file, write_run_file
 from executive.cli.output import add_json_flag, print_json, shown
 from executive.executive import Executive
@@ -51,6 +52,19 @@ def register(sub: Any) -> None:
         metavar="SECONDS",
         help="time a component gets to stop, before SIGTERM and again before SIGKILL (default 3)",
     )
+    p.add_argument(
+        "--record",
+        type=Path,
+        metavar="OUT.mcap",
+        help="record the robot's bus traffic to MCAP, as 'dura record' does",
+    )
+    p.add_argument(
+        "--record-max-size",
+        type=megabytes,
+        default=DEFAULT_MAX_SIZE,
+        metavar="MB",
+        help=f"rotate the recording at this size (default {DEFAULT_MAX_SIZE // MB})",
+    )
     add_json_flag(p)
     p.set_defaults(run=run)
 
@@ -67,6 +81,8 @@ def run(args: argparse.Namespace) -> int:
         log_dir=args.log_dir.resolve(),
         resource_rate=args.resource_rate,
         grace=args.grace,
+        record=args.record.resolve() if args.record is not None else None,
+        record_max_size=args.record_max_size,
     )
     with executive:
         endpoint = local_endpoint(executive.endpoint)
