@@ -10,14 +10,12 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any, TextIO
 
-from executive.bags.bag import Bag, Route, routes
-from executive.bags.reader import open_bag
 from executive.bus.session import Message
 from executive.cli.arguments import factor, seconds
 from executive.cli.output import add_json_flag, print_json, shown
-from knowledge.errors import BagError
+from executive.testing.replay import BagReplay
 from knowledge.robot import load_robot
-from monitoring.replay import Replay, state_component, watched_topics
+from monitoring.replay import Replay
 from monitoring.timeline import Entry, RepairEntry, Timeline
 
 PROGRESS_AFTER = 1.0  # seconds of replay before progress shows (on a terminal only)
@@ -63,44 +61,26 @@ def register(sub: Any) -> None:
     p.set_defaults(run=run)
 
 
-def window(bag: Bag, begin: float | None, end: float | None) -> tuple[float, float]:
-    """The replayed window in the recording's time."""
-    length = bag.end - bag.start
-    if begin is not None and begin > length:
-        raise BagError(f"{bag.path}: --from {begin:g} is after its end ({length:.3f} s)")
-    if begin is not None and end is not None and end <= begin:
-        raise BagError(f"--to {end:g} must come after --from {begin:g}")
-    start = bag.start + (begin or 0.0)
-    return start, min(bag.end, bag.start + end) if end is not None else bag.end
-
-
 def run(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot)
-    with open_bag(args.bag) as bag:
-        start, end = window(bag, args.begin, args.end)
-        found = routes(bag, robot, args.map, watched=watched_topics(robot))
-        printer = None if args.json else Printer(sys.stdout, bag)
-        replay = Replay(
-            robot,
-            provided={r.key for r in found.values()},
-            origin=bag.start,
-            start=start,
-            on_entry=printer.entry if printer is not None else None,
-        )
-        used = {
-            name: route
-            for name, route in found.items()
-            if route.key in replay.listened or state_component(route.key) is not None
-        }
-        bag.check(used)
+    printer = None if args.json else Printer(sys.stdout)
+    with BagReplay(
+        args.bag,
+        robot,
+        maps=args.map,
+        begin=args.begin,
+        end=args.end,
+        on_entry=printer.entry if printer is not None else None,
+    ) as session:
+        bag = session.bag
         if printer is not None:
-            printer.header(robot.name, replay, used, start, end)
-        messages: Iterable[Message] = bag.messages(used, start, end)
+            printer.header(session)
+        messages: Iterable[Message] = session.messages()
         if args.rate:
-            messages = paced(messages, replay, start, args.rate)
-        if not args.json and sys.stderr.isatty():
-            messages = Progress(sys.stderr, start, end).wrap(messages)
-        timeline = replay.run(messages, end)
+            messages = paced(messages, session.replay, session.start, args.rate)
+        if printer is not None and sys.stderr.isatty():
+            messages = Progress(sys.stderr, session.start, session.end).wrap(messages)
+        timeline = session.run(messages)
     if printer is not None:
         printer.summary(timeline)
     else:
@@ -109,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
                 "bag": str(args.bag),
                 "format": bag.format,
                 "robot": robot.name,
-                "routes": {name: vars(route) for name, route in used.items()},
+                "routes": {name: vars(route) for name, route in session.routes.items()},
                 **timeline.to_payload(),
             }
         )
@@ -167,26 +147,24 @@ class Progress:
 class Printer:
     """The timeline for people: a header, each entry as it happens, a summary."""
 
-    def __init__(self, out: TextIO, bag: Bag) -> None:
-        self.out, self.bag = out, bag
+    def __init__(self, out: TextIO) -> None:
+        self.out = out
 
-    def header(
-        self, robot: str, replay: Replay, used: dict[str, Route], start: float, end: float
-    ) -> None:
-        bag = self.bag
+    def header(self, session: BagReplay) -> None:
+        bag, start, end = session.bag, session.start, session.end
         mapped = ", ".join(
             f"{name} → {route.key.removeprefix('topic/')}"
             + (f" (from {route.caller})" if route.caller else "")
-            for name, route in used.items()
+            for name, route in session.routes.items()
             if route.key.startswith("topic/")
         )
         self.out.write(
             f"{shown(bag.path)}: {bag.format}, {bag.end - bag.start:.3f} s, {bag.count} "
-            f"messages; robot '{robot}'; {mapped}\n"
+            f"messages; robot '{session.robot.name}'; {mapped}\n"
         )
         if start > bag.start or end < bag.end:
             self.out.write(f"window: {start - bag.start:.3f} to {end - bag.start:.3f} s\n")
-        for reason in replay.skipped:
+        for reason in session.replay.skipped:
             self.out.write(f"not replayed: {reason}\n")
         self.out.write(f"{'TIME':>9}  {'WHAT':<11}  DETAIL\n")
         self.out.flush()
