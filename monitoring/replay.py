@@ -32,15 +32,14 @@ import heapq
 import logging
 from collections.abc import Callable, Collection, Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 from executive.bus.keys import DIAGNOSES, EVENTS
-from executive.bus.payloads import ComponentState, DiagnosisInfo, Lifecycle
+from executive.bus.payloads import ComponentState, Lifecycle
 from executive.bus.session import Message
 from knowledge.description import RobotDescription
-from knowledge.errors import BusError, ConfigError
+from knowledge.errors import BusError
 from monitoring.diagnosis.engine import DiagnosisEngine
-from monitoring.diagnosis.model import Node, UpdateAction, observer_from
+from monitoring.diagnosis.model import Node, UpdateAction
 from monitoring.diagnosis.service import PERIOD, SETTLE
 from monitoring.diagnosis.timed import TimedDiagnosis
 from monitoring.observer import Environment, Handler, Observer, ObserverResult, make_observer
@@ -54,6 +53,8 @@ from monitoring.timeline import (
     RepairEntry,
     StateEntry,
     Timeline,
+    recorded_diagnosis,
+    recorded_repair,
 )
 
 log = logging.getLogger("dura.replay")
@@ -62,7 +63,7 @@ STOPPED = (Lifecycle.STOPPING, Lifecycle.STOPPED, Lifecycle.EXITED, Lifecycle.FA
 
 
 def watched_topics(robot: RobotDescription) -> set[str]:
-    """The topics the robot's observers listen to.
+    """Return the topics the robot's observers listen to.
 
     Raises:
         ConfigError: an observer of the robot description is invalid.
@@ -78,7 +79,7 @@ def watched_topics(robot: RobotDescription) -> set[str]:
 
 
 def state_component(key: str) -> str | None:
-    """The component of a ``component/<name>/state`` key, else ``None``."""
+    """Return the component of a ``component/<name>/state`` key, else ``None``."""
     parts = key.split("/")
     return parts[1] if len(parts) == 3 and parts[0] == "component" and parts[2] == "state" else None
 
@@ -198,8 +199,8 @@ class Replay:
     # --- input ----------------------------------------------------------------------
 
     def run(self, messages: Iterable[Message], end: float | None = None) -> Timeline:
-        """Replay messages (in order of reception) and then up to ``end`` (default: the
-        last message); the timeline."""
+        """Replay messages (in order of reception), then up to ``end`` (default: the last
+        message), and return the timeline."""
         last = self.start
         for message in messages:
             self.deliver(message)
@@ -254,7 +255,7 @@ class Replay:
         self.now = max(self.now, until)
 
     def finish(self, end: float) -> Timeline:
-        """Run what is due until ``end``; the timeline of the whole replay."""
+        """Run what is due until ``end`` and return the timeline of the whole replay."""
         self.advance(max(end, self.start))
         return Timeline(
             origin=self.origin,
@@ -375,29 +376,21 @@ class Replay:
 
     def _recorded_diagnosis(self, message: Message, t: float) -> None:
         try:
-            info = DiagnosisInfo.from_payload(message.payload)
+            entry = recorded_diagnosis(message.payload, self._time(t))
         except (BusError, KeyError, ValueError, TypeError) as e:
             log.warning("malformed recorded diagnosis: %s", e)
             return
-        if (info.status, info.diagnoses) == self._recorded_last:
-            return
-        self._recorded_last = (info.status, info.diagnoses)
-        failed = tuple(_observer_text(f) for f in info.failed)
-        self._recorded.append(DiagnosisEntry(self._time(t), info.status, info.diagnoses, failed))
+        if (entry.status, entry.diagnoses) != self._recorded_last:
+            self._recorded_last = (entry.status, entry.diagnoses)
+            self._recorded.append(entry)
 
     def _recorded_event(self, message: Message, t: float) -> None:
         try:
-            payload = message.payload
+            entry = recorded_repair(message.payload, self._time(t))
         except BusError:
             return
-        if payload.get("kind") != "RULE_FIRED" or not isinstance(payload.get("data"), dict):
-            return
-        data = payload["data"]
-        faulty = tuple(str(n) for n in data.get("faulty", ()))
-        action = str(data.get("action", ""))
-        self._recorded.append(
-            RepairEntry(self._time(t), str(payload.get("subject")), action, faulty)
-        )
+        if entry is not None:
+            self._recorded.append(entry)
 
     # --- output ---------------------------------------------------------------------
 
@@ -408,11 +401,3 @@ class Replay:
         self._entries.append(entry)
         if self._on_entry is not None:
             self._on_entry(entry)
-
-
-def _observer_text(payload: dict[str, Any]) -> str:
-    """An observer of a diagnosis payload as the diagnosis names it: ``type[resources]``."""
-    try:
-        return str(observer_from(payload))
-    except (ConfigError, KeyError, TypeError, ValueError):
-        return str(payload)

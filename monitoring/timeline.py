@@ -13,7 +13,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-from executive.bus.payloads import ObservationInfo
+from executive.bus.payloads import DiagnosisInfo, ObservationInfo
+from knowledge.errors import ConfigError
+from monitoring.diagnosis.model import observer_from
 
 Names = tuple[str, ...]
 
@@ -26,7 +28,7 @@ class EntryKind(enum.Enum):
 
 
 def _number(value: float) -> float:
-    """A time or value as printed and compared: rounded to the microsecond."""
+    """Round a time or value to the microsecond, as it is printed and compared."""
     return round(value, 6)
 
 
@@ -118,6 +120,34 @@ class RepairEntry:
 Entry = StateEntry | ObservationEntry | DiagnosisEntry | RepairEntry
 
 
+def recorded_diagnosis(payload: dict[str, Any], time: float) -> DiagnosisEntry:
+    """Read a recorded ``diagnoses`` payload as an entry.
+
+    Raises:
+        KeyError, ValueError, TypeError: the payload is malformed.
+    """
+    info = DiagnosisInfo.from_payload(payload)
+    failed = tuple(_observer_text(f) for f in info.failed)
+    return DiagnosisEntry(time, info.status, info.diagnoses, failed)
+
+
+def recorded_repair(payload: dict[str, Any], time: float) -> RepairEntry | None:
+    """Read a recorded ``events`` payload as an entry if it is a RULE_FIRED event."""
+    data = payload.get("data")
+    if payload.get("kind") != "RULE_FIRED" or not isinstance(data, dict):
+        return None
+    faulty = tuple(str(n) for n in data.get("faulty", ()))
+    return RepairEntry(time, str(payload.get("subject")), str(data.get("action", "")), faulty)
+
+
+def _observer_text(payload: dict[str, Any]) -> str:
+    """Name an observer of a diagnosis payload as the diagnosis does: ``type[resources]``."""
+    try:
+        return str(observer_from(payload))
+    except (ConfigError, KeyError, TypeError, ValueError):
+        return str(payload)
+
+
 @dataclass(frozen=True)
 class Hold:
     """How long one diagnosis (a set of faulty names) was part of the published result."""
@@ -140,7 +170,7 @@ class Hold:
 
 
 def holds(entries: tuple[DiagnosisEntry, ...], end: float) -> list[Hold]:
-    """How long each diagnosis held, in order of first appearance."""
+    """Compute how long each diagnosis held, in order of first appearance."""
     since: dict[Names, float] = {}
     periods: dict[Names, list[tuple[float, float]]] = {}
     for entry in entries:
@@ -195,16 +225,16 @@ class Timeline:
         return [e for e in self.entries if isinstance(e, StateEntry)]
 
     def holds(self) -> list[Hold]:
-        """How long each diagnosis held (until the end of the replay if it still did)."""
+        """Compute how long each diagnosis held (to the end if it still did)."""
         return holds(tuple(self.diagnoses()), self.end)
 
     def recorded_holds(self) -> list[Hold]:
-        """How long each diagnosis held in the recording's own (live) diagnoses."""
+        """Compute how long each diagnosis held in the recording's own (live) diagnoses."""
         recorded = tuple(e for e in self.recorded if isinstance(e, DiagnosisEntry))
         return holds(recorded, self.end)
 
     def diagnosed(self) -> list[Names]:
-        """Every diagnosis that held at some time, in order of first appearance."""
+        """List every diagnosis that held at some time, in order of first appearance."""
         return [h.diagnosis for h in self.holds()]
 
     def to_payload(self) -> dict[str, Any]:

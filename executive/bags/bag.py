@@ -82,9 +82,9 @@ class Bag(ABC):
     def messages(
         self, routes: Mapping[str, Route], start: float | None = None, end: float | None = None
     ) -> Iterator[Message]:
-        """The messages of the routed topics from ``start`` to ``end`` (seconds, both
-        included), in order of reception; component states before ``start`` come
-        first (they say which components run when the window opens).
+        """Yield the messages of the routed topics from ``start`` to ``end`` (seconds,
+        both included) in order of reception, after the component states before
+        ``start`` (they say which components run when the window opens).
 
         Raises:
             BagError: the file is truncated or corrupt, or a routed topic unreadable.
@@ -104,7 +104,7 @@ def _bag_topic(bag: Bag, name: str) -> BagTopic | None:
 
 
 def robot_topic(bag: Bag, name: str) -> str | None:
-    """The robot topic a recorded topic goes to by default (its name), if it is one."""
+    """Return the robot topic a recorded topic goes to by default (its name), if any."""
     if bag.keys_are_bus_keys:
         return name.removeprefix("topic/") if name.startswith("topic/") else None
     return name.strip("/") or None
@@ -117,7 +117,7 @@ def routes(
     *,
     watched: Collection[str] = (),
 ) -> dict[str, Route]:
-    """Where each recorded topic goes (see the module docstring).
+    """Route each recorded topic to a bus key (see the module docstring).
 
     Args:
         maps: ``BAG_TOPIC=TOPIC`` pairs that route a recorded topic to a robot topic.

@@ -130,7 +130,7 @@ class McapBag(Bag):
     def _makers(
         self, routes: Mapping[str, Route]
     ) -> dict[tuple[int, int], Callable[[McapMessage], Message]]:
-        """How to make a bus message of each routed channel's records, per file."""
+        """Return how to make a bus message of each routed channel's records, per file."""
         makers: dict[tuple[int, int], Callable[[McapMessage], Message]] = {}
         for index, file in enumerate(self.files):
             summary = file.reader.get_summary()
@@ -255,7 +255,7 @@ def _type_name(found: list[tuple[Channel, Schema | None]]) -> str:
 
 
 def _distro(reader: McapReader) -> str | None:
-    """The ROS distribution rosbag2 wrote in its metadata record, if any."""
+    """Return the ROS distribution rosbag2 wrote in its metadata record, if any."""
     with contextlib.suppress(Exception):  # optional: an odd record only loses the hint
         for record in reader.iter_metadata():
             if record.name == "rosbag2":

@@ -16,7 +16,7 @@ SQLITE_MAGIC = b"SQLite format 3\x00"
 
 
 def open_bag(path: Path) -> Bag:
-    """The recording at ``path``, opened (close it when done).
+    """Open the recording at ``path`` (close it when done).
 
     Raises:
         BagError: there is none, or it is not a recording dura reads, or it is
@@ -40,7 +40,7 @@ def open_bag(path: Path) -> Bag:
 
 
 def _folder(path: Path) -> Bag:
-    """A rosbag2 folder: its MCAP files read as one, anything else with rosbags."""
+    """Open a rosbag2 folder: its MCAP files read as one, anything else with rosbags."""
     metadata = path / "metadata.yaml"
     try:
         info = yaml.safe_load(metadata.read_text())["rosbag2_bagfile_information"]

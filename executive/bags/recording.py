@@ -45,7 +45,7 @@ SNAPSHOT_CALLER = "executive"  # who publishes component states
 
 
 def rotated(path: Path, number: int) -> Path:
-    """The ``number``-th older file of a recording: ``OUT.1.mcap``."""
+    """Return the ``number``-th older file of a recording: ``OUT.1.mcap``."""
     return path.with_name(f"{path.stem}.{number}{path.suffix}")
 
 
@@ -120,7 +120,7 @@ class Recorder:
         return True
 
     def has_state(self, key: str) -> bool:
-        """Whether a state of that key was recorded."""
+        """Tell whether a state of that key was recorded."""
         with self._lock:
             return key in self._states
 
@@ -280,6 +280,6 @@ class Recording(Service):
 
 
 def state_payloads(components: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Component state payloads from the launcher's component list (``component/list``)."""
+    """Extract the state payloads from the launcher's component list (``component/list``)."""
     keys = ("component", "state", "pid", "exit_code", "signal", "reason", "stamp")
     return [{k: c.get(k) for k in keys if k in c} for c in components]

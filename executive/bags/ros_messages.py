@@ -25,7 +25,7 @@ IDL_SEPARATOR = "=" * 80 + "\n"
 
 
 def store_of(distro: str | None) -> Stores:
-    """The type store of a ROS distribution (``humble``); the newest if unknown."""
+    """Return the type store of a ROS distribution (``humble``); the newest if unknown."""
     if distro:
         for store in Stores:
             if store.name == f"ROS2_{distro.upper()}":
@@ -73,7 +73,7 @@ class RosTypes:
         return msgtype in self.typestore.fielddefs
 
     def decoder(self, msgtype: str) -> Decoder:
-        """A function from CDR bytes to the message as a dict."""
+        """Return a function from CDR bytes to the message as a dict."""
         deserialize = self.typestore.deserialize_cdr
 
         def decode(raw: bytes) -> dict[str, Any]:
@@ -89,7 +89,7 @@ _FIELDS: dict[type, tuple[str, ...]] = {}
 
 
 def plain(value: Any) -> Any:
-    """A deserialized ROS message (or a part of one) as JSON-like data."""
+    """Turn a deserialized ROS message (or a part of one) into JSON-like data."""
     kind = type(value)
     names = _FIELDS.get(kind)
     if names is None and dataclasses.is_dataclass(value):
@@ -126,7 +126,7 @@ class RosMessage(Message):
 
     @property
     def stamp(self) -> float | None:
-        """``header.stamp`` in seconds (a ``stamp`` field of a message without a header)."""
+        """Return ``header.stamp`` in seconds (``stamp`` of a message without a header)."""
         payload = self.payload
         header = payload.get("header")
         stamp = header.get("stamp") if isinstance(header, dict) else payload.get("stamp")

@@ -24,7 +24,7 @@ SCHEMA = "https://json-schema.org/draft/2020-12/schema"
 
 
 def _type(annotation: Any) -> dict[str, Any]:
-    """The JSON schema of one annotated field."""
+    """Return the JSON schema of one annotated field."""
     origin = typing.get_origin(annotation)
     if annotation is Any:
         return {}
@@ -48,7 +48,7 @@ def _type(annotation: Any) -> dict[str, Any]:
 
 
 def object_schema(cls: type, extra: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """The schema of a payload dataclass (its fields, all required), plus ``extra`` fields."""
+    """Return the schema of a payload dataclass (its fields, all required) plus ``extra``."""
     hints = typing.get_type_hints(cls)
     fields = [f.name for f in dataclasses.fields(cls)]
     properties = {name: _type(hints[name]) for name in fields}
@@ -96,7 +96,7 @@ BY_KEY = {
 
 
 def schema_name(key: str) -> str | None:
-    """The schema of a bus key's payloads; ``None`` for keys dura does not record."""
+    """Return the schema of a bus key's payloads; ``None`` for keys dura does not record."""
     if key.startswith("topic/"):
         return "dura.TopicMessage"
     parts = key.split("/")

@@ -99,8 +99,8 @@ def run(args: argparse.Namespace) -> int:
 def paced(
     messages: Iterable[Message], replay: Replay, start: float, rate: float
 ) -> Iterator[Message]:
-    """The messages, each at its time at ``rate`` times the recorded speed; what is due
-    between them happens at its own time too."""
+    """Yield each message at its time at ``rate`` times the recorded speed, running what
+    is due between them at its own time."""
     began = time.monotonic()
     for message in messages:
         while True:
@@ -162,6 +162,8 @@ class Printer:
             f"{shown(bag.path)}: {bag.format}, {bag.end - bag.start:.3f} s, {bag.count} "
             f"messages; robot '{session.robot.name}'; {mapped}\n"
         )
+        if bag.robot is not None and bag.robot != session.robot.name:
+            self.out.write(f"note: recorded of robot '{bag.robot}'\n")
         if start > bag.start or end < bag.end:
             self.out.write(f"window: {start - bag.start:.3f} to {end - bag.start:.3f} s\n")
         for reason in session.replay.skipped:

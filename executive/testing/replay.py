@@ -88,11 +88,11 @@ class BagReplay:
         return start, min(bag.end, bag.start + end) if end is not None else bag.end
 
     def messages(self) -> Iterator[Message]:
-        """The routed messages of the window, in order."""
+        """Yield the routed messages of the window, in order."""
         return self.bag.messages(self.routes, self.start, self.end)
 
     def run(self, messages: Iterable[Message] | None = None) -> Timeline:
-        """Replay ``messages`` (default: :meth:`messages`); the timeline."""
+        """Replay ``messages`` (default: :meth:`messages`) and return the timeline."""
         return self.replay.run(self.messages() if messages is None else messages, self.end)
 
     def close(self) -> None:
@@ -113,8 +113,8 @@ def replay_bag(
     begin: float | None = None,
     end: float | None = None,
 ) -> Timeline:
-    """Replay a recording through a robot's observers, diagnosis and repair rules; the
-    timeline (see the module docstring)."""
+    """Replay a recording through a robot's observers, diagnosis and repair rules and
+    return the timeline (see the module docstring)."""
     description = robot if isinstance(robot, RobotDescription) else Path(robot)
     with BagReplay(Path(path), description, maps=maps, begin=begin, end=end) as replay:
         return replay.run()

@@ -34,7 +34,7 @@ def learn(engine: DiagnosisEngine, info: ObservationInfo) -> bool:
 
 
 def without_orphans(model: SystemDescription, update: ModelUpdate) -> ModelUpdate:
-    """A REMOVE of nodes that also removes the observers that watch only what they had."""
+    """Extend a REMOVE of nodes to the observers that watch only what they had."""
     if update.action is not UpdateAction.REMOVE or not update.nodes:
         return update
     gone = {n.name for n in update.nodes}

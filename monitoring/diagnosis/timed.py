@@ -84,7 +84,7 @@ class TimedDiagnosis:
         self._changed(t)
 
     def wake(self, t: float) -> Published | None:
-        """One turn of the service's loop at ``t``; the result it publishes, if any."""
+        """Run one turn of the service's loop at ``t``; return what it publishes, if any."""
         dirty, self._settling = self._settling, False
         self.wake_at = None
         try:

@@ -3,6 +3,7 @@ through the use-case robot's real observers, diagnosis (clingo) and repair rules
 
 from __future__ import annotations
 
+import io
 import json
 import time
 from collections.abc import Callable
@@ -11,6 +12,9 @@ from subprocess import CompletedProcess
 
 import pytest
 
+from executive.bus.session import Message
+from executive.cli import replay as replay_command
+from monitoring.timeline import Timeline
 from tests.conftest import USECASE
 from tests.executive.bags.recorded import T0, scan_times, write_scan_bag, write_unknown_type_bag
 
@@ -154,3 +158,27 @@ def test_bad_input_is_one_line_naming_the_file_and_the_reason(
     assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr
     assert result.stderr.startswith(f"dura: {path}: ")
     assert reason in result.stderr
+
+
+def test_progress_shows_on_a_terminal_after_a_while_and_is_cleared_at_the_end(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(replay_command, "PROGRESS_AFTER", 0.0)
+    monkeypatch.setattr(replay_command, "PROGRESS_EVERY", 0.0)
+    out = io.StringIO()
+    messages = [Message("topic/scan", b"{}", "lidar", None, T0 + k) for k in range(5)]
+    progress = replay_command.Progress(out, T0, T0 + 4)
+    assert list(progress.wrap(messages)) == messages
+    shown = out.getvalue()
+    assert "\r  replayed 2.0 of 4.0 s (50%)" in shown
+    assert shown.endswith("\r\033[K")
+
+
+def test_the_dura_replay_fixture_pins_a_bags_diagnoses_in_a_test(
+    dura_replay: Callable[..., Timeline], tmp_path: Path
+) -> None:
+    timeline = dura_replay(write_scan_bag(tmp_path / "bag"), USECASE)
+    assert timeline.diagnosed() == [("lidar",)]
+    assert [(r.time, r.action) for r in timeline.repairs()] == [(10.52, "restart lidar")]
+    (hold,) = timeline.holds()
+    assert hold.periods == ((10.52, 12.52),)
