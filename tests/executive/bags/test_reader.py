@@ -174,3 +174,24 @@ def test_what_is_not_a_recording_is_refused(tmp_path: Path) -> None:
     shutil.rmtree(tmp_path)
     with pytest.raises(BagError, match="cannot read it"):
         open_bag(tmp_path / "gone.mcap")
+
+
+def test_a_bag_split_into_several_mcap_files_is_read_as_one_in_order(
+    tmp_path: Path, robot: RobotDescription
+) -> None:
+    folder = tmp_path / "split"
+    folder.mkdir()
+    times = scan_times(None, 2.0)
+    write_mcap(folder / "split_0.mcap", [(t, t) for t in times[:12]])
+    write_mcap(folder / "split_1.mcap", [(t, t) for t in times[12:]])
+    (folder / "metadata.yaml").write_text(
+        "rosbag2_bagfile_information:\n  version: 9\n  storage_identifier: mcap\n"
+        "  relative_file_paths: [split_0.mcap, split_1.mcap]\n  ros_distro: jazzy\n"
+    )
+    with open_bag(folder) as bag:
+        assert (bag.format, bag.count) == ("rosbag2 (mcap)", 20)
+        received = [m.received for m in bag.messages(routes(bag, robot))]
+    assert received == [t / 1e9 for t in times]
+    (folder / "split_1.mcap").unlink()
+    with pytest.raises(BagError, match=r"files of the bag are missing: .*split_1\.mcap"):
+        open_bag(folder)
