@@ -45,6 +45,8 @@ class Executive:
         grace: seconds a component gets at each step of a stop.
         folder: the working folder whose ``.dura/`` holds the bus credentials (created on
             the first run, user-only) and the logs (default: the current folder).
+        record: record the bus traffic to this MCAP file (``dura run --record``).
+        record_max_size: bytes at which the recording is rotated (default: the recorder's).
     """
 
     def __init__(
@@ -57,6 +59,8 @@ class Executive:
         resource_rate: float = 1.0,
         grace: float = 3.0,
         folder: Path | None = None,
+        record: Path | None = None,
+        record_max_size: int | None = None,
     ) -> None:
         self.robot = robot
         self.endpoint = endpoint or robot.endpoint
@@ -66,6 +70,8 @@ class Executive:
         self.credentials_path = security.credentials_file(self.folder, robot.name)
         self.resource_rate = resource_rate
         self.grace = grace
+        self.record = record
+        self.record_max_size = record_max_size
         self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> Executive:
@@ -128,7 +134,14 @@ class Executive:
             from executive.ros2.state import Ros2StatePublisher
 
             extra.append(Ros2StatePublisher(context, ros2.spec, link=ros2))
+        recording: list[Service] = []
+        if self.record is not None:  # first: it sees every other service's traffic
+            from executive.bags.recording import DEFAULT_MAX_SIZE, Recording
+
+            size = self.record_max_size or DEFAULT_MAX_SIZE
+            recording.append(Recording(context, self.record, max_size=size))
         return [
+            *recording,
             ComponentApi(context, self.launcher),
             ResourceMonitor(context, rate=self.resource_rate),
             ObserverManager(context, sources=[ros2.topics] if ros2 is not None else []),

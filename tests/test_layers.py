@@ -21,6 +21,7 @@ ALLOWED: dict[str, set[str]] = {
     "executive.sdk": {"executive.bus", "knowledge"},
     "executive.runtime": {"executive.bus", "executive.sdk", "knowledge"},
     "executive.ros2": {"executive.bus", "knowledge"},
+    "executive.bags": {"executive.bus", "knowledge"},
     "executive.planning": {"executive.bus", "knowledge"},
     # the task executor runs plan steps through the plan executer's port
     "executive.tasks": {
@@ -32,13 +33,21 @@ ALLOWED: dict[str, set[str]] = {
         "executive.planning.expression",
         "knowledge",
     },
-    "executive.testing": {"executive.bus", "executive.sdk", "knowledge"},
+    # the replay helper composes the bag reader and the offline replay of monitoring
+    "executive.testing": {
+        "executive.bus",
+        "executive.sdk",
+        "executive.bags",
+        "monitoring",
+        "knowledge",
+    },
     "executive.dashboard": {"executive.bus", "executive.planning", "knowledge"},
     "executive.executive": {
         "executive.bus",
         "executive.runtime",
         "executive.sdk",
         "executive.ros2",
+        "executive.bags",
         "executive.tasks",
         "executive.planning",
         "executive.dashboard",
@@ -50,6 +59,7 @@ ALLOWED: dict[str, set[str]] = {
         "executive.runtime",
         "executive.sdk",
         "executive.ros2",
+        "executive.bags",
         "executive.tasks",
         "executive.planning",
         "executive.testing",

@@ -32,6 +32,8 @@ COMMANDS: dict[str, str] = {
     "dashboard": "dashboard",
     "graph": "graph",
     "diagnose": "diagnose",
+    "record": "record",
+    "replay": "replay",
     "rules": "rules",
     "kb": "kb",
     "version": "version",
