@@ -27,17 +27,16 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from executive.bus.api import monitoring as api
 from executive.bus.keys import OBSERVATIONS, component
 from executive.bus.payloads import ComponentState, Lifecycle
 from executive.bus.service import Context, Service
-from executive.bus.session import Bus, Message
+from executive.bus.session import Message
 from executive.bus.topic_source import TopicSource
-from executive.bus.verb import Verb
 from knowledge.description import ObserverSpec
 from knowledge.errors import ConfigError, DuraError
 from knowledge.yamlsource import did_you_mean
 from monitoring.observer import Environment, Handler, Observer, make_observer
+from monitoring.observer_api import serve_observers
 from monitoring.observer_config import config_of
 
 log = logging.getLogger("dura.observers")
@@ -144,7 +143,7 @@ class ObserverManager(Service):
                 self._register(_Slot(observer_id, owner, observer, observer.inputs()))
         bus = self.context.bus
         self._declared.append(bus.subscribe(component("*", "state"), self._on_component_state))
-        self._declared.extend(self._serve(bus))
+        self._declared.extend(serve_observers(self, bus))
         self._thread = threading.Thread(target=self._run, name="observer-manager", daemon=True)
         self._thread.start()
 
@@ -187,6 +186,15 @@ class ObserverManager(Service):
         """
         with self._lock:
             return self._add(config, component, name, source)
+
+    def active(self, observer_id: str) -> bool:
+        """Whether an observer observes now (enabled, and its component READY).
+
+        Raises:
+            ConfigError: unknown id.
+        """
+        with self._lock:
+            return self._slot(observer_id).active
 
     def change(self, observer_id: str, config: ObserverEntry, *, source: str = "observer") -> None:
         """Replace an observer's configuration; it keeps its id and starts afresh.
@@ -381,47 +389,3 @@ class ObserverManager(Service):
                 self._latest[(slot.id, info.type, info.resource, info.callerids)] = payload
                 payloads.append(payload)
         return payloads
-
-    # --- the bus API ----------------------------------------------------------------
-
-    def _serve(self, bus: Bus) -> list[Any]:
-        """Serve the observer verbs of :mod:`executive.bus.api.monitoring`."""
-
-        def entry(config: Any, verb: Verb[Any, Any]) -> Mapping[str, Any]:
-            if not isinstance(config, dict):
-                raise ConfigError(f"{verb.key}: 'config' must be an observer entry (a mapping)")
-            return config
-
-        def add(request: api.ObserverAdd) -> api.ObserverActive:
-            key = api.OBSERVER_ADD.key
-            with self._lock:
-                config = entry(request.config, api.OBSERVER_ADD)
-                observer_id = self._add(config, request.component, request.name, key)
-                return api.ObserverActive(observer_id, self._slots[observer_id].active)
-
-        def change(request: api.ObserverChange) -> api.ObserverActive:
-            config = entry(request.config, api.OBSERVER_CHANGE)
-            self.change(request.id, config, source=api.OBSERVER_CHANGE.key)
-            return api.ObserverActive(request.id, self._slot(request.id).active)
-
-        def remove(request: api.ObserverId) -> api.ObserverId:
-            self.remove(request.id)
-            return request
-
-        def deactivate(request: api.ObserverId) -> api.ObserverActive:
-            self.deactivate(request.id)
-            return api.ObserverActive(request.id, False)
-
-        return [
-            api.OBSERVER_LIST.serve(
-                bus, lambda _: api.ObserversReply([s.to_payload() for s in self.observers()])
-            ),
-            api.OBSERVER_ADD.serve(bus, add),
-            api.OBSERVER_CHANGE.serve(bus, change),
-            api.OBSERVER_REMOVE.serve(bus, remove),
-            api.OBSERVER_ACTIVATE.serve(
-                bus, lambda r: api.ObserverActive(r.id, self.activate(r.id))
-            ),
-            api.OBSERVER_DEACTIVATE.serve(bus, deactivate),
-            api.OBSERVER_LATEST.serve(bus, lambda _: api.LatestReply(self.latest())),
-        ]
