@@ -36,6 +36,7 @@ from knowledge.errors import BusError, ConfigError
 POLL = 0.05  # seconds between two looks for a cancellation while a goal runs
 ANSWER = 5.0  # seconds a server gets to accept a goal or a cancellation
 GONE = 2.0  # seconds without a server before a running goal fails
+ENDING = 1.5  # seconds a cancelled goal gets to end on the server (a stop waits 2 s)
 _NUMBERS = {"float32": float, "float64": float}
 _TRUE, _FALSE = ("true", "1", "yes", "on"), ("false", "0", "no", "off")
 
@@ -167,6 +168,7 @@ class ActionGoals:
                     behavior.checkpoint()
         except GoalCancelled:
             self._cancel(handle)
+            handle.result(ENDING)  # the server is free again when dura's goal ends
             raise
 
     def _cancel(self, handle: ActionGoal) -> None:
