@@ -178,6 +178,16 @@ class RobotProcess:
         """The operator's login to this robot's bus (its credentials are in the folder)."""
         return security.find_login(self.robot.name, security.OPERATOR, [self.folder])
 
+    @property
+    def credentials(self) -> Path:
+        """The robot's bus credentials, as ``dura`` commands run elsewhere need them
+        (``DURA_BUS_CREDENTIALS``)."""
+        return security.credentials_file(self.folder, self.robot.name)
+
+    def environment(self) -> dict[str, str]:
+        """The environment for a ``dura`` command run against this robot from any folder."""
+        return {**os.environ, security.ENV_CREDENTIALS: str(self.credentials)}
+
     def _close(self) -> None:
         if self._bus is not None:
             self._bus.close()
