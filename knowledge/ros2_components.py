@@ -20,7 +20,7 @@ The node's topics, for the diagnosis model, come from ROS 2 discovery; the node'
 id on its topics is the component's name. A behavior with an ``action`` or a
 ``service`` runs each goal as one goal of the action or one call of the service; the
 task's goal fields are the goal's (the request's) fields, by dotted path. ``wait`` is
-how long a start waits for the server (default 5 s).
+how long a start waits for the server (default 5 s; within the ``startup_timeout``).
 """
 
 from __future__ import annotations

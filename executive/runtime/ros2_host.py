@@ -150,7 +150,7 @@ class Ros2Host:
         if call is not None:
             limit = time.monotonic() + float(call["wait"])
             client = self.goals.client if self.goals is not None else None
-            self._await(lambda: client is not None and client.ready(), max(deadline, limit),
+            self._await(lambda: client is not None and client.ready(), min(deadline, limit),
                         f"ROS 2 {call['kind']} {call['name']} has no server")  # fmt: skip
 
     def _await(self, ready: Callable[[], bool], deadline: float, failure: str) -> None:

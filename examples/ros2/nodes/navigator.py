@@ -21,16 +21,9 @@ import time
 from typing import Any
 
 from . import interfaces as ros
-from .rosnode import (
-    ABORTED,
-    CANCELED,
-    SUCCEEDED,
-    ActionServer,
-    GoalHandle,
-    LifecycleNode,
-    action_types,
-    params,
-)
+from .action_server import ABORTED, CANCELED, SUCCEEDED, ActionServer, GoalHandle, action_types
+from .lifecycle_node import LifecycleNode
+from .rosnode import params
 
 UNKNOWN, TIMEOUT = 9000, 9003  # NavigateToPose's error codes
 SCAN_GAP = 0.5  # seconds without a scan before it stops and waits

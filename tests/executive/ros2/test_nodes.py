@@ -248,7 +248,7 @@ def test_a_behavior_whose_server_is_missing_fails_to_start_with_the_reason(
     endpoint: str, tmp_path: Path, domain: int
 ) -> None:
     robot = example(domain, tmp_path)
-    behavior = dataclasses.replace(robot.behaviors["navigate"], startup_timeout=2.0)
+    behavior = dataclasses.replace(robot.behaviors["navigate"], startup_timeout=8.0)
     assert behavior.ros2 is not None and behavior.ros2.call is not None
     call = dataclasses.replace(behavior.ros2.call, wait=0.5)
     behavior = dataclasses.replace(behavior, ros2=dataclasses.replace(behavior.ros2, call=call))
