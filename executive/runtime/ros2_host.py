@@ -89,6 +89,7 @@ class Ros2Host:
         self.goals: ActionGoals | ServiceGoals | None = None
         self._closers: list[Callable[[], None]] = []
         self._wanted = "unconfigured"  # the state dura put a managed node in
+        self._launched = False
         self._changing = threading.Lock()  # held while dura drives a transition
         try:
             self.discovery = Discovery(self.participant, self.library, node=f"dura_{name}")
@@ -132,7 +133,8 @@ class Ros2Host:
                 managed node refused to configure.
         """
         deadline = time.monotonic() + max(1.0, self.config.startup_timeout - 1.0)
-        if self.program is not None:
+        if self.program is not None and not self._launched:  # configured twice: once
+            self._launched = True
             try:
                 self.program.start(params)
             except OSError as e:
