@@ -111,7 +111,9 @@ class Executive:
             if self.robot.ros2 is not None:  # Cyclone DDS loads only for a ROS 2 robot
                 from executive.ros2.link import Ros2Link
 
-                self.ros2 = stack.enter_context(Ros2Link(self.robot.ros2))
+                nodes = {c.ros2.node: name for name, c in self.robot.components.items()
+                         if c.ros2 is not None and c.ros2.node is not None}  # fmt: skip
+                self.ros2 = stack.enter_context(Ros2Link(self.robot.ros2, nodes=nodes))
             for service in self.services(Context(self.robot, self.bus, self.kb)):
                 service.start()
                 stack.callback(service.stop)
@@ -130,10 +132,15 @@ class Executive:
         )
         ros2 = self.ros2
         extra: list[Service] = []
+        last: list[Service] = []
         if ros2 is not None:
+            from executive.ros2.goals import Ros2Goals
+            from executive.ros2.graph_model import Ros2GraphModel
             from executive.ros2.state import Ros2StatePublisher
 
             extra.append(Ros2StatePublisher(context, ros2.spec, link=ros2))
+            extra.append(Ros2GraphModel(context, ros2.discovery))
+            last.append(Ros2Goals(context, ros2))  # once the high level takes goals
         recording: list[Service] = []
         if self.record is not None:  # first: it sees every other service's traffic
             from executive.bags.recording import DEFAULT_MAX_SIZE, Recording
@@ -150,6 +157,7 @@ class Executive:
             *extra,
             self.tasks,
             self.high_level,
+            *last,
         ]
 
     def _components(self) -> list[dict[str, Any]]:

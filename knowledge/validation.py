@@ -26,6 +26,7 @@ from knowledge.domain import DomainInfo, parse_problem, read_domain
 from knowledge.errors import DomainError
 from knowledge.finding import Finding, Report, Severity, finding_of
 from knowledge.robot import read_robot
+from knowledge.ros2_components import check_ros2_components
 from knowledge.yamlsource import did_you_mean
 
 RESERVED_PREFIXES = ("AB", "/AB")
@@ -171,6 +172,7 @@ def _components_checks(robot: RobotDescription, report: Report) -> None:
     check_capabilities(robot, report)
     check_topics(robot, report)
     check_commands(robot, report)
+    check_ros2_components(robot, report)
 
 
 def check_commands(robot: RobotDescription, report: Report) -> None:
@@ -178,6 +180,8 @@ def check_commands(robot: RobotDescription, report: Report) -> None:
     exists), so a typo is met here and not as a permanent fault at run time."""
     folder = robot.path.parent
     for c in robot.components.values():
+        if not c.command and c.ros2 is not None and c.ros2.call is not None:
+            continue  # dura's own client of a ROS 2 action or service: no program
         problem = command_problem(c.command, folder)
         if problem:
             report.error(c.line_of("command"), f"{c.kind.value} '{c.name}': {problem}")

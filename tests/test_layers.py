@@ -19,7 +19,8 @@ ALLOWED: dict[str, set[str]] = {
     "executive.bus": {"knowledge"},
     "monitoring": {"executive.bus", "knowledge"},
     "executive.sdk": {"executive.bus", "knowledge"},
-    "executive.runtime": {"executive.bus", "executive.sdk", "knowledge"},
+    # the host of ROS 2 programs drives their nodes through the ROS 2 layer
+    "executive.runtime": {"executive.bus", "executive.sdk", "executive.ros2", "knowledge"},
     "executive.ros2": {"executive.bus", "knowledge"},
     "executive.bags": {"executive.bus", "knowledge"},
     "executive.planning": {"executive.bus", "knowledge"},
