@@ -15,6 +15,7 @@ from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, shown, table
 from executive.dashboard import gantt
+from executive.planning.expression import TRUE
 from executive.planning.goals import GoalSpec
 from executive.planning.partial_order import PartialOrderPlan, Step
 from executive.planning.planner import Planner, PlanningTask, PlanResult, engine_names
@@ -69,6 +70,9 @@ def run(args: argparse.Namespace) -> int:
         return run_show(args)
     domain, problem = args.offline
     world, goal = read_world(domain, problem)
+    if goal == TRUE and not args.json:
+        print(f"dura: warning: {shown(problem)} has an empty goal, so any plan is empty: "
+              "write one in its (:goal ...)", file=sys.stderr)  # fmt: skip
     task = PlanningTask(domain.resolve(), world, (GoalSpec(0, goal),))
     with Planner(args.engine, args.timeout) as planner:
         result = planner.solve(task)

@@ -65,6 +65,10 @@ def _capturing_output(method: Any) -> Any:
     return wrapped
 
 
+# How to install the engines that are optional extras.
+INSTALL = {"tamer": " (it is an optional extra: pip install 'dura[tamer]', or -e '.[tamer]')"}
+
+
 @dataclass
 class _Worker:
     """The worker's state: UP's environment, engines and parsed domains, kept warm."""
@@ -109,7 +113,8 @@ class _Worker:
             from unified_planning.shortcuts import OneshotPlanner
 
             if name not in self.env.factory.engines:
-                raise PlanningError(f"engine '{name}' is not installed")
+                hint = INSTALL.get(name, "")
+                raise PlanningError(f"engine '{name}' is not installed{hint}")
             self.engines[name] = OneshotPlanner(name=name)
         return self.engines[name]
 
