@@ -34,7 +34,12 @@ def register(sub: Any) -> None:
     )
     add.set_defaults(run=run_add)
 
-    listing = gsub.add_parser("list", help="every goal with its state")
+    listing = gsub.add_parser(
+        "list",
+        help="every goal with its state",
+        description="List the goals of a running robot: state, priority, deadline, where "
+        "each came from (user, integrity, rule) and why it is where it is.",
+    )
     listing.add_argument(
         "--open", action="store_true", help="only goals not yet achieved, failed or cancelled"
     )

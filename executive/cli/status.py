@@ -34,7 +34,10 @@ def register(sub: Any) -> None:
     events.add_argument("--follow", action="store_true", help="keep printing new events")
     events.set_defaults(run=run_events, parser=events)
     status = sub.add_parser(
-        "status", help="goals, plan, tasks, components and diagnoses at a glance"
+        "status",
+        help="goals, plan, tasks, components and diagnoses at a glance",
+        description="Print a running robot's goals, its plan with the state of each step, "
+        "the tasks and the components they use, faults and the newest diagnosis.",
     )
     status.set_defaults(run=run_status)
     for cmd in (events, status):

@@ -21,14 +21,18 @@ def register(sub: Any) -> None:
         description="Print the facts. PATTERN is a predicate or function name with leading "
         "arguments, '*' for any: 'robot_at', '(robot_at *)', '(travel_time dock *)'.",
     )
-    get.add_argument("pattern", nargs="?", default="", metavar="PATTERN")
+    get.add_argument(
+        "pattern", nargs="?", default="", metavar="PATTERN", help="a predicate and arguments"
+    )
     get.set_defaults(run=run_get)
     for verb, text in (
         ("set", "make a fact true: '(robot_at lab)', or set a value: '(= (battery) 80)'"),
         ("unset", "make a fact false: '(robot_at lab)'"),
     ):
         cmd = ssub.add_parser(verb, help=text)
-        cmd.add_argument("fact", metavar="FACT")
+        cmd.add_argument(
+            "fact", metavar="FACT", help="a fact in PDDL: '(robot_at lab)' or '(= (battery) 80)'"
+        )
         cmd.set_defaults(run=run_change, verb=verb)
     cmds = [get, *ssub.choices.values()]
 
@@ -36,8 +40,8 @@ def register(sub: Any) -> None:
     osub = o.add_subparsers(dest="object_command", metavar="OBJECT_COMMAND")
     osub.required = True
     add = osub.add_parser("add", help="add an object of a domain type")
-    add.add_argument("name", metavar="NAME")
-    add.add_argument("type", metavar="TYPE")
+    add.add_argument("name", metavar="NAME", help="the object's name (a PDDL name)")
+    add.add_argument("type", metavar="TYPE", help="one of the domain's types")
     add.set_defaults(run=run_object_add)
     for cmd in {*cmds, add}:
         add_client_options(cmd)
