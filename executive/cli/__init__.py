@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
-import logging
+import os
 import sys
 from collections.abc import Sequence
+from typing import Any
 
 from knowledge.errors import DuraError
 
@@ -40,8 +42,42 @@ COMMANDS: dict[str, str] = {
 }
 
 
+def _columns() -> int:
+    """The terminal's width as ``shutil.get_terminal_size`` finds it (``COLUMNS``, else
+    the terminal of stdout, else 80)."""
+    try:
+        columns = int(os.environ.get("COLUMNS", "0"))
+    except ValueError:
+        columns = 0
+    if columns <= 0:
+        try:
+            columns = os.get_terminal_size(sys.__stdout__.fileno()).columns  # type: ignore[union-attr]
+        except (AttributeError, ValueError, OSError):
+            columns = 0
+    return columns if columns > 0 else 80
+
+
+class _Formatter(argparse.HelpFormatter):
+    """argparse's help formatter, but without importing ``shutil`` for the width (a few
+    milliseconds of every command's start: argparse makes a formatter for each argument)."""
+
+    def __init__(
+        self,
+        prog: str,
+        indent_increment: int = 2,
+        max_help_position: int = 24,
+        width: int | None = None,
+    ) -> None:
+        width = _columns() - 2 if width is None else width
+        super().__init__(prog, indent_increment, max_help_position, width)
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with one-line usage errors and exit code 2."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
@@ -66,12 +102,31 @@ def build_parser(argv: Sequence[str] = ()) -> argparse.ArgumentParser:
     return parser
 
 
+def _configure_logging(verbose: int) -> None:
+    """Log to stderr: warnings by default, -v info, -vv debug."""
+    import logging
+
+    level = {0: logging.WARNING, 1: logging.INFO}.get(verbose, logging.DEBUG)
+    logging.basicConfig(level=level, format="%(asctime)s %(name)s %(levelname)s: %(message)s")
+
+
+def parse(argv: Sequence[str] | None = None) -> argparse.Namespace:
+    """The arguments of one ``dura`` command (its module imported)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    return build_parser(argv).parse_args(argv)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run one ``dura`` command; returns the exit code."""
-    argv = list(sys.argv[1:] if argv is None else argv)
-    args = build_parser(argv).parse_args(argv)
-    level = {0: logging.WARNING, 1: logging.INFO}.get(args.verbose, logging.DEBUG)
-    logging.basicConfig(level=level, format="%(asctime)s %(name)s %(levelname)s: %(message)s")
+    return execute(parse(argv))
+
+
+def execute(args: argparse.Namespace) -> int:
+    """Run a parsed command; returns the exit code."""
+    if args.verbose or "logging" in sys.modules:
+        # A quick command (status, goal list) never loads logging; should its bus warn
+        # (a malformed message), Python prints the warning as it is, and nothing less.
+        _configure_logging(args.verbose)
     try:
         return int(args.run(args))
     except DuraError as e:
@@ -84,5 +139,15 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def entry() -> None:
-    """The console script."""
-    sys.exit(main())
+    """The console script (and ``python -m executive.cli``)."""
+    # The imports of a command make tens of thousands of objects that live until the
+    # process ends: collecting garbage among them only costs time (milliseconds of every
+    # quick command). Collection resumes once they are made, with those objects frozen
+    # out of every later collection.
+    gc.disable()
+    try:
+        args = parse()
+    finally:
+        gc.freeze()
+        gc.enable()
+    sys.exit(execute(args))

@@ -6,12 +6,11 @@ import argparse
 import time
 from typing import Any
 
-from executive.bus.api import components, tasks
+from executive.bus.api import components
 from executive.bus.payloads import ComponentState, Lifecycle
 from executive.cli.arguments import count, seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
-from executive.runtime.spawn import describe_exit
 from knowledge.errors import DuraError
 
 
@@ -77,6 +76,8 @@ def run_list(args: argparse.Namespace) -> int:
 
 
 def _summary(state: ComponentState) -> str:
+    from executive.runtime.spawn import describe_exit  # not for 'component list'
+
     if state.state in (Lifecycle.READY, Lifecycle.STARTING, Lifecycle.PAUSED):
         return f"{state.component}: {state.state.value} (pid {state.pid})"
     if state.exit_code is None and state.signal is None:
@@ -87,6 +88,8 @@ def _summary(state: ComponentState) -> str:
 
 
 def run_lifecycle(args: argparse.Namespace) -> int:
+    from executive.bus.api import tasks  # the task executor's verbs: not for 'component list'
+
     name, timeout = args.name, args.timeout
     if args.verb == "reset":
         reset = ask(args, tasks.COMPONENT_RESET, tasks.ComponentName(name), timeout=timeout)

@@ -10,7 +10,7 @@ from executive.bus.api import planning as api
 from executive.cli.arguments import identifier, priority, seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
-from knowledge.records import GoalState
+from knowledge.lifecycle import GoalState
 
 
 def register(sub: Any) -> None:
