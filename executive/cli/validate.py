@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from executive.cli.output import add_json_flag, print_json, shown
+from executive.cli.reader_environment import use_reader_environment
 from executive.planning.integrity import read_rules as read_integrity_rules
 from executive.planning.problem import read_world
 from knowledge.description import RobotDescription
@@ -56,6 +57,7 @@ def check_rule_files(robot: RobotDescription, domain: DomainInfo) -> list[Findin
 
 
 def run(args: argparse.Namespace) -> int:
+    use_reader_environment()
     observers = check_observer_file(args.robot)
     if observers is not None:
         specs, findings = observers
