@@ -31,6 +31,7 @@ COMMANDS: dict[str, str] = {
     "schedule": "task",
     "component": "component",
     "observe": "observe",
+    "observer": "observer",
     "dashboard": "dashboard",
     "graph": "graph",
     "diagnose": "diagnose",
