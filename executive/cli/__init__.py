@@ -23,6 +23,7 @@ COMMANDS: dict[str, str] = {
     "run": "run",
     "goal": "goal",
     "plan": "plan",
+    "domain": "domain",
     "state": "world",
     "object": "world",
     "events": "status",

@@ -1,4 +1,4 @@
-"""``dura state get|set|unset`` and ``dura object add``: the facts and objects the
+"""``dura state get|set|unset`` and ``dura object add|remove``: the facts and objects the
 planner plans from, in a running robot's knowledge base."""
 
 from __future__ import annotations
@@ -32,14 +32,24 @@ def register(sub: Any) -> None:
         cmd.set_defaults(run=run_change, verb=verb)
     cmds = [get, *ssub.choices.values()]
 
-    o = sub.add_parser("object", help="add PDDL objects to a running robot's world")
+    o = sub.add_parser("object", help="add and remove PDDL objects of a running robot's world")
     osub = o.add_subparsers(dest="object_command", metavar="OBJECT_COMMAND")
     osub.required = True
     add = osub.add_parser("add", help="add an object of a domain type")
     add.add_argument("name", metavar="NAME")
     add.add_argument("type", metavar="TYPE")
     add.set_defaults(run=run_object_add)
-    for cmd in {*cmds, add}:
+    remove = osub.add_parser(
+        "remove",
+        help="remove an object and every fact that names it",
+        description="Remove an object from the world, with every fact that names it (as "
+        "PlanSys2 removes an instance). Refused, with the reason, while an open goal, the "
+        "current plan or an integrity rule names it: cancel the goal or change the rule "
+        "first.",
+    )
+    remove.add_argument("name", metavar="NAME")
+    remove.set_defaults(run=run_object_remove)
+    for cmd in {*cmds, add, remove}:
         add_client_options(cmd)
         add_json_flag(cmd)
 
@@ -77,4 +87,16 @@ def run_object_add(args: argparse.Namespace) -> int:
         print_json(added.to_payload())
     else:
         print(f"object {added.name} - {added.type} added")
+    return 0
+
+
+def run_object_remove(args: argparse.Namespace) -> int:
+    removed = ask(args, api.OBJECT_REMOVE, api.ObjectName(args.name))
+    if args.json:
+        print_json(removed.to_payload())
+        return 0
+    ((name, type_name),) = removed.objects.items()
+    facts = [f["text"] for f in removed.facts]
+    also = f", and {len(facts)} facts: {', '.join(facts)}" if facts else ""
+    print(f"object {name} - {type_name} removed{also}")
     return 0

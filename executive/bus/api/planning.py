@@ -1,4 +1,5 @@
-"""The high level's API: goals, plans, the world's facts and objects, events, status."""
+"""The high level's API: goals, plans, the world's facts and objects, the domain, events,
+status."""
 
 from __future__ import annotations
 
@@ -94,6 +95,29 @@ class ObjectAdd(Payload):
 
 
 @dataclass(frozen=True)
+class ObjectName(Payload):
+    """An object of the world, by name."""
+
+    name: Text
+
+
+@dataclass(frozen=True)
+class DomainReply(Payload):
+    """The robot's domain: ``types`` ``{name, parent}``; ``predicates`` and ``functions``
+    ``{name, parameters}`` (their types); ``actions`` ``{name, parameters [[?name, type]],
+    durative, duration (as written), task, behavior, goal (the behavior's goal fields),
+    blocked (why it cannot run now, or null)}``; ``constants`` by name, their types."""
+
+    name: str
+    path: str
+    types: list[dict[str, Any]]
+    predicates: list[dict[str, Any]]
+    functions: list[dict[str, Any]]
+    actions: list[dict[str, Any]]
+    constants: dict[str, str]
+
+
+@dataclass(frozen=True)
 class EventQuery(Payload):
     """Events after a sequence number, of one kind (all without), oldest first: the
     newest ``limit`` of them, or with ``oldest`` the oldest ``limit`` (to page forward
@@ -136,5 +160,8 @@ STATE_GET = Verb(api("state/get"), StateQuery, StateReply)
 STATE_SET = Verb(api("state/set"), FactChange, FactReply)
 STATE_UNSET = Verb(api("state/unset"), FactChange, FactReply)
 OBJECT_ADD = Verb(api("object/add"), ObjectAdd, ObjectAdd)
+# what left the world with the object: the object {name: type} and the facts that named it
+OBJECT_REMOVE = Verb(api("object/remove"), ObjectName, StateReply)
+DOMAIN_SHOW = Verb(api("domain/show"), Empty, DomainReply)
 EVENTS = Verb(api("events"), EventQuery, EventsReply)
 STATUS = Verb(api("status"), Empty, StatusReply)
