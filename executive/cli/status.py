@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import queue
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from executive.bus.api import planning as api
 from executive.bus.keys import EVENTS
@@ -17,6 +16,9 @@ from executive.cli.arguments import count
 from executive.cli.client import add_client_options, ask, connect
 from executive.cli.goal import GOAL_HEADERS, details, goal_rows
 from executive.cli.output import add_json_flag, print_json, section, table
+
+if TYPE_CHECKING:
+    import queue
 
 PAGE = 1000  # events read at a time when catching up
 
@@ -61,6 +63,8 @@ def run_events(args: argparse.Namespace) -> int:
         if args.robot is not None or args.endpoint is not None:
             args.parser.error("--db reads a file; --robot and --endpoint ask an executive")
         return _events_from_file(args)
+    import queue  # only to follow: not for 'dura status'
+
     arrived: queue.Queue[dict[str, Any]] = queue.Queue()
     with connect(args) as bus:
         if args.follow:  # before the history: nothing falls between the two
@@ -110,6 +114,8 @@ def _follow(
     """Print events as they come, in order and without a gap: an event that arrives
     after a gap (the bus dropped some, or they came before the subscription) is
     preceded by the missing ones, read from the knowledge base by sequence number."""
+    import queue
+
     while True:
         try:
             event = arrived.get(timeout=0.5)
