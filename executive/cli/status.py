@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 from executive.bus.api import planning as api
 from executive.bus.keys import EVENTS
 from executive.bus.session import Bus, Message
+from executive.cli import client_command
 from executive.cli.arguments import count
 from executive.cli.client import add_client_options, ask, connect
 from executive.cli.goal import GOAL_HEADERS, details, goal_rows
@@ -45,6 +46,7 @@ def register(sub: Any) -> None:
     )
     status.set_defaults(run=run_status)
     for cmd in (events, status):
+        client_command(cmd)
         add_client_options(cmd)
         add_json_flag(cmd)
 
