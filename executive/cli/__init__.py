@@ -156,24 +156,25 @@ def entry() -> None:
         gc.freeze()
         gc.enable()
     code = execute(args)
-    if getattr(args, "client", False):
-        _exit_client(code)
+    if getattr(args, "exits_at_once", False):
+        _exit_at_once(code)
     sys.exit(code)
 
 
-def client_command(parser: Any) -> None:
-    """Mark a command (and its subcommands) as a client: it asks, prints and keeps
-    nothing open when it returns (no file, no process, no thread of its own), so it ends
-    as :func:`_exit_client` says."""
-    parser.set_defaults(client=True)
+def exits_at_once(parser: Any) -> None:
+    """Mark a command (and its subcommands) that keeps nothing open when it returns: no
+    file being written, no process, no thread of its own (the commands that ask the
+    executive and print, and those that only read files). It ends as
+    :func:`_exit_at_once` says."""
+    parser.set_defaults(exits_at_once=True)
 
 
-def _exit_client(code: int) -> NoReturn:
-    """End a client command: exit handlers run and output is flushed as at any exit, but
-    the memory is not freed object by object and Zenoh's runtime threads are not stopped
-    one by one, since the kernel does both at once (that teardown is a tenth of a quick
-    command's CPU). Only when the main thread is the last: otherwise Python's own exit,
-    which waits for the others."""
+def _exit_at_once(code: int) -> NoReturn:
+    """End a command that keeps nothing open: exit handlers run and output is flushed as
+    at any exit, but the memory is not freed object by object and Zenoh's runtime
+    threads are not stopped one by one, since the kernel does both at once (that
+    teardown is a tenth of a command's CPU). Only when the main thread is the last:
+    otherwise Python's own exit, which waits for the others."""
     if threading.active_count() > 1:
         sys.exit(code)
     atexit._run_exitfuncs()

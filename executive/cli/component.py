@@ -8,7 +8,7 @@ from typing import Any
 
 from executive.bus.api import components
 from executive.bus.payloads import ComponentState, Lifecycle
-from executive.cli import client_command
+from executive.cli import exits_at_once
 from executive.cli.arguments import count, seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
@@ -19,7 +19,7 @@ def register(sub: Any) -> None:
     p = sub.add_parser(
         "component", help="list, start, stop, restart, fault and reset components; show logs"
     )
-    client_command(p)
+    exits_at_once(p)
     csub = p.add_subparsers(dest="component_command", metavar="COMPONENT_COMMAND")
     csub.required = True
 

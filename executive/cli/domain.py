@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from executive.bus.api import planning as api
-from executive.cli import client_command
+from executive.cli import exits_at_once
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, section, shown, table
 from knowledge.errors import ConfigError
@@ -17,7 +17,7 @@ from knowledge.errors import ConfigError
 
 def register(sub: Any) -> None:
     p = sub.add_parser("domain", help="show a robot's PDDL domain and the tasks of its actions")
-    client_command(p)
+    exits_at_once(p)
     dsub = p.add_subparsers(dest="domain_command", metavar="DOMAIN_COMMAND")
     dsub.required = True
     show = dsub.add_parser(

@@ -12,7 +12,7 @@ from typing import Any, TextIO
 from executive.bus.api import planning as api
 from executive.bus.keys import EVENTS
 from executive.bus.session import Bus, Message
-from executive.cli import client_command
+from executive.cli import exits_at_once
 from executive.cli.arguments import identifier, priority, seconds
 from executive.cli.client import add_client_options, ask, connect
 from executive.cli.output import add_json_flag, print_json, table
@@ -26,7 +26,7 @@ ACTIVE_STEPS = ("dispatched", "running", "paused")
 
 def register(sub: Any) -> None:
     p = sub.add_parser("goal", help="submit, list, show and cancel goals")
-    client_command(p)
+    exits_at_once(p)
     gsub = p.add_subparsers(dest="goal_command", metavar="GOAL_COMMAND")
     gsub.required = True
 

@@ -9,7 +9,7 @@ from typing import Any
 
 from executive.bus.api import monitoring as api
 from executive.bus.verb import Verb
-from executive.cli import client_command
+from executive.cli import exits_at_once
 from executive.cli.client import add_client_options, ask, connect
 from executive.cli.output import add_json_flag, print_json, shown, table
 from knowledge.errors import DuraError
@@ -28,7 +28,7 @@ def register(sub: Any) -> None:
         "restarting it. Observer ids are '<component>/<index>' for those of the robot "
         "description. An observer observes while it is activated and its component is ready.",
     )
-    client_command(p)
+    exits_at_once(p)
     osub = p.add_subparsers(dest="observer_command", metavar="OBSERVER_COMMAND")
     osub.required = True
 

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 from executive.bus.api import planning as api
 from executive.bus.keys import EVENTS
 from executive.bus.session import Bus, Message
-from executive.cli import client_command
+from executive.cli import exits_at_once
 from executive.cli.arguments import count
 from executive.cli.client import add_client_options, ask, connect
 from executive.cli.goal import GOAL_HEADERS, details, goal_rows
@@ -46,7 +46,7 @@ def register(sub: Any) -> None:
     )
     status.set_defaults(run=run_status)
     for cmd in (events, status):
-        client_command(cmd)
+        exits_at_once(cmd)
         add_client_options(cmd)
         add_json_flag(cmd)
 

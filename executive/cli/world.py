@@ -7,14 +7,14 @@ import argparse
 from typing import Any
 
 from executive.bus.api import planning as api
-from executive.cli import client_command
+from executive.cli import exits_at_once
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
 
 
 def register(sub: Any) -> None:
     p = sub.add_parser("state", help="read and change the facts the planner plans from")
-    client_command(p)
+    exits_at_once(p)
     ssub = p.add_subparsers(dest="state_command", metavar="STATE_COMMAND")
     ssub.required = True
     get = ssub.add_parser(
@@ -35,7 +35,7 @@ def register(sub: Any) -> None:
     cmds = [get, *ssub.choices.values()]
 
     o = sub.add_parser("object", help="add and remove PDDL objects of a running robot's world")
-    client_command(o)
+    exits_at_once(o)
     osub = o.add_subparsers(dest="object_command", metavar="OBJECT_COMMAND")
     osub.required = True
     add = osub.add_parser("add", help="add an object of a domain type")
