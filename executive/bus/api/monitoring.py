@@ -31,12 +31,16 @@ class ObserverAdd(Payload):
 
 @dataclass(frozen=True)
 class ObserverChange(Payload):
+    """A new configuration for an observer (it keeps its id)."""
+
     id: Text
     config: Any
 
 
 @dataclass(frozen=True)
 class ObserverId(Payload):
+    """An observer, by id (``<component>/<index>`` for those of the robot description)."""
+
     id: Text
 
 

@@ -27,6 +27,8 @@ class GoalAdd(Payload):
 
 @dataclass(frozen=True)
 class GoalId(Payload):
+    """A goal, by id."""
+
     id: int
 
 
@@ -39,11 +41,15 @@ class GoalQuery(Payload):
 
 @dataclass(frozen=True)
 class GoalReply(Payload):
+    """A goal as stored."""
+
     goal: dict[str, Any]
 
 
 @dataclass(frozen=True)
 class GoalsReply(Payload):
+    """Goals as stored, by id."""
+
     goals: list[dict[str, Any]]
 
 
@@ -72,6 +78,8 @@ class StateQuery(Payload):
 
 @dataclass(frozen=True)
 class StateReply(Payload):
+    """Facts (name, args, value, text) and objects (name -> type)."""
+
     facts: list[dict[str, Any]]
     objects: dict[str, str]
 
@@ -85,11 +93,15 @@ class FactChange(Payload):
 
 @dataclass(frozen=True)
 class FactReply(Payload):
+    """The fact as it was set or unset."""
+
     fact: dict[str, Any]
 
 
 @dataclass(frozen=True)
 class ObjectAdd(Payload):
+    """An object of a domain type."""
+
     name: Text
     type: Text
 
@@ -131,6 +143,8 @@ class EventQuery(Payload):
 
 @dataclass(frozen=True)
 class EventsReply(Payload):
+    """Events of the log, oldest first."""
+
     events: list[dict[str, Any]]
 
 
