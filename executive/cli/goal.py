@@ -25,7 +25,7 @@ ACTIVE_STEPS = ("dispatched", "running", "paused")
 
 
 def register(sub: Any) -> None:
-    p = sub.add_parser("goal", help="submit, list, show and cancel goals")
+    p = sub.add_parser("goal", help="submit, list, show, cancel and watch goals")
     exits_at_once(p)
     gsub = p.add_subparsers(dest="goal_command", metavar="GOAL_COMMAND")
     gsub.required = True

@@ -23,7 +23,7 @@ EXONERATION = {
 def register(sub: Any) -> None:
     p = sub.add_parser(
         "observer",
-        help="list, add, change, remove, activate and deactivate observers at run time",
+        help="change observers at run time (list, add, remove, ...); switch exoneration",
         description="Change the observers of a running robot (its observer manager) without "
         "restarting it. Observer ids are '<component>/<index>' for those of the robot "
         "description. An observer observes while it is activated and its component is ready.",
