@@ -21,6 +21,8 @@ if TYPE_CHECKING:
 _EMPTY_FUNCTIONS = re.compile(r"\(\s*:functions\s*\)", re.IGNORECASE)
 _UP_LINE = re.compile(r"line:? (\d+)")
 _ACTION_HEAD = re.compile(r"\(\s*:(durative-action|action)\s+([^\s()]+)", re.IGNORECASE)
+_COMMENT = re.compile(r";[^\n]*")
+_DURATION = re.compile(r":duration\s*\(", re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -31,6 +33,7 @@ class ActionInfo:
     parameters: tuple[tuple[str, str], ...]
     durative: bool
     line: int | None = None
+    duration: str | None = None  # a durative action's constraint as written: (= ?duration 2)
 
     @property
     def parameter_names(self) -> tuple[str, ...]:
@@ -104,6 +107,29 @@ def parse_problem(domain: Path, problem_text: str, source: str = "problem") -> P
         raise DomainError(located(source, _error_line(e), f"PDDL: {_error_text(e)}")) from e
 
 
+def _balanced(text: str, start: int) -> str:
+    """The parenthesised expression that opens at ``text[start]`` (to the end if open)."""
+    depth = 0
+    for i in range(start, len(text)):
+        depth += {"(": 1, ")": -1}.get(text[i], 0)
+        if depth == 0:
+            return text[start : i + 1]
+    return text[start:]
+
+
+def _durations(text: str) -> dict[str, str]:
+    """Each action's ``:duration`` constraint as written, on one line, by lower-case name."""
+    code = _COMMENT.sub(lambda m: " " * len(m.group(0)), text)  # offsets stay
+    found: dict[str, str] = {}
+    for head in _ACTION_HEAD.finditer(code):
+        body = _balanced(code, head.start())
+        duration = _DURATION.search(body)
+        if duration is not None:
+            constraint = _balanced(body, duration.end() - 1)
+            found[head.group(2).lower()] = " ".join(constraint.replace("( ", "(").split())
+    return found
+
+
 def read_domain(path: Path) -> DomainInfo:
     """Parse a domain file and describe its signatures.
 
@@ -115,12 +141,14 @@ def read_domain(path: Path) -> DomainInfo:
     lines = {
         m.group(2).lower(): text.count("\n", 0, m.start()) + 1 for m in _ACTION_HEAD.finditer(text)
     }
+    durations = _durations(text)
     actions: dict[str, ActionInfo] = {}
     for action in problem.actions:
         params = tuple((p.name, str(p.type)) for p in action.parameters)
         durative = type(action).__name__ == "DurativeAction"
+        key = action.name.lower()
         actions[action.name] = ActionInfo(
-            action.name, params, durative, lines.get(action.name.lower())
+            action.name, params, durative, lines.get(key), durations.get(key) if durative else None
         )
     predicates: dict[str, tuple[str, ...]] = {}
     functions: dict[str, tuple[str, ...]] = {}

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import re
 import threading
 import time
 from collections.abc import Callable
@@ -27,17 +28,20 @@ from executive.bus.keys import DIAGNOSES, EVENTS
 from executive.bus.payloads import DiagnosisInfo
 from executive.bus.service import Context, Service
 from executive.bus.verb import Empty
+from executive.planning.domain_description import describe
 from executive.planning.expression import Signature, parse_fact
 from executive.planning.goal_planner import GoalPlanner
 from executive.planning.goals import submit
-from executive.planning.integrity import IntegrityGoals, IntegrityRule, read_rules
+from executive.planning.integrity import IntegrityGoals, IntegrityRule, Trigger, read_rules
 from executive.planning.plan_executer import ExecutionLimits, PlanExecuter, TaskRunner, recover
 from executive.planning.planner import Planner
 from executive.planning.problem import seed_world
 from knowledge.availability import blocked_tasks
 from knowledge.domain import read_domain
 from knowledge.errors import DuraError, KnowledgeError
+from knowledge.lifecycle import PlanState
 from knowledge.records import Event, Fact, to_plain
+from knowledge.yamlsource import did_you_mean
 
 log = logging.getLogger("dura.high_level")
 FAULT_CHANGES = ("PERMANENT_FAULT", "COMPONENT_RESET")  # events that may block or free tasks
@@ -204,6 +208,8 @@ class HighLevel(Service):
             api.STATE_SET.serve(bus, lambda r: self._state_change(r, unset=False)),
             api.STATE_UNSET.serve(bus, lambda r: self._state_change(r, unset=True)),
             api.OBJECT_ADD.serve(bus, self._object_add),
+            api.OBJECT_REMOVE.serve(bus, self._object_remove),
+            api.DOMAIN_SHOW.serve(bus, self._domain_show),
             api.EVENTS.serve(bus, self._events),
             api.STATUS.serve(bus, self._status),
         ]
@@ -274,6 +280,52 @@ class HighLevel(Service):
             kb.log_event("OBJECT_ADDED", name, {"type": type_name})
         return api.ObjectAdd(name, type_name)
 
+    def _object_remove(self, request: api.ObjectName) -> api.StateReply:
+        """Remove an object and every fact that names it (as PlanSys2 removes an
+        instance); refused, with who names it, while an open goal, the current plan or an
+        integrity rule does."""
+        name, kb = request.name, self.context.kb
+        with kb.transaction():
+            objects = kb.objects()
+            if name not in objects:
+                raise KnowledgeError(f"no object '{name}'{did_you_mean(name, sorted(objects))}")
+            users = self._naming(name)
+            if users:
+                raise DuraError(f"object '{name}' is in use: {'; '.join(users)}")
+            facts = [f for f in kb.facts() if name in f.args]
+            kb.update_facts(remove=facts)
+            kb.remove_object(name)
+            kb.log_event(
+                "OBJECT_REMOVED",
+                name,
+                {"type": objects[name], "facts": [str(f) for f in facts], "source": "user"},
+            )
+        self.executer.facts_changed()
+        self.goals.wake(f"object {name} removed by the user")
+        return api.StateReply([_fact(f) for f in facts], {name: objects[name]})
+
+    def _naming(self, name: str) -> list[str]:
+        """Who names an object: open goals, the current plan's steps, integrity rules."""
+        kb = self.context.kb
+        users = [
+            f"goal {g.id} {g.expression} is {g.state.value}"
+            for g in kb.open_goals()
+            if _mentions(g.expression, name)
+        ]
+        plan = kb.latest_plan()
+        if plan is not None and plan.state in (PlanState.PENDING, PlanState.EXECUTING):
+            steps = [f"{s.action}({', '.join(s.args)})" for s in plan.steps if name in s.args]
+            if steps:
+                users.append(f"plan {plan.id} ({plan.state.value}) has {', '.join(steps)}")
+        for rule in self.integrity.rules:
+            condition = rule.subject if rule.trigger is Trigger.CONDITION else ""
+            if _mentions(rule.goal, name) or _mentions(condition, name):
+                users.append(f"integrity rule '{rule.name}' ({rule.where})")
+        return users
+
+    def _domain_show(self, request: Empty) -> api.DomainReply:
+        return describe(self.domain, self.context.robot, self.blocked())
+
     def _events(self, request: api.EventQuery) -> api.EventsReply:
         events = self.context.kb.events(
             after=request.after,
@@ -312,6 +364,16 @@ class HighLevel(Service):
 def _names_goal(event: Event, goal_id: int) -> bool:
     goals = event.data.get("goals") if isinstance(event.data, dict) else None
     return isinstance(goals, list) and goal_id in goals
+
+
+_TOKEN = re.compile(r"[()]|[^\s()]+")
+
+
+def _mentions(expression: str, name: str) -> bool:
+    """Whether a PDDL expression names an object: as an argument, not as the name of a
+    predicate, function or connective (the word after an opening parenthesis)."""
+    tokens = _TOKEN.findall(expression)
+    return any(t == name and (i == 0 or tokens[i - 1] != "(") for i, t in enumerate(tokens))
 
 
 def _matches(words: list[str], name: str, args: tuple[str, ...]) -> bool:

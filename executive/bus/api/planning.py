@@ -1,4 +1,5 @@
-"""The high level's API: goals, plans, the world's facts and objects, events, status."""
+"""The high level's API: goals, plans, the world's facts and objects, the domain, events,
+status."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from typing import Annotated, Any
 from executive.bus.keys import api
 from executive.bus.schema import Between, Payload, Text
 from executive.bus.verb import Empty, Verb
-from knowledge.records import GoalState
+from knowledge.lifecycle import GoalState
 
 Count = Annotated[int, Between(0, 2**63 - 1)]
 Priority = Annotated[int, Between(-(10**9), 10**9)]  # what the CLI accepts too
@@ -26,6 +27,8 @@ class GoalAdd(Payload):
 
 @dataclass(frozen=True)
 class GoalId(Payload):
+    """A goal, by id."""
+
     id: int
 
 
@@ -38,11 +41,15 @@ class GoalQuery(Payload):
 
 @dataclass(frozen=True)
 class GoalReply(Payload):
+    """A goal as stored."""
+
     goal: dict[str, Any]
 
 
 @dataclass(frozen=True)
 class GoalsReply(Payload):
+    """Goals as stored, by id."""
+
     goals: list[dict[str, Any]]
 
 
@@ -71,6 +78,8 @@ class StateQuery(Payload):
 
 @dataclass(frozen=True)
 class StateReply(Payload):
+    """Facts (name, args, value, text) and objects (name -> type)."""
+
     facts: list[dict[str, Any]]
     objects: dict[str, str]
 
@@ -84,13 +93,40 @@ class FactChange(Payload):
 
 @dataclass(frozen=True)
 class FactReply(Payload):
+    """The fact as it was set or unset."""
+
     fact: dict[str, Any]
 
 
 @dataclass(frozen=True)
 class ObjectAdd(Payload):
+    """An object of a domain type."""
+
     name: Text
     type: Text
+
+
+@dataclass(frozen=True)
+class ObjectName(Payload):
+    """An object of the world, by name."""
+
+    name: Text
+
+
+@dataclass(frozen=True)
+class DomainReply(Payload):
+    """The robot's domain: ``types`` ``{name, parent}``; ``predicates`` and ``functions``
+    ``{name, parameters}`` (their types); ``actions`` ``{name, parameters [[?name, type]],
+    durative, duration (as written), task, behavior, goal (the behavior's goal fields),
+    blocked (why it cannot run now, or null)}``; ``constants`` by name, their types."""
+
+    name: str
+    path: str
+    types: list[dict[str, Any]]
+    predicates: list[dict[str, Any]]
+    functions: list[dict[str, Any]]
+    actions: list[dict[str, Any]]
+    constants: dict[str, str]
 
 
 @dataclass(frozen=True)
@@ -107,6 +143,8 @@ class EventQuery(Payload):
 
 @dataclass(frozen=True)
 class EventsReply(Payload):
+    """Events of the log, oldest first."""
+
     events: list[dict[str, Any]]
 
 
@@ -136,5 +174,8 @@ STATE_GET = Verb(api("state/get"), StateQuery, StateReply)
 STATE_SET = Verb(api("state/set"), FactChange, FactReply)
 STATE_UNSET = Verb(api("state/unset"), FactChange, FactReply)
 OBJECT_ADD = Verb(api("object/add"), ObjectAdd, ObjectAdd)
+# what left the world with the object: the object {name: type} and the facts that named it
+OBJECT_REMOVE = Verb(api("object/remove"), ObjectName, StateReply)
+DOMAIN_SHOW = Verb(api("domain/show"), Empty, DomainReply)
 EVENTS = Verb(api("events"), EventQuery, EventsReply)
 STATUS = Verb(api("status"), Empty, StatusReply)
