@@ -1,5 +1,5 @@
 """An event of the log as one readable line, the same in every view (``dura events``,
-``goal show``, ``kb show``, the demo, the dashboard).
+``goal show``, ``kb show``, the demo, the dashboard); a diagnosis result likewise.
 
 :func:`describe` says what happened, starting with what it happened to: ``goal 1:
 (picture_taken lab)``, ``move_to(dock, lab) (plan 1, step 0); at start: not (robot_at
@@ -39,6 +39,23 @@ def line(event: Mapping[str, Any]) -> str:
     """An event as a line of a log: its time of day, its kind, what it says."""
     when = clock(float(event.get("stamp", 0.0)), millis=True)
     return f"{when}  {event.get('kind', '?')!s:<{WIDTH}}  {describe(event)}".rstrip()
+
+
+def diagnosis(payload: Mapping[str, Any]) -> str:
+    """A diagnosis result (a ``diagnoses`` payload) on one line, as ``dura replay``
+    writes it: ``DIAGNOSED: lidar (failed: timeout[scan])``, ``OK: nothing is faulty``."""
+    status = str(payload.get("status", "?"))
+    if status == "OK":
+        return "OK: nothing is faulty"
+    found = " | ".join(", ".join(d) for d in payload.get("diagnoses") or []) or "none"
+    failed = "; ".join(_observer(o) for o in payload.get("failed") or []) or "-"
+    return f"{status}: {found} (failed: {failed})"
+
+
+def _observer(observer: Mapping[str, Any]) -> str:
+    callers = list(observer.get("callerids") or [])
+    ids = f" from {', '.join(callers)}" if callers else ""
+    return f"{observer.get('type', '?')}[{', '.join(observer.get('resource') or [])}{ids}]"
 
 
 def _generic(subject: str, data: Data, kind: str = "") -> str:
