@@ -18,6 +18,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
+from executive.bus.wording import seconds
 from executive.planning.goals import GoalSpec
 from executive.planning.planner import Planner, PlanningTask, PlanResult, PlanStatus
 
@@ -78,7 +79,9 @@ def plan_goals(planner: Planner, task: PlanningTask, budget: float | None = None
 
 
 def _reason(goal: GoalSpec, kept: list[GoalSpec], attempt: PlanResult) -> str:
-    by = f" by its deadline ({goal.deadline:g} s from now)" if goal.deadline is not None else ""
+    by = (
+        f" by its deadline ({seconds(goal.deadline)} from now)" if goal.deadline is not None else ""
+    )
     if not attempt.status.no_plan:
         return attempt.reason + (
             f" (with goals {', '.join(str(g.id) for g in kept)})" if kept else ""
