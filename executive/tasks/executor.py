@@ -262,7 +262,7 @@ class TaskExecutor(Service):
         spec = self.robot.tasks.get(request.task)
         behavior = spec.behavior if spec is not None else request.task
         handle = self.start_task(
-            behavior, request.goal, name=request.task, duration=request.duration,
+            behavior, request.goal, name=request.label, duration=request.duration,
             earliest=request.earliest or 0.0, deadline=request.deadline,
             together=tuple(request.together),
         )  # fmt: skip
