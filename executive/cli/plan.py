@@ -13,7 +13,7 @@ from executive.bus.api import planning as api
 from executive.bus.api import tasks
 from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
-from executive.cli.output import add_json_flag, print_json, shown, table
+from executive.cli.output import add_json_flag, bar, print_json, shown, table
 from executive.dashboard import gantt
 from executive.planning.expression import TRUE
 from executive.planning.goals import GoalSpec
@@ -22,8 +22,6 @@ from executive.planning.planner import Planner, PlanningTask, PlanResult, engine
 from executive.planning.problem import read_world
 from knowledge.description import DEFAULT_ENGINE
 from knowledge.errors import DuraError
-
-BAR = 40  # characters of the timeline
 
 
 def register(sub: Any) -> None:
@@ -139,14 +137,6 @@ def write_svg(target: str, picture: str) -> bool:
 
 def _duration(duration: float | None) -> str:
     return "-" if duration is None else f"{duration:g}"
-
-
-def bar(start: float, duration: float | None, span: float) -> str:
-    """A step's place in a timeline of ``BAR`` characters scaled to ``span`` seconds."""
-    span = span or 1.0
-    first = min(BAR - 1, int(start / span * BAR))
-    width = max(1, round((duration or 0.0) / span * BAR))
-    return "|" + (" " * first + "█" * min(width, BAR - first)).ljust(BAR) + "|"
 
 
 def _after(step: Step) -> str:
