@@ -41,13 +41,13 @@ TIMEOUT = 120.0  # seconds for the whole run
 def register(sub: Any) -> None:
     p = sub.add_parser(
         "demo",
-        help="run the thesis use case end to end (about 40 s; longer on a busy machine)",
+        help="run the thesis use case end to end (about 30 s; 45 s or more on a busy machine)",
         description="Start the example robot, submit goals, stop lidar's scan until it is "
         "permanently faulty, watch the diagnosis and the switch to the camera, and print a "
         "summary once every goal is achieved. Exit 0 if they all are. Each plan the robot "
         "executes is shown as it starts, with the plan it replaces and why. It takes about "
-        "40 s on a quiet machine (most of it the robot driving) and a minute or more on a "
-        "loaded one; on a terminal, the last line says what the robot does now.",
+        "30 s on a quiet machine (most of it the robot driving) and 45 s or more on a busy "
+        "one; on a terminal, the last line says what the robot does now.",
     )
     p.add_argument("--keep", type=Path, metavar="DIR", help="run in DIR and keep its files")
     p.add_argument(
