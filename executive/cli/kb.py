@@ -160,6 +160,6 @@ def run_repair(args: argparse.Namespace) -> int:
         return 0
     kept = sum(done.kept.values())
     lost = sum(done.lost.values())
-    print(f"{shown(done.path)}: repaired: kept {kept} rows, could not read {lost}")
+    print(f"{shown(done.path)}: repaired: kept {plural(kept, 'row')}, could not read {lost}")
     print(f"the damaged file is kept as {shown(done.kept_aside)}")
     return 0

@@ -11,6 +11,7 @@ from typing import Any
 
 from executive.bus.api import planning as api
 from executive.bus.api import tasks
+from executive.bus.wording import plural
 from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, bar, print_json, shown, table
@@ -75,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
     with Planner(args.engine, args.timeout) as planner:
         result = planner.solve(task)
     if args.svg is not None and result.plan is not None:
-        title = f"{problem.name}: {len(result.plan.steps)} steps, makespan {result.plan.makespan:g} s, by {result.engine}"
+        title = f"{problem.name}: {plural(len(result.plan.steps), 'step')}, makespan {result.plan.makespan:g} s, by {result.engine}"
         if write_svg(args.svg, gantt.render(gantt.offline_gantt(result.plan, title))):
             return 0
     if args.json:
@@ -85,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"dura: {shown(problem)}: no plan: {result.reason}", file=sys.stderr)
         return 1
     print(
-        f"{shown(problem)}: {len(result.plan.steps)} steps, makespan {result.plan.makespan:g} s, "
+        f"{shown(problem)}: {plural(len(result.plan.steps), 'step')}, makespan {result.plan.makespan:g} s, "
         f"by {result.engine} in {result.time:.2f} s, validated by {result.validator}"
     )
     print_timeline(result.plan)

@@ -179,7 +179,7 @@ class Printer:
     def summary(self, timeline: Timeline) -> None:
         out = self.out
         length = timeline.end - timeline.begin
-        out.write(f"\nsummary: {length:.3f} s replayed, {timeline.messages} messages\n")
+        out.write(f"\nsummary: {length:.3f} s replayed, {plural(timeline.messages, 'message')}\n")
         holds = timeline.holds()
         if not holds:
             out.write("  nothing was diagnosed\n")
