@@ -70,6 +70,10 @@ def _inner(item: Any) -> str:
 
 
 def pairs(data: Mapping[str, Any]) -> str:
-    """A mapping on one line: ``target lab, reached yes`` (empty values left out)."""
+    """A mapping on one line: ``target lab, reached yes``, a nested one in parentheses
+    (``result (error_code 0)``); empty values left out."""
     shown = [(k, v) for k, v in data.items() if v not in (None, "", [], {})]
-    return ", ".join(f"{k} {value(v, str(k))}" for k, v in shown)
+    return ", ".join(
+        f"{k} ({pairs(v)})" if isinstance(v, Mapping) else f"{k} {value(v, str(k))}"
+        for k, v in shown
+    )

@@ -113,7 +113,7 @@ def test_no_event_shows_a_python_value() -> None:
 
 def test_a_kind_nobody_knows_reads_as_its_subject_and_data() -> None:
     odd = event("SOMETHING_NEW", "lidar", values=[1, 2], deep={"a": [["x", True]]}, ratio=0.05962)
-    assert describe(odd) == "lidar: values 1, 2, deep a (x yes), ratio 0.06"
+    assert describe(odd) == "lidar: values 1, 2, deep (a (x yes)), ratio 0.06"
 
 
 def test_an_unexpected_shape_falls_back_to_the_generic_line() -> None:
