@@ -14,7 +14,9 @@ this file. The rules:
   ``.dura`` of one running robot, the use case, shared by the whole module
   (:class:`RobotProcess` with its knowledge base in ``.dura``, as ``dura run`` keeps
   it): commands find the running executive, its credentials and its knowledge base as
-  they would in the folder where ``dura run`` runs. ``dura run ROBOT &`` is that robot.
+  they would in the folder where ``dura run`` runs. ``dura run`` of the use case is that
+  robot (its first line is compared with the one shown); a block that runs another
+  robot fails, saying so.
   Blocks run in the README's order on that one robot, as a reader who follows along
   would run them: ids count on from earlier blocks (the first user goal is goal 2 when
   an integrity rule posted goal 1 before). Before a block, the robot finishes what
@@ -22,8 +24,11 @@ this file. The rules:
   robot (a robot description with a typo, the diagnosis model, a bag) are made by
   ``SETUP``, keyed by the block's first command.
 - **Exit.** A command with no shown output must exit 0; one with shown output must
-  print it, whatever its exit code (the README may show an error). ``--follow``
-  commands run ``FOLLOW`` seconds and are interrupted, as a person would.
+  print it, whatever its exit code (the README may show an error). A command runs as
+  written, so it names real files and ids (placeholders such as ``ROBOT.yaml`` belong
+  in the prose and the command table). Commands that run until Ctrl-C (``--follow``,
+  ``dashboard``, ``record``) run ``FOLLOW`` seconds and are interrupted, as a person
+  would; their output is not compared.
 - **Output** (stdout, else stderr, else both) is compared line by line after these
   rules, applied to both sides: a shown ``...`` stands for any lines (or none); runs of
   spaces are one (column widths follow the content); what depends on the moment or
@@ -60,7 +65,7 @@ from tests.conftest import ROOT, USECASE
 pytestmark = pytest.mark.slow
 
 README = ROOT / "README.md"
-FOLLOW = 2.0  # seconds a --follow command runs
+FOLLOW = 2.0  # seconds a command that runs until Ctrl-C runs
 SETTLE = 30.0  # seconds a command that changes nothing is asked again until it matches
 IDLE = 90.0  # seconds the robot may take to finish what earlier blocks gave it
 TIMEOUT = 240.0  # seconds any one command may take (the demo is the longest)
@@ -75,8 +80,9 @@ class Command:
     shown: list[str] = field(default_factory=list)  # the output the README shows
 
     @property
-    def background(self) -> bool:
-        return self.argv[-1:] == ["&"]
+    def endless(self) -> bool:
+        """It runs until Ctrl-C."""
+        return "--follow" in self.argv or self.argv[1:2] in (["dashboard"], ["record"])
 
     @property
     def read_only(self) -> bool:
@@ -299,7 +305,7 @@ def workspace(folder: Path, robot: RobotProcess) -> Path:
 def run(command: Command, folder: Path) -> subprocess.CompletedProcess[str]:
     argv = [sys.executable, "-m", "executive.cli", *command.argv[1:]]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    if "--follow" not in command.argv:
+    if not command.endless:
         return subprocess.run(argv, cwd=folder, env=env, capture_output=True, text=True,
                               timeout=TIMEOUT, check=False)  # fmt: skip
     with subprocess.Popen(argv, cwd=folder, env=env, stdout=subprocess.PIPE,
@@ -339,22 +345,28 @@ def test_the_readme_block_runs_as_shown(block: Block, robot: RobotProcess, tmp_p
         if command.argv[0] != "dura":
             continue
         where = f"README.md:{command.line}: $ {command.text}"
-        if command.argv[1] == "run" and command.background:
+        if command.argv[1] == "run":
+            ran = ROOT / command.argv[2] if len(command.argv) > 2 else None
+            assert ran is not None and ran.resolve() == USECASE.resolve(), (
+                f"{where}: the README runner runs one robot, {USECASE.relative_to(ROOT)}; "
+                "teach tests/test_readme.py a second robot to run this one"
+            )
             first = robot.output.read_text(encoding="utf-8").splitlines()[:1]
             assert not command.shown or matches(first, command.shown), f"{where}\n{first}"
             continue
-        deadline = time.monotonic() + (SETTLE if command.read_only and command.shown else 0)
+        compared = bool(command.shown) and not command.endless
+        deadline = time.monotonic() + (SETTLE if command.read_only and compared else 0)
         while True:
             done = run(command, folder)
-            if not command.shown or fits(done, command.shown) or time.monotonic() > deadline:
+            if not compared or fits(done, command.shown) or time.monotonic() > deadline:
                 break
             time.sleep(0.5)
         printed = f"exit {done.returncode}\n--- stdout\n{done.stdout}--- stderr\n{done.stderr}"
-        if command.shown:
+        if compared:
             assert fits(done, command.shown), (
                 f"{where}\nshown:\n" + "\n".join(command.shown) + f"\nprinted: {printed}"
             )
-        elif "--follow" not in command.argv:
+        elif not command.endless and not command.shown:
             assert done.returncode == 0, f"{where}\n{printed}"
         check = CHECKS.get(command.text)
         if check is not None:
