@@ -16,13 +16,13 @@ this file. The rules:
   it): commands find the running executive, its credentials and its knowledge base as
   they would in the folder where ``dura run`` runs. ``dura run`` of the use case is that
   robot (its first line is compared with the one shown); a block that runs another
-  robot fails, saying so.
-  Blocks run in the README's order on that one robot, as a reader who follows along
-  would run them: ids count on from earlier blocks (the first user goal is goal 2 when
-  an integrity rule posted goal 1 before). Before a block, the robot finishes what
-  earlier blocks gave it (no open goal, no task). Files a block names that the README shows elsewhere or that come from the
-  robot (a robot description with a typo, the diagnosis model, a bag) are made by
-  ``SETUP``, keyed by the block's first command.
+  robot fails, saying so. Blocks run in the README's order on that one robot, as a
+  reader who follows along would run them: ids count on from earlier blocks (the first
+  user goal is goal 2 when an integrity rule posted goal 1 before). Before a block, the
+  robot finishes what earlier blocks gave it (no open goal, no task). Files a block
+  names that the README shows elsewhere or that come from the robot (a robot
+  description with a typo, the diagnosis model, a bag) are made by ``SETUP``, keyed by
+  the block's first command; ``CHECKS`` adds checks to a command (the demo's counts).
 - **Exit.** A command with no shown output must exit 0; one with shown output must
   print it, whatever its exit code (the README may show an error). A command runs as
   written, so it names real files and ids (placeholders such as ``ROBOT.yaml`` belong
