@@ -248,7 +248,9 @@ class GoalPlanner:
         if self._stopping.is_set():
             return
         objects = self.kb.objects()
-        usable, refused = specs(self.kb.open_goals(), Signature.of(self.domain, objects))
+        usable, refused = specs(
+            self.kb.open_goals(), Signature.of(self.domain, objects), clock=self.executer.clock
+        )
         failed: dict[int, str] = {}
         for goal_id, refusal in refused.items():
             if refusal.cause is RefusalCause.DEADLINE_PASSED:

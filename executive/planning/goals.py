@@ -15,6 +15,7 @@ import math
 import time
 from dataclasses import dataclass
 
+from executive.bus.clock import Clock
 from executive.planning.expression import Expression, Signature, parse
 from knowledge.domain import DomainInfo
 from knowledge.errors import DomainError
@@ -78,15 +79,17 @@ def submit(
     return kb.add_goal(text, priority=priority, deadline=deadline, source=source)
 
 
-def remaining(goal: Goal, now: float | None = None) -> float | None:
-    """Seconds left until a goal's deadline (negative once passed); ``None`` without one."""
+def remaining(goal: Goal, now: float | None = None, clock: Clock | None = None) -> float | None:
+    """Seconds of robot time left until a goal's deadline (negative once passed);
+    ``None`` without one. ``now`` is wall-clock epoch seconds."""
     if goal.deadline is None:
         return None
-    return goal.created + goal.deadline - (time.time() if now is None else now)
+    waited = (time.time() if now is None else now) - goal.created
+    return goal.deadline - (clock or Clock()).robot(waited)
 
 
 def specs(
-    goals: list[Goal], signature: Signature, now: float | None = None
+    goals: list[Goal], signature: Signature, now: float | None = None, clock: Clock | None = None
 ) -> tuple[list[GoalSpec], dict[int, Refusal]]:
     """Read stored goals for planning: the usable ones, and the refusal of each other one.
 
@@ -102,7 +105,7 @@ def specs(
         except DomainError as e:
             refused[goal.id] = Refusal(RefusalCause.INVALID, str(e))
             continue
-        left = remaining(goal, now)
+        left = remaining(goal, now, clock)
         if left is not None and left <= 0:
             refused[goal.id] = Refusal(
                 RefusalCause.DEADLINE_PASSED, f"its deadline of {goal.deadline:g} s passed"

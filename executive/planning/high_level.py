@@ -18,11 +18,11 @@ from __future__ import annotations
 import contextlib
 import logging
 import threading
-import time
 from collections.abc import Callable
 from typing import Any
 
 from executive.bus.api import planning as api
+from executive.bus.clock import Clock, system_clock
 from executive.bus.keys import DIAGNOSES, EVENTS
 from executive.bus.payloads import DiagnosisInfo
 from executive.bus.service import Context, Service
@@ -55,6 +55,7 @@ class HighLevel(Service):
         status: the sections other services add to ``status`` (``tasks`` from the task
             executor, ``components`` from the launcher), by name.
         limits: when a running step times out.
+        clock: robot time (default: this process's, from ``DURA_TIME_SCALE``).
     """
 
     name = "high-level"
@@ -66,8 +67,10 @@ class HighLevel(Service):
         *,
         status: dict[str, Callable[[], Any]] | None = None,
         limits: ExecutionLimits | None = None,
+        clock: Clock | None = None,
     ) -> None:
         super().__init__(context)
+        self.clock = clock or system_clock()
         self.runner = runner
         self.extra_status = dict(status or {})
         unknown = sorted(set(self.extra_status) - set(SECTIONS))
@@ -93,10 +96,12 @@ class HighLevel(Service):
         rules: list[IntegrityRule] = []
         for path in robot.integrity:
             rules.extend(read_rules(path, robot, self.domain, kb.objects()))
-        self.integrity = IntegrityGoals(kb, self.domain, rules)
+        self.integrity = IntegrityGoals(kb, self.domain, rules, clock=self.clock)
         self.planner = Planner(robot.planner.engine, robot.planner.timeout)
         self.planner.start(robot.domain)
-        self.executer = PlanExecuter(kb, self.runner, robot.tasks, self._replan, self.limits)
+        self.executer = PlanExecuter(
+            kb, self.runner, robot.tasks, self._replan, self.limits, clock=self.clock
+        )
         self._blocked = self.blocked()
         self.goals = GoalPlanner(kb, self.domain, self.planner, self.executer, blocked=self.blocked)
         self._relaying = True
@@ -155,7 +160,7 @@ class HighLevel(Service):
         """Check the integrity rules when something changed, and when a rule is due."""
         while not self._stopping.is_set():
             due = self.integrity.next_check()
-            wait = None if due is None else max(0.0, due - time.time())
+            wait = None if due is None else max(0.0, self.clock.wall(due - self.clock.monotonic()))
             self._check.wait(wait)
             self._check.clear()
             if self._stopping.is_set():

@@ -22,12 +22,12 @@ open, and fires again only after the trigger was false once.
 from __future__ import annotations
 
 import enum
-import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from executive.bus.clock import Clock
 from executive.planning.expression import Expression, Signature, WorldState, parse
 from executive.planning.goals import normalized, submit
 from knowledge.description import RobotDescription
@@ -172,12 +172,14 @@ class IntegrityGoals:
 
     Call :meth:`check` whenever something a rule reads may have changed (diagnoses,
     faults, facts) and again at :meth:`next_check`, for rules that wait ``for`` a while.
+    Times are the clock's robot seconds (``for`` is robot time).
     """
 
     kb: KnowledgeBase
     domain: DomainInfo
     rules: Sequence[IntegrityRule]
     diagnoses: tuple[frozenset[str], ...] = ()
+    clock: Clock = field(default_factory=Clock)
     _watch: dict[str, _Watch] = field(default_factory=dict)
 
     def diagnosed(self, payload: Mapping[str, Any]) -> None:
@@ -200,7 +202,7 @@ class IntegrityGoals:
 
     def check(self, now: float | None = None) -> list[Goal]:
         """Post the goals of the rules that fire now; returns them."""
-        now = time.time() if now is None else now
+        now = self.clock.monotonic() if now is None else now
         state = WorldState(self.kb.facts())
         faulty = {c.name for c in self.kb.components() if c.permanent_fault}
         open_goals = {g.expression for g in self.kb.open_goals()}
@@ -231,7 +233,8 @@ class IntegrityGoals:
         return posted
 
     def next_check(self) -> float | None:
-        """When a rule waiting ``for`` its trigger to persist is due (epoch seconds)."""
+        """When a rule waiting ``for`` its trigger to persist is due (the clock's
+        :meth:`~executive.bus.clock.Clock.monotonic` seconds)."""
         due = [
             w.since + r.hold
             for r in self.rules

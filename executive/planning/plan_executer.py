@@ -40,6 +40,7 @@ from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
+from executive.bus.clock import Clock, system_clock
 from executive.bus.worker import Worker
 from executive.planning.expression import WorldState, atoms
 from executive.planning.goals import GoalSpec
@@ -117,6 +118,7 @@ class PlanExecuter:
         tasks: the actions that have a task; the others complete at once.
         on_replan: called (on the executer's thread) with the reason when a new plan
             is needed; the goal planner wakes up on it.
+        clock: robot time (step timeouts and goal deadlines are robot seconds).
     """
 
     def __init__(
@@ -126,8 +128,11 @@ class PlanExecuter:
         tasks: Collection[str],
         on_replan: Callable[[str], None],
         limits: ExecutionLimits | None = None,
+        *,
+        clock: Clock | None = None,
     ) -> None:
         self.kb = kb
+        self.clock = clock or system_clock()
         self.runner = runner
         self.tasks = frozenset(tasks)
         self.on_replan = on_replan
@@ -146,6 +151,7 @@ class PlanExecuter:
             tell=lambda change: self._tell(change),  # noqa: PLW0108 (report_to replaces _tell)
             on_replan=on_replan,
             tokens=itertools.count(1),
+            clock=self.clock,
         )
         self._run: PlanRun | None = None
         self._goals: list[_Goal] = []
@@ -255,7 +261,9 @@ class PlanExecuter:
             goal = _Goal(spec, atoms(spec.expression))
             if spec.deadline is not None:
                 goal.timer = start_timer(
-                    spec.deadline, self._worker.post, functools.partial(self._deadline, goal)
+                    self.clock.wall(spec.deadline),
+                    self._worker.post,
+                    functools.partial(self._deadline, goal),
                 )
             self._goals.append(goal)
             self._tell(GoalChange(spec.id, GoalState.EXECUTING))

@@ -10,7 +10,6 @@ true in the robot's world: the integrity goals take it from there. The level sta
 
 from __future__ import annotations
 
-import time
 from typing import Any
 
 from executive.sdk import Functionality, Message
@@ -39,14 +38,14 @@ class Base(Functionality):
     def command(self, message: Message) -> None:
         linear = message.payload.get("linear", 0.0)
         if isinstance(linear, (int, float)):
-            self.linear, self.commanded = float(linear), time.monotonic()
+            self.linear, self.commanded = float(linear), self.clock.monotonic()
 
     def charge(self, message: Message) -> None:
         on = message.payload.get("on") is True
-        self.charging_until = time.monotonic() + 1.0 if on else 0.0
+        self.charging_until = self.clock.monotonic() + 1.0 if on else 0.0
 
     def step(self) -> None:
-        now, dt = time.monotonic(), 1.0 / self.rate
+        now, dt = self.clock.monotonic(), 1.0 / self.rate
         if now - self.commanded > 0.5:  # a command holds for half a second
             self.linear = 0.0
         self.x += self.linear * dt
