@@ -284,12 +284,11 @@ class PlanRun:
         run.since = time.monotonic()
         if run.step.duration is None:
             return
-        limit = self._c.limits.timeout(run.step.duration)
+        clock = self._c.clock
+        wall = self._c.limits.wall_timeout(run.step.duration, clock)
         token = run.token
-        run.timer = start_timer(  # elapsed is wall time, the limit robot time
-            self._c.clock.wall(limit) - run.elapsed,
-            self._c.post,
-            lambda: self.timed_out(run, token, limit),
+        run.timer = start_timer(  # elapsed and the limit are wall time
+            wall - run.elapsed, self._c.post, lambda: self.timed_out(run, token, clock.robot(wall))
         )
 
     def timed_out(self, run: StepRun, token: int, limit: float) -> None:
