@@ -118,13 +118,14 @@ class Executive:
     def services(self, context: Context) -> list[Service]:
         """The services of the executive, in the order they start (and stop reversed):
         monitoring first, so that it watches every component the executive starts."""
+        ros2 = self.ros2
         self.tasks = TaskExecutor(context, self.launcher)
         self.high_level = HighLevel(
             context,
             PlanTasks(self.tasks, self.robot),
             status={"tasks": self.tasks.tasks, "components": self._components},
+            sources=[ros2.topics] if ros2 is not None else [],
         )
-        ros2 = self.ros2
         extra: list[Service] = []
         if ros2 is not None:
             from executive.ros2.state import Ros2StatePublisher

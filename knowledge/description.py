@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from knowledge.ros2_spec import Ros2Spec
+from knowledge.sensing_spec import SensingRuleSpec
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 
@@ -152,6 +153,7 @@ class RobotDescription:
     endpoint: str = DEFAULT_ENDPOINT
     knowledge_base: Path | None = None
     ros2: Ros2Spec | None = None  # the robot's ROS 2 graph, if it has one
+    sensing: tuple[SensingRuleSpec, ...] = ()  # facts and values read from topics
 
     @property
     def components(self) -> dict[str, ComponentSpec]:

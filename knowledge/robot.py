@@ -28,6 +28,7 @@ from knowledge.description import (
 from knowledge.errors import ConfigError
 from knowledge.finding import Finding, Report
 from knowledge.ros2_spec import read_ros2
+from knowledge.sensing_spec import read_sensing
 from knowledge.yamlsource import Section, compose, describe, line_of, paths, to_python
 
 ENGINES = ("kairos", "aries", "fast-downward", "tamer")
@@ -209,6 +210,7 @@ def read_robot(
         if t is not None:
             tasks[action] = t
     ros2 = read_ros2(top.section("ros2"), base, report)
+    sensing = read_sensing(top, report)
     top.close()
     robot = RobotDescription(
         name=name,
@@ -224,6 +226,7 @@ def read_robot(
         endpoint=endpoint,
         knowledge_base=kb,
         ros2=ros2,
+        sensing=sensing,
     )
     return robot, report.findings
 

@@ -64,8 +64,10 @@ def submit(
     priority: int = 0,
     deadline: float | None = None,
     source: str = "user",
+    keep: bool = False,
 ) -> Goal:
-    """Check a goal against the domain and the KB's objects, then store it as pending.
+    """Check a goal against the domain and the KB's objects, then store it as pending;
+    ``keep``: a maintenance goal, re-posted whenever it stops holding.
 
     Raises:
         DomainError: the expression, deadline or source is invalid (nothing is stored).
@@ -76,7 +78,7 @@ def submit(
     if source not in SOURCES:
         raise DomainError(f"goal '{text}': unknown source '{source}' (one of {', '.join(SOURCES)})")
     parse(text, Signature.of(domain, kb.objects()))
-    return kb.add_goal(text, priority=priority, deadline=deadline, source=source)
+    return kb.add_goal(text, priority=priority, deadline=deadline, source=source, keep=keep)
 
 
 def remaining(goal: Goal, now: float | None = None, clock: Clock | None = None) -> float | None:

@@ -10,13 +10,16 @@ Rules live in YAML files named under ``integrity:`` in the robot description::
         priority: 10                       # optional (default 0)
         deadline: 60                       # optional, seconds from posting
         for: 2                             # optional: the trigger must hold this long
+        keep: true                         # optional: a maintenance goal (re-posted
+                                           # whenever it stops holding)
 
 Triggers: ``permanent_fault: COMPONENT`` (the KB marks it permanently faulty),
 ``diagnosis: COMPONENT`` (it is in every current diagnosis, i.e. certainly faulty),
 ``condition: PDDL`` (a condition over the KB facts and numeric values, e.g.
 ``(< (battery_level robot) 20)``). A rule fires when its trigger becomes true (and has
 stayed true for ``for`` seconds), posts its goal unless the same goal is already
-open, and fires again only after the trigger was false once.
+open (or, for a maintenance goal, achieved and watched), and fires again only after
+the trigger was false once.
 """
 
 from __future__ import annotations
@@ -35,7 +38,7 @@ from knowledge.domain import DomainInfo
 from knowledge.errors import ConfigError, DomainError
 from knowledge.finding import Report
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.records import Goal
+from knowledge.records import Goal, GoalState
 from knowledge.yamlsource import Section, compose, did_you_mean, line_of
 
 
@@ -62,6 +65,7 @@ class IntegrityRule:
     deadline: float | None = None
     hold: float = 0.0
     where: str = ""  # file:line, for messages
+    keep: bool = False  # post a maintenance goal
 
 
 def read_rules(
@@ -118,6 +122,7 @@ def _rule(
     deadline_node = s.has("deadline")
     deadline = s.number("deadline", 0.0, minimum=0.001) if deadline_node else None
     hold = s.number("for", 0.0, minimum=0.0)
+    keep = s.flag("keep", False)
     when = s.section("when", required=True)
     s.close()
     where = f"{report.path}:{s.line}"
@@ -157,7 +162,9 @@ def _rule(
             trigger = None
     if name is None or goal is None or trigger is None or subject is None:
         return None
-    return IntegrityRule(name, trigger, subject, normalized(goal), priority, deadline, hold, where)
+    return IntegrityRule(
+        name, trigger, subject, normalized(goal), priority, deadline, hold, where, keep
+    )
 
 
 @dataclass
@@ -205,7 +212,8 @@ class IntegrityGoals:
         now = self.clock.monotonic() if now is None else now
         state = WorldState(self.kb.facts())
         faulty = {c.name for c in self.kb.components() if c.permanent_fault}
-        open_goals = {g.expression for g in self.kb.open_goals()}
+        watched = [g for g in self.kb.goals([GoalState.ACHIEVED]) if g.keep]
+        open_goals = {g.expression for g in (*self.kb.open_goals(), *watched)}
         posted: list[Goal] = []
         for rule in self.rules:
             watch = self._watch.setdefault(rule.name, _Watch())
@@ -221,7 +229,8 @@ class IntegrityGoals:
                 continue
             try:
                 goal = submit(self.kb, self.domain, rule.goal, priority=rule.priority,
-                              deadline=rule.deadline, source="integrity")  # fmt: skip
+                              deadline=rule.deadline, source="integrity",
+                              keep=rule.keep)  # fmt: skip
             except DomainError as e:
                 self.kb.log_event("INTEGRITY_REFUSED", rule.name, {"reason": str(e)})
                 continue

@@ -82,14 +82,14 @@ class Reachability:
         return [a for i, a in enumerate(self.actions) if i not in self.applied]
 
     def explain(self, atom: Expression) -> str:
-        """Why an atom can never hold: ``(picture_taken dock): take_picture(dock) needs
-        (photographable dock)`` or ``(lift_at lab): no action makes it true``."""
+        """Why an atom can never hold: ``(picture_taken dock) cannot become true:
+        take_picture(dock) needs (photographable dock)``."""
         if not isinstance(atom, Atom):
-            return f"{atom} can never hold"
+            return f"{atom} cannot become true"
         key = (atom.name, atom.args)
         achievers = [a for a in self.actions if key in a.adds]
         if not achievers:
-            return f"{atom}: no action makes it true"
+            return f"{atom} cannot become true: no action makes it true"
         reasons = []
         for action in achievers[:SHOWN]:
             lacking = _lacking(action.before, self.reached) or _lacking(
@@ -98,7 +98,7 @@ class Reachability:
             needs = " and ".join(str(x) for x in lacking[:SHOWN]) or "its conditions"
             reasons.append(f"{action.label} needs {needs}")
         more = f" (and {len(achievers) - SHOWN} more)" if len(achievers) > SHOWN else ""
-        return f"{atom}: " + "; ".join(reasons) + more
+        return f"{atom} cannot become true: " + "; ".join(reasons) + more
 
 
 def possible(expression: Expression, reached: frozenset[Key] | set[Key]) -> bool:

@@ -219,10 +219,16 @@ class RobotProcess:
         return self.bus.request(api(verb), dict(payload or {}), timeout=timeout)
 
     def submit_goal(
-        self, expression: str, *, priority: int = 0, deadline: float | None = None
+        self,
+        expression: str,
+        *,
+        priority: int = 0,
+        deadline: float | None = None,
+        keep: bool = False,
     ) -> int:
-        """Submit a goal; returns its id. Raises BusError if the executive refuses it."""
-        request = planning.GoalAdd(expression, priority, deadline)
+        """Submit a goal (``keep``: a maintenance goal); returns its id. Raises BusError if
+        the executive refuses it."""
+        request = planning.GoalAdd(expression, priority, deadline, keep=keep)
         return int(planning.GOAL_ADD.call(self.bus, request).goal["id"])
 
     def goal(self, goal_id: int) -> dict[str, Any]:
