@@ -27,6 +27,7 @@ from executive.bus.clock import Clock
 from executive.planning.expression import Signature, WorldState
 from executive.planning.goal_watch import GoalWatch
 from executive.planning.goals import GoalSpec, specs
+from executive.planning.oversubscription import blocked_note, unreachable_reason
 from executive.planning.planner import Planner, PlanningTask, PlanResult
 from executive.planning.problem import World
 from knowledge.domain import DomainInfo
@@ -138,27 +139,32 @@ class GoalKeeper:
             [goals[i] for i in due], Signature.of(self.domain, self.kb.objects()), clock=self.clock
         )
         for left in set(due) - {s.id for s in usable}:  # an object is gone, a deadline passed
-            self.watch.looked(left, time.monotonic(), reachable=False)
+            self.watch.looked(left, time.monotonic())
         if not usable:
             return
         self._looking = True
         reason, objects = self._reason, self.kb.objects()
         self.links.search(lambda: self._search(usable, objects, reason))
 
-    def _looked(self, results: dict[int, PlanResult], reason: str) -> None:
+    def _looked(
+        self,
+        results: dict[int, tuple[GoalSpec, PlanResult]],
+        blocked: Mapping[str, str],
+        reason: str,
+    ) -> None:
         self._looking = False
         now = time.monotonic()
-        for goal_id, result in results.items():
+        for goal_id, (spec, result) in results.items():
             goal = self.kb.goal(goal_id)
             if goal.state is not GoalState.UNREACHABLE:
                 continue  # cancelled meanwhile
-            self.watch.looked(goal_id, now, reachable=result.ok)
+            self.watch.looked(goal_id, now)
             if result.ok:
                 why = f"reachable again after {reason}" if reason else "reachable again"
                 self.kb.set_goal_state(goal_id, GoalState.PENDING, why)
                 self.links.want(f"goal {goal_id} is reachable again")
                 continue
-            why = unreachable_reason(result)
+            why = unreachable_reason(spec, (), result) + blocked_note(blocked)
             if why != goal.reason:
                 self.kb.set_goal_state(goal_id, GoalState.UNREACHABLE, why)
         self._look()
@@ -177,21 +183,16 @@ class GoalKeeper:
     # --- the search thread --------------------------------------------------------------
 
     def _search(self, goals: list[GoalSpec], objects: dict[str, str], reason: str) -> None:
-        results: dict[int, PlanResult] = {}
+        results: dict[int, tuple[GoalSpec, PlanResult]] = {}
+        blocked: dict[str, str] = {}
         try:
             facts = tuple(self.links.planning_facts())
-            blocked = frozenset(self.links.blocked())
+            blocked = dict(self.links.blocked())
             timeout = min(self.planner.timeout, LOOK_TIMEOUT)
             for goal in goals:
-                task = PlanningTask(self.domain.path, World(objects, facts), (goal,), blocked)
-                results[goal.id] = self.planner.solve(task, timeout=timeout)
+                world = World(objects, facts)
+                task = PlanningTask(self.domain.path, world, (goal,), frozenset(blocked))
+                results[goal.id] = (goal, self.planner.solve(task, timeout=timeout))
         except Exception:
             log.exception("looking again at unreachable goals failed")
-        self.links.post(lambda: self._looked(results, reason))
-
-
-def unreachable_reason(result: PlanResult) -> str:
-    """Why no plan reaches a goal alone: what is missing, if the relaxation tells,
-    and the engine's answer."""
-    missing = "".join(f": {line}" for line in result.missing[:2])
-    return f"no plan reaches it from the current state{missing} ({result.reason})"
+        self.links.post(lambda: self._looked(results, blocked, reason))

@@ -6,10 +6,11 @@ which does the looking:
 
 - An unreachable goal is looked at again only after the world changed in a way the
   plan does not explain (a fact or object set, a sensed fact, a component reset or
-  repaired), and not sooner than its interval after the last look. Each look that
-  finds it still unreachable doubles the interval (``first`` up to ``longest``), so a
-  fact that flaps cannot make the planner spin: ten flaps a second cost one look at
-  first, then one every 2, 4, ... 60 seconds.
+  repaired), and not sooner than its interval after the last look. Each look doubles
+  the interval (``first`` up to ``longest``), also one that re-posts the goal (it may
+  be unreachable again together with the others), so a fact that flaps cannot make
+  the planner spin: ten flaps a second cost one look at first, then one every 2, 4,
+  ... 60 seconds.
 - A maintenance goal (``keep``) that is achieved is watched: it is re-posted as soon
   as it stops holding, but not twice within ``repost_interval`` seconds (a noisy fact
   would pause the plan again and again); a later look catches it then.
@@ -57,8 +58,6 @@ class GoalWatch:
     def due(self, unreachable: Iterable[int], now: float) -> tuple[list[int], float | None]:
         """The unreachable goals to look at now, and when the next other one is due."""
         ids = set(unreachable)
-        for gone in set(self._looks) - ids:
-            del self._looks[gone]
         now_due: list[int] = []
         later: float | None = None
         for goal_id in sorted(ids):
@@ -71,11 +70,8 @@ class GoalWatch:
                 later = look.next if later is None else min(later, look.next)
         return now_due, later
 
-    def looked(self, goal_id: int, now: float, *, reachable: bool) -> None:
-        """A look at a goal ended: forget it if reachable, else wait longer next time."""
-        if reachable:
-            self._looks.pop(goal_id, None)
-            return
+    def looked(self, goal_id: int, now: float) -> None:
+        """A look at a goal ended: the next waits for a change and twice as long."""
         look = self._looks.setdefault(goal_id, _Look(self.first))
         look.changed = False
         look.next = now + look.interval

@@ -74,7 +74,7 @@ def plan_goals(planner: Planner, task: PlanningTask, budget: float | None = None
             kept.append(goal)
             best = attempt
         else:
-            unreachable[goal.id] = _reason(goal, kept, attempt)
+            unreachable[goal.id] = unreachable_reason(goal, kept, attempt)
     result = best or first
     return GoalPlan(result, tuple(g.id for g in kept), unreachable, calls)
 
@@ -86,7 +86,9 @@ def missing_for(goal: GoalSpec, result: PlanResult) -> list[str]:
     return [line for line in result.missing if line.startswith(heads)]
 
 
-def _reason(goal: GoalSpec, kept: list[GoalSpec], attempt: PlanResult) -> str:
+def unreachable_reason(goal: GoalSpec, kept: Sequence[GoalSpec], attempt: PlanResult) -> str:
+    """Why no plan reaches a goal together with the ``kept`` ones: what it misses, if the
+    relaxed reachability check tells, else the engine's answer or the goals in the way."""
     by = f" by its deadline ({goal.deadline:g} s from now)" if goal.deadline is not None else ""
     missing = missing_for(goal, attempt)
     if missing:  # nothing can make part of it true: the other goals do not matter
