@@ -164,6 +164,9 @@ def _action_uses(action: Any, uses: _Uses) -> None:
     else:
         conditions = [c for cs in action.conditions.values() for c in cs]
         effects = [e for es in action.effects.values() for e in es]
+    duration = getattr(action, "duration", None)  # durations may name functions
+    for bound in (duration.lower, duration.upper) if duration is not None else ():
+        _walk(bound, False, name, uses.needed, uses.mentioned)
     for condition in conditions:
         _walk(condition, True, name, uses.needed, uses.mentioned)
     for effect in effects:

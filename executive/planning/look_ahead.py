@@ -2,9 +2,9 @@
 
 When facts change outside the plan (``dura state set``, a component, a sensing rule),
 the plan executer runs the rest of its plan forward from the current facts, in the
-order the planner timed it: each step not yet started checks its at-start condition
-and applies its at-start effects; each step not yet ended checks its over-all and
-at-end conditions and applies its at-end effects; at the end, the plan's open goals
+order the planner timed it: each step not yet started checks its at-start condition,
+applies its at-start effects and checks its over-all condition; each step not yet
+ended checks its over-all and at-end conditions and applies its at-end effects; at the end, the plan's open goals
 must hold. The first condition that fails and names a fact that changed is a road
 blocked ahead: the executer asks for a new plan now, not when the robot gets there.
 A failure that names no changed fact is left to the executer as the plan runs (the
@@ -78,25 +78,42 @@ def look_ahead(
         moments.append((step.start + (step.duration or 0.0), 0 if step.duration else 2, n, ahead))
     for _, end, _, ahead in sorted(moments, key=lambda m: m[:3]):
         step = ahead.step
-        if end == 1:  # its start
-            checks: tuple[tuple[str, Expression], ...] = (("at-start", step.at_start),)
+        if end == 1:  # its start: the at-start condition, then over all from just after
+            before: tuple[tuple[str, Expression], ...] = (("at-start", step.at_start),)
             effects: tuple[Effect, ...] = step.start_effects
+            after: tuple[tuple[str, Expression], ...] = (("over-all", step.over_all),)
         else:
-            checks = (("over-all", step.over_all), ("at-end", step.at_end))
-            effects = step.end_effects
+            before = (("over-all", step.over_all), ("at-end", step.at_end))
+            effects, after = step.end_effects, ()
+        blocked = _checks(step, before, values, touched)
+        if blocked is not None:
+            return blocked
         state = _state(values)
-        for part, condition in checks:
-            blocked = _check(step, part, condition, state, touched)
-            if blocked is not None:
-                return blocked
         add, remove = apply(effects, state)
         for f in remove:
             values.pop((f.name, f.args), None)
         for f in add:
             values[(f.name, f.args)] = f.value
+        blocked = _checks(step, after, values, touched)
+        if blocked is not None:
+            return blocked
     state = _state(values)
     for goal in goals:
         blocked = _check(None, "goal", goal, state, touched)
+        if blocked is not None:
+            return blocked
+    return None
+
+
+def _checks(
+    step: Step,
+    checks: tuple[tuple[str, Expression], ...],
+    values: dict[Key, bool | float],
+    touched: set[Key],
+) -> Blocked | None:
+    state = _state(values)
+    for part, condition in checks:
+        blocked = _check(step, part, condition, state, touched)
         if blocked is not None:
             return blocked
     return None

@@ -115,12 +115,12 @@ def test_a_road_blocked_ahead_replans_before_the_robot_gets_there(dura_robot: St
         for i, e in enumerate(events)
         if e["kind"] == "REPLAN" and "drive(store, hall0) ahead" in e["data"]["reason"]
     )
-    arrived = index(events, "END", "drive(dock, store)")
-    assert replan < arrived  # replanned while the robot was still on its way to the store
+    drives = [i for i, e in enumerate(events) if e["kind"] == "END" and "drive(" in e["subject"]]
+    assert replan < drives[0]  # replanned while the robot was still on its first drive
     assert "(road store hall0) changed" in events[replan]["data"]["reason"]
     driven = [e["subject"] for e in events[replan:] if e["kind"] == "END"]
-    assert "drive(store, hall0)" not in driven
-    assert "drive(store, dock)" in driven and "drive(dock, hall0)" in driven, driven
+    assert "drive(store, hall0)" not in driven, driven
+    assert "(crate_at parcel lab)" in robot.facts("crate_at")
 
 
 def test_a_dry_run_shows_a_plan_for_the_open_goals_and_executes_nothing(
