@@ -56,3 +56,33 @@ def test_a_problem_is_parsed_against_the_domain_and_its_errors_name_the_problem(
     bad = "(define (problem p) (:domain usecase)\n (:objects a - place)\n (:init (robot_at b)))"
     with pytest.raises(DomainError, match=r"^world.pddl:3: PDDL: "):
         parse_problem(DOMAIN, bad, "world.pddl")
+
+
+def test_an_object_named_like_its_type_is_accepted_as_rosplan_writes_it(tmp_path: Path) -> None:
+    from tests.executive.planning.planning_cases import DRIVERLOG_DOMAIN, DRIVERLOG_PROBLEM
+
+    domain = tmp_path / "driverlog.pddl"
+    domain.write_text(DRIVERLOG_DOMAIN)
+    problem = parse_problem(domain, DRIVERLOG_PROBLEM, "drive1.pddl")
+    assert {o.name: str(o.type) for o in problem.all_objects} == {
+        "driver": "driver", "truck": "truck", "depot": "location", "market": "location"
+    }  # fmt: skip
+
+
+def test_a_name_declared_twice_is_still_refused_at_its_second_line(tmp_path: Path) -> None:
+    from tests.executive.planning.planning_cases import DRIVERLOG_DOMAIN, DRIVERLOG_TWICE
+
+    domain = tmp_path / "driverlog.pddl"
+    domain.write_text(DRIVERLOG_DOMAIN)
+    with pytest.raises(DomainError, match=r"^twice\.pddl:6: PDDL: name 'depot' is declared twice$"):
+        parse_problem(domain, DRIVERLOG_TWICE, "twice.pddl")
+
+
+def test_a_predicate_declared_twice_is_refused_at_its_second_line(tmp_path: Path) -> None:
+    domain = tmp_path / "twice.pddl"
+    domain.write_text(
+        "(define (domain twice)\n  (:requirements :strips)\n  (:predicates\n"
+        "    (ready)\n    (ready)))\n"
+    )
+    with pytest.raises(DomainError, match=r"twice\.pddl:5: PDDL: name 'ready' is declared twice"):
+        read_domain(domain)
