@@ -101,13 +101,12 @@ def test_a_maintenance_goal_is_reposted_once_it_stops_holding_and_achieved_again
 
 
 def test_a_road_blocked_ahead_replans_before_the_robot_gets_there(dura_robot: Start) -> None:
-    # drives take 10 robot seconds (1 s of wall time): time to block a road ahead
-    slow = {"behaviors": {"drive_to": {"params": {"duration": 10.0}}}}
+    # drives take 30 robot seconds (3 s of wall time): time to block a road ahead
+    slow = {"behaviors": {"drive_to": {"params": {"duration": 30.0}}}}
     robot = dura_robot(TRANSPORT, changes=slow, time_scale=FAST)
     delivery = robot.submit_goal("(crate_at parcel lab)")
     robot.wait_for_event("START", "drive(dock, store)", timeout=60)
-    done = run_dura("state", "unset", "(road store hall0)", cwd=robot.folder)
-    assert done.returncode == 0, done.stderr
+    robot.unset_fact("(road store hall0)")  # as dura state unset does
     robot.wait_for(delivery, "achieved", timeout=120)
     events = robot.events()
     replan = next(
