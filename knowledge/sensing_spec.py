@@ -67,7 +67,7 @@ class SensingRuleSpec:
 
     @property
     def condition(self) -> str:
-        """The condition as written: ``level < 20 (false again above 30)``."""
+        """Return the condition as written: ``level < 20 (false again above 30)``."""
         if self.below is not None:
             clear = f" (false again above {self.clear_above:g})" if self.clear_above else ""
             return f"{self.path} < {self.below:g}{clear}"
@@ -78,7 +78,7 @@ class SensingRuleSpec:
 
 
 def field_problem(path: str) -> str:
-    """Why a dotted field path is malformed, or an empty string."""
+    """Say why a dotted field path is malformed, or return an empty string."""
     parts = path.split(".")
     if not path or not all(FIELD_PATH.fullmatch(p) for p in parts):
         return (
@@ -170,7 +170,7 @@ def _rule(node: yaml.Node, report: Report) -> SensingRuleSpec | None:
 def check_sensing(
     robot: RobotDescription, domain: DomainInfo, objects: Mapping[str, str], report: Report
 ) -> None:
-    """Each rule names a topic the robot has, and a fact (value) of the domain's
+    """Check that each rule names a topic the robot has, and a fact (value) of the domain's
     predicates (functions) with the right number and types of known objects."""
     published = sorted({t for c in robot.components.values() for t in c.publishes})
     ros2 = sorted(robot.ros2.topics) if robot.ros2 is not None else []
@@ -200,7 +200,7 @@ def atom_problem(
     domain: DomainInfo,
     what: str,
 ) -> str:
-    """Why ``(name obj ...)`` is not a ground atom of the domain, or an empty string."""
+    """Say why ``(name obj ...)`` is not a ground atom of the domain, or return ''."""
     words = text.strip().removeprefix("(").removesuffix(")").split()
     if not text.strip().startswith("(") or not text.strip().endswith(")") or not words:
         return f"'{text}' is not a {what} in parentheses, e.g. (battery_low)"

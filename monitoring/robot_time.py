@@ -45,11 +45,11 @@ class RobotTime:
         self.clock = clock
 
     def now(self) -> float:
-        """Now, on the robot-time axis."""
+        """Return now, on the robot-time axis."""
         return time.time() * self.clock.scale
 
     def message(self, message: Message) -> Message:
-        """A message on the robot-time axis."""
+        """Return a message as seen on the robot-time axis."""
         scale = self.clock.scale
         if scale == 1.0:
             return message
@@ -60,7 +60,7 @@ class RobotTime:
         )  # fmt: skip
 
     def handler(self, handler: Callable[[Message], None]) -> Callable[[Message], None]:
-        """A handler that gets messages on the robot-time axis."""
+        """Wrap a handler so that it gets messages on the robot-time axis."""
         if not self.clock.scaled:
             return handler
         return lambda message: handler(self.message(message))

@@ -61,18 +61,19 @@ class Clock:
 
     @property
     def scaled(self) -> bool:
+        """Tell whether robot time runs faster (or slower) than the wall clock."""
         return self.scale != 1.0
 
     def wall(self, seconds: float) -> float:
-        """How many wall-clock seconds ``seconds`` of robot time take."""
+        """Return the wall-clock seconds that ``seconds`` of robot time take."""
         return seconds / self.scale
 
     def robot(self, wall_seconds: float) -> float:
-        """How many seconds of robot time ``wall_seconds`` on the wall clock are."""
+        """Return the robot seconds that ``wall_seconds`` on the wall clock are."""
         return wall_seconds * self.scale
 
     def monotonic(self) -> float:
-        """A monotonic reading in robot seconds (for intervals only)."""
+        """Read a monotonic clock in robot seconds (for intervals only)."""
         return time.monotonic() * self.scale
 
     def sleep(self, seconds: float) -> None:
@@ -80,20 +81,20 @@ class Clock:
         time.sleep(max(0.0, self.wall(seconds)))
 
     def timer(self, seconds: float, fn: Callable[[], object]) -> threading.Timer:
-        """Call ``fn`` on a daemon thread after ``seconds`` of robot time; started."""
+        """Start a daemon timer that calls ``fn`` after ``seconds`` of robot time."""
         timer = threading.Timer(max(0.0, self.wall(seconds)), fn)
         timer.daemon = True
         timer.start()
         return timer
 
     def environment(self) -> dict[str, str]:
-        """The variables that give a child process this clock."""
+        """Return the environment variables that give a child process this clock."""
         return {SCALE_VARIABLE: repr(float(self.scale))} if self.scaled else {}
 
 
 @functools.cache
 def system_clock() -> Clock:
-    """The clock of this process, from its environment (read once).
+    """Return this process's clock, read from its environment once.
 
     Raises:
         ConfigError: ``DURA_TIME_SCALE`` is not a positive number.

@@ -49,7 +49,7 @@ class _Uses:
 
 
 def check_domain(domain: Path, problem: Path | None = None) -> list[Finding]:
-    """Every warning about a domain (and a problem of it), in file and line order.
+    """Return every warning about a domain (and a problem of it), in file and line order.
 
     Raises:
         DomainError: a file cannot be read or is not valid PDDL (``file:line``).
@@ -147,7 +147,7 @@ def _reachability(
 
 
 def _lacking_atoms(reach: Reachability, action: GroundAction) -> str:
-    """The conditions that keep a ground action from ever being applied (two at most)."""
+    """Return the conditions that keep a ground action from being applied (two at most)."""
     parts: list[str] = []
     during = reach.reached | action.start_adds
     for condition, known in ((action.before, reach.reached), (action.during, during)):
@@ -196,7 +196,7 @@ def _walk(
 
 
 def _used_types(domain: Problem, problem: Problem | None) -> set[str]:
-    """Every type a parameter, signature, constant or object names, with its ancestors."""
+    """Return every type a parameter, signature, constant or object names, with ancestors."""
     named: list[Any] = []
     for action in domain.actions:
         named.extend(p.type for p in action.parameters)
@@ -214,7 +214,7 @@ def _used_types(domain: Problem, problem: Problem | None) -> set[str]:
 
 
 def _declared_lines(text: str, section: str, names: Iterable[str]) -> dict[str, int]:
-    """The line of each name's first mention after a section keyword (``:predicates``)."""
+    """Find the line of each name's first mention after a section keyword (``:predicates``)."""
     start = text.lower().find(section)
     if start < 0:
         return {}

@@ -69,7 +69,7 @@ def dry_run(
 
 
 def steps_json(plan: PartialOrderPlan | None) -> list[dict[str, Any]]:
-    """A plan's steps as plain data, as ``dura plan --offline --json`` prints them."""
+    """Return a plan's steps as plain data, as ``dura plan --offline --json`` prints them."""
     return [
         {
             "index": s.index,

@@ -83,6 +83,7 @@ class GoalKeeper:
         self._stopped = False
 
     def stop(self) -> None:
+        """Stop looking (a pending timer is cancelled)."""
         self._stopped = True
         if self._timer is not None:
             self._timer.cancel()
@@ -90,7 +91,7 @@ class GoalKeeper:
     # --- the goal planner's thread -------------------------------------------------------
 
     def changed(self, reason: str, *, outside: bool) -> None:
-        """Facts changed; ``outside``: not by the plan (a user, a component, sensing, a
+        """Take a change of facts; ``outside``: not by the plan (a user, a component, sensing, a
         repair), so unreachable goals may be reachable now."""
         if self._stopped:
             return
@@ -101,7 +102,7 @@ class GoalKeeper:
         self._look()
 
     def achieved_at_once(self, spec: GoalSpec, planning: WorldState, facts: WorldState) -> bool:
-        """Whether a goal holds, so that it needs no plan: in the facts the planner plans
+        """Tell whether a goal holds, so that it needs no plan: in the facts the planner plans
         from, and for a maintenance goal also in the facts as they are (a paused step
         may have taken it away already)."""
         if not planning.holds(spec.expression):

@@ -51,12 +51,12 @@ class GoalWatch:
     # --- unreachable goals -------------------------------------------------------------
 
     def world_changed(self, unreachable: Iterable[int]) -> None:
-        """The world changed outside the plan: every unreachable goal may be looked at."""
+        """Note a change outside the plan: every unreachable goal may be looked at."""
         for goal_id in unreachable:
             self._looks.setdefault(goal_id, _Look(self.first)).changed = True
 
     def due(self, unreachable: Iterable[int], now: float) -> tuple[list[int], float | None]:
-        """The unreachable goals to look at now, and when the next other one is due."""
+        """Return the unreachable goals to look at now, and when the next other one is due."""
         ids = set(unreachable)
         now_due: list[int] = []
         later: float | None = None
@@ -71,7 +71,7 @@ class GoalWatch:
         return now_due, later
 
     def looked(self, goal_id: int, now: float) -> None:
-        """A look at a goal ended: the next waits for a change and twice as long."""
+        """Note a finished look at a goal: the next waits for a change and twice as long."""
         look = self._looks.setdefault(goal_id, _Look(self.first))
         look.changed = False
         look.next = now + look.interval
@@ -82,7 +82,7 @@ class GoalWatch:
     def broken(
         self, goals: Iterable[Goal], expressions: dict[int, Expression], state: WorldState
     ) -> list[Goal]:
-        """The achieved maintenance goals that no longer hold in ``state``."""
+        """Return the achieved maintenance goals that no longer hold in ``state``."""
         return [
             g
             for g in goals
@@ -93,11 +93,12 @@ class GoalWatch:
         ]
 
     def may_repost(self, goal_id: int, now: float) -> float | None:
-        """``None`` if a broken maintenance goal may be re-posted now, else when."""
+        """Return ``None`` if a broken maintenance goal may be re-posted now, else when."""
         last = self._reposted.get(goal_id)
         if last is None or now - last >= self.repost_interval:
             return None
         return last + self.repost_interval
 
     def reposted(self, goal_id: int, now: float) -> None:
+        """Note that a maintenance goal was re-posted."""
         self._reposted[goal_id] = now

@@ -50,7 +50,7 @@ class Blocked:
 
 
 def steps_ahead(runs: Iterable[StepRun]) -> list[Ahead]:
-    """The steps of a plan run still to come: pending, or dispatched and not ended."""
+    """Return the steps of a plan run still to come: pending, or dispatched and not ended."""
     return [
         Ahead(r.step, r.started) for r in runs if r.state is StepState.PENDING or r.state.active
     ]
@@ -62,8 +62,8 @@ def look_ahead(
     changed: Collection[Key],
     goals: Sequence[Expression] = (),
 ) -> Blocked | None:
-    """The first condition ahead that fails and names a changed fact (see the module
-    docstring); ``None`` if the rest of the plan still works."""
+    """Return the first condition ahead that fails and names a changed fact (see the
+    module docstring); ``None`` if the rest of the plan still works."""
     if not changed:
         return None
     touched = set(changed)

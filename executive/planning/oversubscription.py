@@ -80,14 +80,14 @@ def plan_goals(planner: Planner, task: PlanningTask, budget: float | None = None
 
 
 def missing_for(goal: GoalSpec, result: PlanResult) -> list[str]:
-    """The lines of a result's ``missing`` about parts of this goal."""
+    """Return the lines of a result's ``missing`` about parts of this goal."""
     parts = goal.expression.args if isinstance(goal.expression, And) else (goal.expression,)
     heads = tuple(f"{p} " for p in parts)
     return [line for line in result.missing if line.startswith(heads)]
 
 
 def unreachable_reason(goal: GoalSpec, kept: Sequence[GoalSpec], attempt: PlanResult) -> str:
-    """Why no plan reaches a goal together with the ``kept`` ones: what it misses, if the
+    """Say why no plan reaches a goal together with the ``kept`` ones: what it misses, if the
     relaxed reachability check tells, else the engine's answer or the goals in the way."""
     by = f" by its deadline ({goal.deadline:g} s from now)" if goal.deadline is not None else ""
     missing = missing_for(goal, attempt)

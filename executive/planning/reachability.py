@@ -69,20 +69,21 @@ class Reachability:
     applied: frozenset[int]
 
     def holds(self, expression: Expression) -> bool:
-        """Whether a condition may ever hold (optimistic for negations and numbers)."""
+        """Tell whether a condition may ever hold (optimistic for negations and numbers)."""
         return possible(expression, self.reached)
 
     def missing(self, goal: Expression) -> list[Expression]:
-        """The parts of a goal that can never hold: atoms no action makes true, or a
+        """Return the parts of a goal that can never hold: atoms no action makes true, or a
         disjunction none of whose parts can."""
         parts = goal.args if isinstance(goal, And) else (goal,)
         return [p for p in parts if not possible(p, self.reached)]
 
     def never_applied(self) -> list[GroundAction]:
+        """Return the ground actions the relaxation never applied."""
         return [a for i, a in enumerate(self.actions) if i not in self.applied]
 
     def explain(self, atom: Expression) -> str:
-        """Why an atom can never hold: ``(picture_taken dock) cannot become true:
+        """Say why an atom can never hold: ``(picture_taken dock) cannot become true:
         take_picture(dock) needs (photographable dock)``."""
         if not isinstance(atom, Atom):
             return f"{atom} cannot become true"
@@ -102,7 +103,7 @@ class Reachability:
 
 
 def possible(expression: Expression, reached: frozenset[Key] | set[Key]) -> bool:
-    """Whether a condition may hold once the atoms in ``reached`` are true."""
+    """Tell whether a condition may hold once the atoms in ``reached`` are true."""
     e = expression
     if isinstance(e, Const):
         return bool(e.value)
@@ -118,7 +119,7 @@ def possible(expression: Expression, reached: frozenset[Key] | set[Key]) -> bool
 
 
 def _lacking(expression: Expression, reached: frozenset[Key] | set[Key]) -> list[Expression]:
-    """The atoms (or disjunctions) of a condition that keep it from holding."""
+    """Return the atoms (or disjunctions) of a condition that keep it from holding."""
     parts = expression.args if isinstance(expression, And) else (expression,)
     return [p for p in parts if not possible(p, reached)]
 
@@ -146,7 +147,7 @@ def closure(actions: Sequence[GroundAction], facts: Iterable[Key]) -> Reachabili
 
 
 def ground(problem: Problem, limit: int = GROUND_LIMIT) -> list[GroundAction] | None:
-    """Every ground action of a problem (dura's bookkeeping actions included); ``None``
+    """Ground every action of a problem (dura's bookkeeping actions included); ``None``
     when there would be more than ``limit``."""
     choices = []
     total = 0
@@ -196,7 +197,7 @@ def _ground(problem: Problem, action: Any, env: dict[str, str]) -> GroundAction:
 
 
 def _adds(effects: Iterable[Any], problem: Problem, env: Mapping[str, str]) -> set[Key]:
-    """The atoms effects may make true (conditions of conditional effects ignored)."""
+    """Return the atoms effects may make true (conditions of conditional effects ignored)."""
     from executive.planning.problem import bindings
 
     out: set[Key] = set()
@@ -212,7 +213,7 @@ def _adds(effects: Iterable[Any], problem: Problem, env: Mapping[str, str]) -> s
 
 
 def problem_facts(problem: Problem) -> set[Key]:
-    """The atoms true in a problem's initial state (explicit and default values)."""
+    """Return the atoms true in a problem's initial state (explicit and default values)."""
     out: set[Key] = set()
     for fluent_exp, value in problem.initial_values.items():
         if value.is_bool_constant() and value.bool_constant_value():
@@ -222,7 +223,7 @@ def problem_facts(problem: Problem) -> set[Key]:
 
 
 def missing_atoms(problem: Problem, goals: Sequence[Expression]) -> tuple[str, ...]:
-    """Why goals of a problem can never hold from its initial state, one line per goal
+    """Say why goals of a problem can never hold from its initial state, one line per goal
     part that no relaxed plan reaches (empty: the relaxation reaches every goal, or the
     problem is too large to ground)."""
     actions = ground(problem)

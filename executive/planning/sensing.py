@@ -43,7 +43,7 @@ Changed = Callable[[list[Fact], str], None]  # the facts changed, and the reason
 
 
 def read_field(payload: Mapping[str, Any], path: str) -> Any:
-    """The value at a dotted path of a message (list items by index); ``None`` if absent."""
+    """Return the value at a dotted path of a message (list items by index), or ``None``."""
     value: Any = payload
     for part in path.split("."):
         if isinstance(value, Mapping):
@@ -63,7 +63,7 @@ def _number(value: Any) -> float | None:
 
 
 def verdict(rule: SensingRuleSpec, value: Any, current: bool | None) -> bool | None:
-    """Whether a rule's fact holds for a field's value, given whether it holds now
+    """Tell whether a rule's fact holds for a field's value, given whether it holds now
     (hysteresis); ``None`` when the value does not fit the rule (not a number)."""
     if rule.below is not None or rule.above is not None:
         number = _number(value)
@@ -150,6 +150,7 @@ class Sensing:
             self._subscriptions.append(self.subscribe(topic_key(name), self._handler(rules)))
 
     def stop(self) -> None:
+        """Stop listening and end the sensing thread."""
         for subscription in self._subscriptions:
             try:
                 subscription.undeclare()

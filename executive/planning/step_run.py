@@ -47,7 +47,7 @@ class ExecutionLimits:
         return duration + max(self.margin, self.relative * duration)
 
     def wall_timeout(self, duration: float, clock: Clock) -> float:
-        """The timeout in wall-clock seconds: the duration and its relative share are
+        """Return the timeout in wall-clock seconds: the duration and its relative share are
         robot time, the margin is wall time (starting processes and scheduling take as
         long at any time scale)."""
         return clock.wall(duration) + max(self.margin, clock.wall(self.relative * duration))
