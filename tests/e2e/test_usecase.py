@@ -113,3 +113,15 @@ def test_a_killed_executive_restarts_and_continues_its_open_goals(dura_robot: St
     robot.wait_for(goal, "achieved", timeout=120)
     assert kinds(robot).count("EXECUTIVE_STARTED") == 2
     assert "(picture_taken office)" in robot.facts("picture_taken")
+
+
+def test_the_readme_example_waits_for_lidar_before_crashing_it(dura_robot: Start) -> None:
+    # the README's planner-in-the-loop test, as written there (with the use case robot)
+    robot: RobotProcess = dura_robot(USECASE, time_scale=10)
+    goal = robot.submit_goal("(robot_at office)")
+    robot.wait_for_component("lidar", "ready", timeout=60)  # started for the drive
+    robot.inject_fault("lidar", "crash")  # any mode of the fault injection table
+    robot.wait_for(goal, "achieved", timeout=90)  # else: the reason and the latest events
+    assert robot.facts("robot_at") == ["(robot_at office)"]
+    restarted = robot.wait_for_event("REPAIR", "lidar", timeout=30)
+    assert restarted["data"]["restart"] is True
