@@ -122,7 +122,9 @@ class GoalKeeper:
                 self._wake_at(later)
                 continue
             self.watch.reposted(goal.id, now)
-            why = f"maintenance goal: {goal.expression} no longer holds ({reason})"
+            why = f"maintenance goal: {goal.expression} no longer holds" + (
+                f" ({reason})" if reason else ""
+            )
             self.kb.set_goal_state(goal.id, GoalState.PENDING, why)
             self.links.want(f"goal {goal.id} no longer holds")
 
