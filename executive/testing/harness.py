@@ -116,6 +116,7 @@ class RobotProcess:
         self.folder = Path(folder)
         self.folder.mkdir(parents=True, exist_ok=True)
         self.endpoint = endpoint or free_endpoint()
+        self._own_endpoint = endpoint is None  # chosen here: another may be chosen on a clash
         self.run_args = tuple(run_args)
         self.kb_path = self.folder / f"{self.robot.name}.db"
         self.output = self.folder / "executive.log"
@@ -131,7 +132,7 @@ class RobotProcess:
     def __exit__(self, *exc: object) -> None:
         self.stop()
 
-    def start(self, timeout: float = START_TIMEOUT) -> None:
+    def start(self, timeout: float = START_TIMEOUT, *, tries: int = 3) -> None:
         """Start the executive and wait until its bus API answers."""
         if self._process is not None:
             raise DuraError(f"the executive of '{self.robot.name}' runs already")
@@ -150,6 +151,11 @@ class RobotProcess:
             if self._process.poll() is not None:
                 code = self._process.returncode
                 self._close()
+                if self._own_endpoint and "Address already in use" in self.log_tail(3) and tries:
+                    # another process took the free port between our look and its bind
+                    self.endpoint = free_endpoint()
+                    self.start(timeout, tries=tries - 1)
+                    return
                 raise DuraError(f"the executive exited with {code} at start:\n{self.log_tail()}")
             try:
                 if self._bus is None:
