@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from executive.bus import security
+from executive.bus.clock import system_clock
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus
@@ -75,6 +76,7 @@ class Executive:
         self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> Executive:
+        clock = system_clock()  # a bad DURA_TIME_SCALE stops the executive here, with why
         with contextlib.ExitStack() as stack:
             robot, components = self.robot, list(self.robot.components)
             credentials = security.ensure_credentials(self.credentials_path, robot.name, components)
@@ -94,7 +96,7 @@ class Executive:
             self.kb.log_event(
                 "EXECUTIVE_STARTED",
                 self.robot.name,
-                {"endpoint": self.endpoint, "pid": os.getpid()},
+                {"endpoint": self.endpoint, "pid": os.getpid(), "time_scale": clock.scale},
             )
             stack.callback(self.kb.log_event, "EXECUTIVE_STOPPED", self.robot.name)
             self.launcher = stack.enter_context(
@@ -124,13 +126,14 @@ class Executive:
     def services(self, context: Context) -> list[Service]:
         """The services of the executive, in the order they start (and stop reversed):
         monitoring first, so that it watches every component the executive starts."""
+        ros2 = self.ros2
         self.tasks = TaskExecutor(context, self.launcher)
         self.high_level = HighLevel(
             context,
             PlanTasks(self.tasks, self.robot),
             status={"tasks": self.tasks.tasks, "components": self._components},
+            sources=[ros2.topics] if ros2 is not None else [],
         )
-        ros2 = self.ros2
         extra: list[Service] = []
         last: list[Service] = []
         if ros2 is not None:

@@ -20,6 +20,7 @@ from knowledge.errors import ConfigError
 if TYPE_CHECKING:  # read only for a ROS 2 robot: the command line stays quick to start
     from knowledge.ros2_components import Ros2ComponentSpec
     from knowledge.ros2_spec import Ros2Spec
+    from knowledge.sensing_spec import SensingRuleSpec
 
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
@@ -181,6 +182,7 @@ class RobotDescription:
     knowledge_base: Path | None = None
     ros2: Ros2Spec | None = None  # the robot's ROS 2 graph, if it has one
     objects: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)  # their properties
+    sensing: tuple[SensingRuleSpec, ...] = ()  # facts and values read from topics
 
     @property
     def components(self) -> dict[str, ComponentSpec]:

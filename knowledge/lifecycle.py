@@ -11,7 +11,12 @@ from collections.abc import Mapping
 
 
 class GoalState(enum.Enum):
-    """A goal's lifecycle: open (pending, planned, executing) until it ends for good."""
+    """A goal's lifecycle: open (pending, planned, executing) until it ends.
+
+    Unreachable is an end that the world may undo: the goal planner looks at such a
+    goal again when the world changes. A maintenance goal (``keep``) that is achieved
+    is watched, and pending again (re-posted) once it stops holding.
+    """
 
     PENDING = "pending"
     PLANNED = "planned"
@@ -25,9 +30,17 @@ class GoalState(enum.Enum):
     def is_open(self) -> bool:
         return self in (GoalState.PENDING, GoalState.PLANNED, GoalState.EXECUTING)
 
-    def can_become(self, state: GoalState) -> bool:
-        """Whether a goal in this state may change to ``state`` (see GOAL_TRANSITIONS)."""
-        return state in GOAL_TRANSITIONS[self]
+    @property
+    def is_final(self) -> bool:
+        """Whether nothing can change it any more (a maintenance goal's achieved is not)."""
+        return not GOAL_TRANSITIONS[self]
+
+    def can_become(self, state: GoalState, *, keep: bool = False) -> bool:
+        """Whether a goal in this state may change to ``state`` (see GOAL_TRANSITIONS;
+        a maintenance goal also KEEP_TRANSITIONS)."""
+        return state in GOAL_TRANSITIONS[self] or (
+            keep and state in KEEP_TRANSITIONS.get(self, frozenset())
+        )
 
 
 _GOAL_ENDS = frozenset(
@@ -40,10 +53,21 @@ GOAL_TRANSITIONS: Mapping[GoalState, frozenset[GoalState]] = {
     GoalState.PLANNED: _GOAL_ENDS | {GoalState.PLANNED, GoalState.EXECUTING},
     # planned again: replanning after a failed step, a new goal or a cancel
     GoalState.EXECUTING: _GOAL_ENDS | {GoalState.PLANNED},
-    # the ends are final: a cancelled goal is never planned again
+    # the other ends are final: a cancelled goal is never planned again
     **{end: frozenset() for end in _GOAL_ENDS},
+    # looked at again when the world changes: pending again once a plan reaches it,
+    # unreachable for another reason; or cancelled by its user
+    GoalState.UNREACHABLE: frozenset(
+        {GoalState.PENDING, GoalState.UNREACHABLE, GoalState.CANCELLED}
+    ),
 }
 """The changes the knowledge base allows, from each goal state."""
+
+KEEP_TRANSITIONS: Mapping[GoalState, frozenset[GoalState]] = {
+    # re-posted once it stops holding; or no longer watched
+    GoalState.ACHIEVED: frozenset({GoalState.PENDING, GoalState.CANCELLED}),
+}
+"""What a maintenance goal (``keep``) may do besides GOAL_TRANSITIONS."""
 
 
 class PlanState(enum.Enum):

@@ -8,10 +8,18 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from knowledge.lifecycle import GOAL_TRANSITIONS, PLAN_TRANSITIONS, GoalState, PlanState, TaskState
+from knowledge.lifecycle import (
+    GOAL_TRANSITIONS,
+    KEEP_TRANSITIONS,
+    PLAN_TRANSITIONS,
+    GoalState,
+    PlanState,
+    TaskState,
+)
 
 __all__ = [  # the states live in knowledge.lifecycle; records names them too
     "GOAL_TRANSITIONS",
+    "KEEP_TRANSITIONS",
     "PLAN_TRANSITIONS",
     "ComponentRecord",
     "Event",
@@ -40,6 +48,7 @@ class Goal:
     reason: str = ""
     created: float = 0.0
     updated: float = 0.0
+    keep: bool = False  # a maintenance goal: re-posted whenever it stops holding
 
 
 @dataclass(frozen=True)

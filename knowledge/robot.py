@@ -30,6 +30,7 @@ from knowledge.errors import ConfigError
 from knowledge.finding import Finding, Report
 from knowledge.ros2_components import read_component_ros2
 from knowledge.ros2_spec import read_ros2
+from knowledge.sensing_spec import read_sensing
 from knowledge.yamlsource import Section, compose, describe, line_of, paths, to_python
 
 ENGINES = ("kairos", "aries", "fast-downward", "tamer")
@@ -230,6 +231,7 @@ def read_robot(
             tasks[action] = t
     ros2 = read_ros2(top.section("ros2"), base, report)
     objects = _objects(top, report)
+    sensing = read_sensing(top, report)
     top.close()
     robot = RobotDescription(
         name=name,
@@ -246,6 +248,7 @@ def read_robot(
         knowledge_base=kb,
         ros2=ros2,
         objects=objects,
+        sensing=sensing,
     )
     return robot, report.findings
 

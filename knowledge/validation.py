@@ -26,6 +26,7 @@ from knowledge.errors import DomainError
 from knowledge.finding import Finding, Report, Severity, finding_of
 from knowledge.robot import read_robot
 from knowledge.ros2_components import check_ros2_components
+from knowledge.sensing_spec import check_sensing
 from knowledge.yamlsource import did_you_mean
 
 RESERVED_PREFIXES = ("AB", "/AB")
@@ -263,14 +264,17 @@ def validate(path: Path, text: str | None = None) -> Validation:
             domain_report = Report(str(robot.domain))
             check_tasks(robot, domain, report, domain_report)
             findings.extend(domain_report.findings)
+            objects: dict[str, str] = {}
             if robot.problem is not None and robot.problem.is_file():
                 try:
                     text_of_problem = robot.problem.read_text(encoding="utf-8")
-                    parse_problem(robot.domain, text_of_problem, str(robot.problem))
+                    problem = parse_problem(robot.domain, text_of_problem, str(robot.problem))
+                    objects = {o.name: str(o.type) for o in problem.all_objects}
                 except (OSError, UnicodeDecodeError) as e:
                     report.error(None, f"cannot read problem {robot.problem}: {e}")
                 except DomainError as e:
                     findings.append(finding_of(e, str(path)))
+            check_sensing(robot, domain, objects, report)
     all_findings = tuple(sorted(findings + report.findings, key=_order))
     return Validation(robot, domain, all_findings)
 

@@ -27,6 +27,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from executive.bus.clock import Clock, system_clock
 from executive.bus.keys import OBSERVATIONS, component
 from executive.bus.payloads import ComponentState, Lifecycle
 from executive.bus.service import Context, Service
@@ -38,6 +39,7 @@ from knowledge.yamlsource import did_you_mean
 from monitoring.observer import Environment, Handler, Observer, make_observer
 from monitoring.observer_api import serve_observers
 from monitoring.observer_config import config_of
+from monitoring.robot_time import RobotTime
 
 log = logging.getLogger("dura.observers")
 
@@ -112,8 +114,11 @@ class ObserverManager(Service):
 
     name = "observer-manager"
 
-    def __init__(self, context: Context, *, sources: Sequence[TopicSource] = ()) -> None:
+    def __init__(
+        self, context: Context, *, sources: Sequence[TopicSource] = (), clock: Clock | None = None
+    ) -> None:
         super().__init__(context)
+        self._time = RobotTime(clock or system_clock())  # observers measure robot time
         self._sources = tuple(sources)  # topics not on the bus, e.g. ROS 2 topics
         self._lock = threading.Condition(threading.RLock())
         self._slots: dict[str, _Slot] = {}
@@ -297,10 +302,11 @@ class ObserverManager(Service):
             if feed is None:
                 feed = self._feeds[key] = _Feed()
                 source = next((s for s in self._sources if s.serves(key)), None)
+                dispatch = self._time.handler(feed.dispatch)
                 feed.subscriber = (
-                    source.subscribe(key, feed.dispatch)
+                    source.subscribe(key, dispatch)
                     if source is not None
-                    else self.context.bus.subscribe(key, feed.dispatch, decoded=False)
+                    else self.context.bus.subscribe(key, dispatch, decoded=False)
                 )
             feed.users[id(slot)] = slot
         self._refresh(slot)
@@ -336,8 +342,8 @@ class ObserverManager(Service):
             else:
                 feed.handlers = tuple(h for h in feed.handlers if h is not handler)
         if should:
-            slot.observer.start(time.time())
-            slot.due = time.monotonic() + slot.observer.first_report
+            slot.observer.start(self._time.now())
+            slot.due = time.monotonic() + self._time.clock.wall(slot.observer.first_report)
             self._lock.notify_all()
         else:
             for old in [k for k in self._latest if k[0] == slot.id]:
@@ -373,19 +379,19 @@ class ObserverManager(Service):
                     log.warning("cannot publish an observation: %s", e)
 
     def _observe(self, due: list[_Slot], now: float) -> list[dict[str, Any]]:
-        wall = time.time()
+        wall, robot_now = time.time(), self._time.now()
         payloads: list[dict[str, Any]] = []
         for slot in due:
-            period = slot.observer.period
+            period = self._time.clock.wall(slot.observer.period)
             slot.due = slot.due + period if slot.due + period > now else now + period
             try:
-                results = slot.observer.observe(wall)
+                results = slot.observer.observe(robot_now)
             except Exception:
                 log.exception("observer %s failed", slot.id)
                 continue
             for result in results:
                 info = result.info
-                payload = result.to_payload(slot.id)
+                payload = {**result.to_payload(slot.id), "stamp": wall}
                 self._latest[(slot.id, info.type, info.resource, info.callerids)] = payload
                 payloads.append(payload)
         return payloads

@@ -82,6 +82,8 @@ def _world(subject: str, data: Data, kind: str) -> str:
 
 
 def _fact(subject: str, data: Data, kind: str) -> str:
+    if data.get("rule"):  # a sensing rule read it from a topic
+        return f"{subject} (sensing rule {data['rule']}: {data.get('field')} = {value(data.get('value'))})"
     source = data.get("source")
     return f"{subject} (by {source})" if source else subject
 
@@ -113,7 +115,7 @@ def _goals(ids: Any) -> str:
 
 
 def _goal_added(subject: str, data: Data, kind: str) -> str:
-    return f"{subject}: {data['expression']}"
+    return f"{subject}: {data['expression']}" + (", kept true" if data.get("keep") else "")
 
 
 def _goal_state(subject: str, data: Data, kind: str) -> str:

@@ -46,6 +46,12 @@ def register(sub: Any) -> None:
         "--priority", type=priority, default=0, metavar="P", help="higher goals win (default 0)"
     )
     _add_wait_options(add, flag=True)
+    add.add_argument(
+        "--keep",
+        action="store_true",
+        help="a maintenance goal: once achieved it is watched, and posted again whenever it "
+        "stops holding",
+    )
     add.set_defaults(run=run_add)
 
     listing = gsub.add_parser(
@@ -103,11 +109,19 @@ def clock(stamp: float) -> str:
     return time.strftime("%H:%M:%S", time.localtime(stamp)) if stamp else "-"
 
 
+def state_of(goal: dict[str, Any]) -> str:
+    """A goal's state as shown: a maintenance goal that is achieved is watched."""
+    if goal.get("keep") and goal["state"] == GoalState.ACHIEVED.value:
+        return "achieved, watched"
+    return str(goal["state"])
+
+
 def goal_rows(goals: list[dict[str, Any]]) -> list[list[Any]]:
     return [
         [
             g["id"],
-            g["state"],
+            state_of(g),
+            "keep" if g.get("keep") else "once",
             g["priority"],
             "-" if g["deadline"] is None else f"{g['deadline']:g} s",
             g["source"],
@@ -118,17 +132,27 @@ def goal_rows(goals: list[dict[str, Any]]) -> list[list[Any]]:
     ]
 
 
-GOAL_HEADERS = ["id", "state", "priority", "deadline", "source", "goal", "reason"]
+GOAL_HEADERS = ["id", "state", "kind", "priority", "deadline", "source", "goal", "reason"]
+
+MEANING = {
+    "achieved": "it held when the executive checked it, at {updated}; it is not watched "
+    "since (a goal added with --keep is)",
+    "achieved, watched": "a maintenance goal: it held when last checked, at {updated}; it is "
+    "watched and posted again whenever it stops holding",
+    "unreachable": "no plan reached it; it is looked at again when the world changes (a fact "
+    "or object set, a component reset or repaired)",
+}
 
 
 def run_add(args: argparse.Namespace) -> int:
-    request = api.GoalAdd(args.expression, args.priority, args.deadline)
+    request = api.GoalAdd(args.expression, args.priority, args.deadline, keep=args.keep)
     if not args.wait:
         goal = ask(args, api.GOAL_ADD, request).goal
         if args.json:
             print_json(goal)
         else:
-            print(f"goal {goal['id']}: {goal['expression']} ({goal['state']})")
+            kept = ", kept" if goal.get("keep") else ""
+            print(f"goal {goal['id']}: {goal['expression']} ({goal['state']}{kept})")
         return 0
     with connect(args) as bus:
         follower = GoalFollower(bus)  # before the goal exists: no change is missed
@@ -300,8 +324,12 @@ def run_show(args: argparse.Namespace) -> int:
         print_json(reply.to_payload())
         return 0
     g = reply.goal
-    print(f"goal {g['id']}: {g['expression']}")
-    print(f"  state {g['state']}{': ' + g['reason'] if g['reason'] else ''}")
+    kind = "maintenance goal" if g.get("keep") else "goal"
+    print(f"{kind} {g['id']}: {g['expression']}")
+    state = state_of(g)
+    print(f"  state {state}{': ' + g['reason'] if g['reason'] else ''}")
+    if state in MEANING:
+        print(f"  ({MEANING[state].format(updated=clock(g['updated']))})")
     deadline = "none" if g["deadline"] is None else f"{g['deadline']:g} s after submission"
     print(f"  priority {g['priority']}, deadline {deadline}, from {g['source']}")
     print(f"  submitted {clock(g['created'])}, last change {clock(g['updated'])}")

@@ -11,6 +11,11 @@ being dispatched or a plan being computed.
 
 On start it loads the robot's initial world into an empty knowledge base and plans for
 the goals still open there: an executive restarted after a crash carries on with them.
+The robot's sensing rules (:mod:`executive.planning.sensing`) read their topics through
+the topic sources it is given (ROS 2) or the bus. A change of the world from outside the
+plan (a fact or object set, a component reset or repaired) reaches the plan executer,
+which checks the plan ahead, and the goal planner, which looks again at unreachable
+goals; any change of facts reaches the maintenance goals.
 """
 
 from __future__ import annotations
@@ -19,16 +24,19 @@ import contextlib
 import logging
 import re
 import threading
-import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from executive.bus.api import planning as api
+from executive.bus.clock import Clock, system_clock
 from executive.bus.keys import DIAGNOSES, EVENTS
 from executive.bus.payloads import DiagnosisInfo
 from executive.bus.service import Context, Service
+from executive.bus.session import Handler
+from executive.bus.topic_source import Subscription, TopicSource
 from executive.bus.verb import Empty
 from executive.planning.domain_description import describe
+from executive.planning.dry_run import dry_run
 from executive.planning.expression import Signature, parse_fact
 from executive.planning.goal_planner import GoalPlanner
 from executive.planning.goals import submit
@@ -36,6 +44,7 @@ from executive.planning.integrity import IntegrityGoals, IntegrityRule, Trigger,
 from executive.planning.plan_executer import ExecutionLimits, PlanExecuter, TaskRunner, recover
 from executive.planning.planner import Planner
 from executive.planning.problem import seed_world
+from executive.planning.sensing import Sensing
 from knowledge.availability import blocked_tasks
 from knowledge.domain import read_domain
 from knowledge.errors import DuraError, KnowledgeError
@@ -45,6 +54,9 @@ from knowledge.yamlsource import did_you_mean
 
 log = logging.getLogger("dura.high_level")
 FAULT_CHANGES = ("PERMANENT_FAULT", "COMPONENT_RESET")  # events that may block or free tasks
+# events of the world changing outside the plan, and of the plan's own steps changing facts
+OUTSIDE_CHANGES = ("STATE_SET", "STATE_UNSET", "OBJECT_ADDED", "COMPONENT_RESET", "REPAIR")
+PLAN_CHANGES = ("START", "END", "FAIL", "CANCEL")
 SECTIONS = ("tasks", "components")  # what other services add to ``status``
 
 MAX_EVENTS = 10_000  # the most events one request returns
@@ -59,6 +71,8 @@ class HighLevel(Service):
         status: the sections other services add to ``status`` (``tasks`` from the task
             executor, ``components`` from the launcher), by name.
         limits: when a running step times out.
+        clock: robot time (default: this process's, from ``DURA_TIME_SCALE``).
+        sources: topics not on the bus (ROS 2) that sensing rules may read.
     """
 
     name = "high-level"
@@ -70,8 +84,12 @@ class HighLevel(Service):
         *,
         status: dict[str, Callable[[], Any]] | None = None,
         limits: ExecutionLimits | None = None,
+        clock: Clock | None = None,
+        sources: Sequence[TopicSource] = (),
     ) -> None:
         super().__init__(context)
+        self.clock = clock or system_clock()
+        self.sources = tuple(sources)
         self.runner = runner
         self.extra_status = dict(status or {})
         unknown = sorted(set(self.extra_status) - set(SECTIONS))
@@ -97,10 +115,12 @@ class HighLevel(Service):
         rules: list[IntegrityRule] = []
         for path in robot.integrity:
             rules.extend(read_rules(path, robot, self.domain, kb.objects()))
-        self.integrity = IntegrityGoals(kb, self.domain, rules)
+        self.integrity = IntegrityGoals(kb, self.domain, rules, clock=self.clock)
         self.planner = Planner(robot.planner.engine, robot.planner.timeout)
         self.planner.start(robot.domain)
-        self.executer = PlanExecuter(kb, self.runner, robot.tasks, self._replan, self.limits)
+        self.executer = PlanExecuter(
+            kb, self.runner, robot.tasks, self._replan, self.limits, clock=self.clock
+        )
         self._blocked = self.blocked()
         self.goals = GoalPlanner(kb, self.domain, self.planner, self.executer, blocked=self.blocked)
         self._relaying = True
@@ -114,10 +134,20 @@ class HighLevel(Service):
         self._integrity_thread.start()
         self.executer.start()
         self.goals.start()
+        self.sensing = Sensing(
+            kb,
+            self.domain,
+            robot.sensing,
+            subscribe=self._subscribe,
+            changed=self._sensed,
+            clock=self.clock,
+        )
+        self.sensing.start()
 
     def stop(self) -> None:
         if self._integrity_thread is None:
             return
+        self.sensing.stop()
         self._stopping.set()
         self._check.set()
         self._integrity_thread.join()
@@ -134,6 +164,19 @@ class HighLevel(Service):
     def _replan(self, reason: str) -> None:
         self.goals.replan(reason)
 
+    def _subscribe(self, key: str, handler: Handler) -> Subscription:
+        """Subscribe to a topic key where its messages are: a topic source, or the bus."""
+        source = next((s for s in self.sources if s.serves(key)), None)
+        if source is not None:
+            return source.subscribe(key, handler)
+        subscription: Subscription = self.context.bus.subscribe(key, handler)
+        return subscription
+
+    def _sensed(self, facts: list[Fact], reason: str) -> None:
+        """A sensing rule changed facts: as a user's ``dura state set`` does."""
+        self.executer.facts_changed([(f.name, f.args) for f in facts])
+        self.goals.wake(reason)
+
     # --- events, diagnoses and integrity goals ---------------------------------------------
 
     def _on_event(self, event: Event) -> None:
@@ -142,6 +185,10 @@ class HighLevel(Service):
         self.context.bus.publish(EVENTS, to_plain(event))
         if event.kind in FAULT_CHANGES:
             self._faults_changed.set()
+        if event.kind in OUTSIDE_CHANGES:
+            self.goals.world_changed(f"{event.kind} {event.subject}")
+        elif event.kind in PLAN_CHANGES:
+            self.goals.facts_changed(f"{event.kind} {event.subject}")
         if not event.kind.startswith("INTEGRITY_"):
             self._check.set()
 
@@ -159,7 +206,7 @@ class HighLevel(Service):
         """Check the integrity rules when something changed, and when a rule is due."""
         while not self._stopping.is_set():
             due = self.integrity.next_check()
-            wait = None if due is None else max(0.0, due - time.time())
+            wait = None if due is None else max(0.0, self.clock.wall(due - self.clock.monotonic()))
             self._check.wait(wait)
             self._check.clear()
             if self._stopping.is_set():
@@ -204,6 +251,7 @@ class HighLevel(Service):
             api.GOAL_SHOW.serve(bus, self._goal_show),
             api.GOAL_CANCEL.serve(bus, self._goal_cancel),
             api.PLAN_SHOW.serve(bus, self._plan_show),
+            api.PLAN_DRY_RUN.serve(bus, self._plan_dry_run),
             api.STATE_GET.serve(bus, self._state_get),
             api.STATE_SET.serve(bus, lambda r: self._state_change(r, unset=False)),
             api.STATE_UNSET.serve(bus, lambda r: self._state_change(r, unset=True)),
@@ -222,6 +270,7 @@ class HighLevel(Service):
             priority=request.priority,
             deadline=request.deadline,
             source=request.source,
+            keep=request.keep,
         )
         self.goals.wake(f"goal {goal.id} added")
         return api.GoalReply(to_plain(goal))
@@ -245,6 +294,18 @@ class HighLevel(Service):
         plan = self.context.kb.latest_plan()
         return api.PlanReply(None if plan is None else to_plain(plan), self.executer.status())
 
+    def _plan_dry_run(self, request: api.DryRun) -> api.DryRunReply:
+        """Plan for the open goals on the live state; nothing changes."""
+        return dry_run(
+            self.context.kb,
+            self.domain,
+            self.planner,
+            self.executer.planning_facts(),
+            self.blocked(),
+            clock=self.clock,
+            timeout=request.timeout,
+        )
+
     def _state_get(self, request: api.StateQuery) -> api.StateReply:
         kb = self.context.kb
         words = request.pattern.strip("() ").split()
@@ -260,7 +321,7 @@ class HighLevel(Service):
             else:
                 kb.set_fact(fact)
             kb.log_event("STATE_UNSET" if unset else "STATE_SET", str(fact), {"source": "user"})
-        self.executer.facts_changed()
+        self.executer.facts_changed([(fact.name, fact.args)])
         self.goals.wake(f"{fact} {'unset' if unset else 'set'} by the user")
         return api.FactReply(_fact(fact))
 

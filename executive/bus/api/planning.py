@@ -17,12 +17,14 @@ Priority = Annotated[int, Between(-(10**9), 10**9)]  # what the CLI accepts too
 
 @dataclass(frozen=True)
 class GoalAdd(Payload):
-    """A goal expression with its priority, deadline (seconds from now) and source."""
+    """A goal expression with its priority, deadline (seconds from now) and source;
+    ``keep``: a maintenance goal, re-posted whenever it stops holding."""
 
     expression: Text
     priority: Priority = 0
     deadline: float | None = None
     source: str = "user"
+    keep: bool = False
 
 
 @dataclass(frozen=True)
@@ -67,6 +69,32 @@ class PlanReply(Payload):
 
     plan: dict[str, Any] | None
     execution: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class DryRun(Payload):
+    """Plan for the open goals on the live state without executing (seconds to search;
+    the robot's planner timeout without)."""
+
+    timeout: Annotated[float, Between(0.1, 3600.0)] | None = None
+
+
+@dataclass(frozen=True)
+class DryRunReply(Payload):
+    """What the planner would do now: the plan for the goals it reaches (``steps`` as
+    ``dura plan --offline --json`` prints them), the goals that hold already, and why
+    each other goal is unreachable (by id)."""
+
+    status: str
+    engine: str
+    time: float
+    reason: str
+    goals: list[int]
+    planned: list[int]
+    achieved: list[int]
+    unreachable: dict[str, str]
+    steps: list[dict[str, Any]]
+    makespan: float | None = None
 
 
 @dataclass(frozen=True)
@@ -170,6 +198,7 @@ GOAL_LIST = Verb(api("goal/list"), GoalQuery, GoalsReply)
 GOAL_SHOW = Verb(api("goal/show"), GoalId, GoalHistory)
 GOAL_CANCEL = Verb(api("goal/cancel"), GoalId, GoalReply)
 PLAN_SHOW = Verb(api("plan/show"), Empty, PlanReply)
+PLAN_DRY_RUN = Verb(api("plan/dry-run"), DryRun, DryRunReply, timeout=120.0)
 STATE_GET = Verb(api("state/get"), StateQuery, StateReply)
 STATE_SET = Verb(api("state/set"), FactChange, FactReply)
 STATE_UNSET = Verb(api("state/unset"), FactChange, FactReply)

@@ -14,39 +14,86 @@ from knowledge.lifecycle import GoalState
 from tests.conftest import ROOT
 
 PACKAGES = ("executive", "monitoring", "knowledge")
-LOGGERS = {"log_event", "event"}  # the knowledge base's, and the ledger's and plan run's
 
 
-def logged_kinds() -> Iterator[tuple[str, ast.expr]]:
-    """Every kind expression handed to a logger, with where it is (``file:line``)."""
+def sources() -> Iterator[tuple[str, ast.Module]]:
     for package in PACKAGES:
         for path in sorted((ROOT / package).rglob("*.py")):
-            tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
-            for node in ast.walk(tree):
-                if not isinstance(node, ast.Call):
-                    continue
-                where = f"{path.relative_to(ROOT)}:{node.lineno}"
-                func = node.func
-                if isinstance(func, ast.Attribute) and func.attr in LOGGERS and node.args:
-                    yield where, node.args[0]
-                # a logger handed over to be called later: callback(kb.log_event, "KIND")
-                for i, arg in enumerate(node.args[:-1]):
-                    if isinstance(arg, ast.Attribute) and arg.attr == "log_event":
-                        yield where, node.args[i + 1]
+            text = path.read_text(encoding="utf-8")
+            yield str(path.relative_to(ROOT)), ast.parse(text, str(path))
 
 
-def forwarders() -> set[str]:
-    """``file:line`` of every call inside a logger that hands its own ``kind`` on."""
-    found = set()
-    for package in PACKAGES:
-        for path in sorted((ROOT / package).rglob("*.py")):
-            tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+def _called(node: ast.Call) -> str:
+    func = node.func
+    return func.attr if isinstance(func, ast.Attribute) else getattr(func, "id", "")
+
+
+def _parameters(function: ast.FunctionDef) -> list[str]:
+    names = [a.arg for a in function.args.posonlyargs + function.args.args]
+    return names[1:] if names[:1] in (["self"], ["cls"]) else names
+
+
+def _kind_argument(node: ast.Call, index: int) -> ast.expr | None:
+    for keyword in node.keywords:
+        if keyword.arg == "kind":
+            return keyword.value
+    return node.args[index] if len(node.args) > index else None
+
+
+def loggers() -> dict[str, int]:
+    """``log_event`` and every function that hands its own ``kind`` parameter on to a
+    logger (``ledger.event``, a plan run's ``event``, ``_write``), with that parameter's
+    place among the arguments."""
+    found = {"log_event": 0}
+    trees = list(sources())
+    while True:
+        more = {}
+        for _, tree in trees:
             for function in ast.walk(tree):
-                if isinstance(function, ast.FunctionDef) and function.name in LOGGERS:
-                    for node in ast.walk(function):
-                        if isinstance(node, ast.Call):
-                            found.add(f"{path.relative_to(ROOT)}:{node.lineno}")
-    return found
+                if not isinstance(function, ast.FunctionDef) or function.name in found:
+                    continue
+                parameters = _parameters(function)
+                for node in ast.walk(function):
+                    if isinstance(node, ast.Call) and _called(node) in found:
+                        kind = _kind_argument(node, found[_called(node)])
+                        if isinstance(kind, ast.Name) and kind.id in parameters:
+                            more[function.name] = parameters.index(kind.id)
+        if not more:
+            return found
+        found.update(more)
+
+
+def calls(
+    tree: ast.AST, within: ast.FunctionDef | None = None
+) -> Iterator[tuple[ast.Call, ast.FunctionDef | None]]:
+    """Every call with the innermost function it is in (``None``: at module level)."""
+    for child in ast.iter_child_nodes(tree):
+        inner = child if isinstance(child, ast.FunctionDef) else within
+        if isinstance(child, ast.Call):
+            yield child, within
+        yield from calls(child, inner)
+
+
+def logged_kinds() -> Iterator[tuple[str, ast.expr, bool]]:
+    """Every kind expression handed to a logger, where it is (``file:line``), and whether
+    it is the enclosing logger's own parameter, handed on."""
+    known_loggers = loggers()
+    for path, tree in sources():
+        for node, function in calls(tree):
+            where = f"{path}:{node.lineno}"
+            if _called(node) in known_loggers:
+                kind = _kind_argument(node, known_loggers[_called(node)])
+                own = (
+                    _parameters(function)
+                    if function is not None and function.name in known_loggers
+                    else []
+                )
+                if kind is not None:
+                    yield where, kind, isinstance(kind, ast.Name) and kind.id in own
+            # a logger handed over to be called later: callback(kb.log_event, "KIND")
+            for i, arg in enumerate(node.args[:-1]):
+                if isinstance(arg, ast.Attribute) and arg.attr == "log_event":
+                    yield where, node.args[i + 1], False
 
 
 def kinds_of(expression: ast.expr) -> list[str]:
@@ -59,18 +106,15 @@ def kinds_of(expression: ast.expr) -> list[str]:
         first = expression.values[0]
         assert isinstance(first, ast.Constant), ast.unparse(expression)
         return [f"{first.value!s}*"]
-    return []  # a variable: only a forwarder's own parameter (checked below)
+    return []  # a variable: only a logger's own parameter, handed on (checked below)
 
 
 def test_every_logged_kind_is_a_known_kind_or_family() -> None:
-    allowed_variables = forwarders()
     seen: set[str] = set()
-    for where, expression in logged_kinds():
+    for where, expression, handed_on in logged_kinds():
         kinds = kinds_of(expression)
         if not kinds:
-            assert where in allowed_variables, (
-                f"{where}: a kind dura cannot read: {ast.unparse(expression)}"
-            )
+            assert handed_on, f"{where}: a kind dura cannot read: {ast.unparse(expression)}"
             continue
         for kind in kinds:
             if kind.endswith("*"):
@@ -80,6 +124,10 @@ def test_every_logged_kind_is_a_known_kind_or_family() -> None:
             seen.add(kind)
     assert seen >= NAMED, f"listed but never logged: {sorted(NAMED - seen)}"
     assert {f"{p}*" for p in FAMILIES} <= seen, "a family nobody logs"
+
+
+def test_the_loggers_found_include_those_that_hand_a_kind_on() -> None:
+    assert {"log_event", "event"} <= set(loggers())
 
 
 def test_each_family_holds_the_states_of_its_enum() -> None:

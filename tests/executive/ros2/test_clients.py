@@ -101,15 +101,15 @@ def test_a_managed_node_goes_through_its_states_and_tells_each_transition(
     node = LifecycleClient(dura, library, "/navigator", on_transition=transition)
     try:
         assert node.wait(5.0)
-        assert node.state(timeout=2.0) == "unconfigured"
+        assert node.state(timeout=10.0) == "unconfigured"
         visited = []
         for command in ("configure", "start", "pause", "resume", "stop"):
-            outcome = node.drive(command, timeout=2.0)
+            outcome = node.drive(command, timeout=10.0)
             assert outcome is not None and outcome.success, command
             visited.append(outcome.state)
         assert visited == ["inactive", "active", "inactive", "active", "unconfigured"]
-        assert node.drive("pause", timeout=2.0) is None  # nothing to do when unconfigured
-        refused = node.transition("activate", timeout=2.0)  # not from unconfigured
+        assert node.drive("pause", timeout=10.0) is None  # nothing to do when unconfigured
+        refused = node.transition("activate", timeout=10.0)  # not from unconfigured
         assert (refused.success, refused.state) == (False, "unconfigured")
         assert wait_for(lambda: len(heard) == 12)  # each transition and its success
         assert heard[:2] == [("configure", "unconfigured", "configuring"),
@@ -126,7 +126,7 @@ def test_a_failed_configure_leaves_the_node_unconfigured_and_says_so(
     node = LifecycleClient(dura, library, "/navigator")
     try:
         assert node.wait(5.0)
-        outcome = node.drive("start", timeout=2.0)
+        outcome = node.drive("start", timeout=10.0)
         assert outcome is not None
         assert (outcome.transition, outcome.success, outcome.state) == (
             "configure", False, "unconfigured",
@@ -141,7 +141,7 @@ def active(dura: Participant, library: TypeLibrary, robot: dict[str, Node]) -> I
     node = LifecycleClient(dura, library, "/navigator")
     try:
         assert node.wait(5.0)
-        node.drive("start", timeout=2.0)
+        node.drive("start", timeout=10.0)
         yield
     finally:
         node.close()
@@ -174,14 +174,14 @@ def test_an_action_goal_streams_feedback_and_succeeds(navigate: ActionClient, ac
 def test_an_action_goal_the_server_aborts_ends_aborted_with_the_servers_reason(
     navigate: ActionClient, active: None
 ) -> None:
-    goal = navigate.send(goal_to(500.0), timeout=2.0)
+    goal = navigate.send(goal_to(500.0), timeout=10.0)
     result = goal.result(5.0)
     assert result is not None and result.status is GoalStatus.ABORTED
     assert result.result == {"error_code": 9000, "error_msg": "outside the map"}
 
 
 def test_a_cancelled_action_goal_ends_cancelled(navigate: ActionClient, active: None) -> None:
-    goal = navigate.send(goal_to(20.0), timeout=2.0)
+    goal = navigate.send(goal_to(20.0), timeout=10.0)
     assert goal.result(0.3) is None  # still driving
     assert goal.cancel(2.0) is CancelReturn.NONE
     result = goal.result(5.0)
@@ -190,7 +190,7 @@ def test_a_cancelled_action_goal_ends_cancelled(navigate: ActionClient, active: 
 
 
 def test_an_inactive_navigator_rejects_goals(navigate: ActionClient) -> None:
-    goal = navigate.send(goal_to(1.0), timeout=2.0)
+    goal = navigate.send(goal_to(1.0), timeout=10.0)
     assert not goal.accepted
     assert goal.done()
 

@@ -99,11 +99,11 @@ def test_a_managed_node_is_driven_through_its_lifecycle_by_dura_s_commands(
         with rig(example(domain, tmp_path), endpoint, tmp_path) as r:
             assert r.launcher.start("navigator").state is Lifecycle.READY
             assert node.wait(5.0)
-            assert node.state(timeout=2.0) == "active"
+            assert node.state(timeout=10.0) == "active"
             r.launcher.pause("navigator")
-            assert node.state(timeout=2.0) == "inactive"
+            assert node.state(timeout=10.0) == "inactive"
             r.launcher.resume("navigator")
-            assert node.state(timeout=2.0) == "active"
+            assert node.state(timeout=10.0) == "active"
             seen: list[str] = []
             stopping = threading.Thread(target=lambda: r.launcher.stop("navigator"))
             stopping.start()
@@ -143,7 +143,7 @@ def test_a_managed_node_that_leaves_its_state_on_its_own_is_a_fault(
         with rig(example(domain, tmp_path), endpoint, tmp_path) as r:
             assert r.launcher.start("navigator").state is Lifecycle.READY
             assert node.wait(5.0)
-            assert node.transition("deactivate", timeout=2.0).success  # not dura's doing
+            assert node.transition("deactivate", timeout=10.0).success  # not dura's doing
             assert wait_for(lambda: r.launcher.state("navigator").state is Lifecycle.EXITED)
             assert r.launcher.state("navigator").exit_code == 1
             assert any("went inactive on its own" in line for line in r.launcher.logs("navigator"))
