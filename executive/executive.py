@@ -20,6 +20,7 @@ from executive.bus.session import Bus
 from executive.planning.high_level import HighLevel
 from executive.runtime.component_api import ComponentApi
 from executive.runtime.launcher import Launcher
+from executive.runtime.run_lock import RunLock, end_leftovers
 from executive.tasks.executor import TaskExecutor
 from executive.tasks.plan_tasks import PlanTasks
 from knowledge.description import RobotDescription
@@ -70,6 +71,9 @@ class Executive:
 
     def __enter__(self) -> Executive:
         with contextlib.ExitStack() as stack:
+            lock = stack.enter_context(RunLock(self.kb_path))  # one executive per KB
+            if lock.predecessor is not None:
+                end_leftovers(lock.predecessor)
             robot, components = self.robot, list(self.robot.components)
             credentials = security.ensure_credentials(self.credentials_path, robot.name, components)
             users = self.credentials_path.with_suffix(".users")
@@ -99,6 +103,7 @@ class Executive:
                     log_dir=self.log_dir,
                     grace=self.grace,
                     credentials=credentials,
+                    run_id=lock.run_id,
                 )
             )
             self.ros2: Ros2Link | None = None

@@ -43,6 +43,10 @@ class Launcher:
         grace: seconds a component gets to answer a command, and to exit after a stop
             command and again after SIGTERM.
         log_max_bytes, log_backups: log rotation.
+        credentials: the robot's bus credentials (each component gets its own login).
+        run_id: marks every process started, so that the next executive on the same
+            knowledge base can end what this one leaves if it is killed
+            (:mod:`executive.runtime.run_lock`).
     """
 
     def __init__(
@@ -56,6 +60,7 @@ class Launcher:
         log_max_bytes: int = 1 << 20,
         log_backups: int = 3,
         credentials: Credentials | None = None,
+        run_id: str | None = None,
     ) -> None:
         self.robot = robot
         self.bus = bus
@@ -73,6 +78,7 @@ class Launcher:
             log_backups=log_backups,
             on_process_end=self._goals.process_ended,
             credentials=credentials,
+            run_id=run_id,
         )
         self._running = False
 
