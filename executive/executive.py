@@ -18,7 +18,7 @@ from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus
 from executive.planning.high_level import HighLevel
-from executive.runtime.component_api import ComponentApi
+from executive.runtime.component_api import ComponentApi, listed
 from executive.runtime.launcher import Launcher
 from executive.runtime.run_lock import RunLock, end_leftovers
 from executive.tasks.executor import TaskExecutor
@@ -134,7 +134,7 @@ class Executive:
 
             extra.append(Ros2StatePublisher(context, ros2.spec, link=ros2))
         return [
-            ComponentApi(context, self.launcher),
+            ComponentApi(context, self.launcher, by_hand=self.tasks),
             ResourceMonitor(context, rate=self.resource_rate),
             ObserverManager(context, sources=[ros2.topics] if ros2 is not None else []),
             DiagnosisService(context, learn=True),
@@ -145,10 +145,7 @@ class Executive:
         ]
 
     def _components(self) -> list[dict[str, Any]]:
-        return [
-            {"kind": self.launcher.kind(s.component).value, **s.to_payload()}
-            for s in self.launcher.states()
-        ]
+        return [listed(self.launcher, s) for s in self.launcher.states()]
 
     def __exit__(self, *exc: object) -> None:
         self._stack.close()

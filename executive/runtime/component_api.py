@@ -3,13 +3,14 @@
 The verbs are declared in :mod:`executive.bus.api.components`; requests are checked
 there. Achievements (``component/achieve``) are served by the launcher itself
 (:mod:`executive.runtime.behavior_goals`): behaviors store them while the launcher runs,
-with or without this API.
+with or without this API. Starts and stops by hand go to whoever supervises the
+components (the task executor, in the executive), else straight to the launcher.
 """
 
 from __future__ import annotations
 
 import contextlib
-from typing import Any
+from typing import Any, Protocol
 
 from executive.bus.api.components import (
     COMPONENT_LIST,
@@ -27,15 +28,39 @@ from executive.bus.verb import Empty
 from executive.runtime.launcher import Launcher
 
 
+class ByHand(Protocol):
+    """Who starts and stops components for a user, and supervises them afterwards."""
+
+    def start_by_hand(self, name: str) -> ComponentState: ...
+
+    def stop_by_hand(self, name: str) -> ComponentState: ...
+
+
+class _LauncherByHand:
+    def __init__(self, launcher: Launcher) -> None:
+        self.launcher = launcher
+
+    def start_by_hand(self, name: str) -> ComponentState:
+        return self.launcher.start(name)
+
+    def stop_by_hand(self, name: str) -> ComponentState:
+        return self.launcher.stop(name)
+
+
 class ComponentApi(Service):
     """Serves list, start, stop and logs of the robot's components (the task executor
-    serves restart, fault and reset: they count as faults)."""
+    serves restart, fault and reset: they count as faults).
+
+    Args:
+        by_hand: starts and stops for users (default: the launcher, unsupervised).
+    """
 
     name = "component-api"
 
-    def __init__(self, context: Context, launcher: Launcher) -> None:
+    def __init__(self, context: Context, launcher: Launcher, by_hand: ByHand | None = None) -> None:
         super().__init__(context)
         self.launcher = launcher
+        self.by_hand = by_hand or _LauncherByHand(launcher)
         self._declared: list[Any] = []
 
     def start(self) -> None:
@@ -57,23 +82,28 @@ class ComponentApi(Service):
         launcher = self.launcher
         return ComponentsReply(
             [
-                {
-                    "kind": launcher.kind(state.component).value,
-                    "log": str(launcher.log_path(state.component)),
-                    **state.to_payload(),
-                }
+                {**listed(launcher, state), "log": str(launcher.log_path(state.component))}
                 for state in launcher.states()
             ]
         )
 
     def _start(self, request: ComponentName) -> ComponentState:
-        return self.launcher.start(request.name)
+        return self.by_hand.start_by_hand(request.name)
 
     def _stop(self, request: ComponentName) -> ComponentState:
-        return self.launcher.stop(request.name)
+        return self.by_hand.stop_by_hand(request.name)
 
     def _logs(self, request: LogQuery) -> LogReply:
         name = request.name
         return LogReply(
             name, str(self.launcher.log_path(name)), self.launcher.logs(name, request.lines)
         )
+
+
+def listed(launcher: Launcher, state: ComponentState) -> dict[str, Any]:
+    """A component as lists show it: its kind and state, and a pid only while it runs
+    (a stopped component's last pid may belong to another process by now)."""
+    payload = {"kind": launcher.kind(state.component).value, **state.to_payload()}
+    if not state.state.is_alive:
+        payload["pid"] = None
+    return payload

@@ -6,6 +6,10 @@ missing (dependencies first), as :meth:`SystemConfiguration.transition` orders i
 component the executor starts and that becomes ready joins the diagnosis model; one
 it stops leaves it. A start that fails is reported back: it is a fault of that
 component, which the fault handling counts.
+
+A component started by hand (``dura component start``) is kept running like the
+others, and no configuration change stops it: only a stop by hand (when no task holds
+it) or a permanent fault does.
 """
 
 from __future__ import annotations
@@ -44,6 +48,7 @@ class Configurator:
         self._before_start = before_start
         self._configuration = SystemConfiguration()
         self._expected: set[str] = set()  # components we started and keep running
+        self._by_hand: set[str] = set()  # started by hand: only a stop by hand ends them
 
     @property
     def configuration(self) -> SystemConfiguration:
@@ -64,7 +69,7 @@ class Configurator:
             {"stop": list(transition.stop), "start": list(transition.start), "why": why},
         )
         for name in transition.stop:
-            self.stop(name, "no task needs it")
+            self.release(name, "no task needs it")
         failed = [n for n in transition.start if self.start(n).state is not Lifecycle.READY]
         return {name: self.launcher.state(name).reason for name in failed}
 
@@ -83,6 +88,34 @@ class Configurator:
         self._expected.discard(name)
         self.model.remove(name)
         self.launcher.stop(name, reason)
+
+    def release(self, name: str, reason: str) -> None:
+        """No task needs it any more: stop it, unless it was started by hand."""
+        if name not in self._by_hand:
+            self.stop(name, reason)
+
+    def start_by_hand(self, name: str) -> ComponentState:
+        """Start a component for a user, kept running until the user stops it."""
+        self._by_hand.add(name)
+        state = self.start(name)
+        if state.state is not Lifecycle.READY:
+            self._by_hand.discard(name)
+        return state
+
+    def stop_by_hand(self, name: str, *, held: bool) -> ComponentState:
+        """A user stops a component: it stops unless a task holds it (``held``)."""
+        self._by_hand.discard(name)
+        if not held:
+            self.stop(name, "stopped by hand")
+        return self.launcher.state(name)
+
+    def by_hand(self, name: str) -> bool:
+        """It was started by hand and not stopped by hand since."""
+        return name in self._by_hand
+
+    def forget_by_hand(self, name: str) -> None:
+        """It is no longer kept running for a user (it is permanently faulty)."""
+        self._by_hand.discard(name)
 
     def restart(self, name: str, reason: str) -> ComponentState:
         self.stop(name, reason)

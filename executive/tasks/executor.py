@@ -49,6 +49,7 @@ from executive.bus.api.tasks import (
     TaskStart,
     TaskStarted,
 )
+from executive.bus.payloads import ComponentState
 from executive.bus.service import Context, Service
 from executive.bus.worker import Worker
 from executive.runtime.launcher import Launcher
@@ -61,6 +62,7 @@ from knowledge.records import TaskState
 T = TypeVar("T")
 CALL_TIMEOUT = 30.0  # seconds a command waits for the worker (it may be starting components)
 STOP_TIMEOUT = 60.0  # seconds the worker gets to cancel every task and stop their components
+HAND_TIMEOUT = 60.0  # seconds a start or stop by hand waits (the worker may be starting others)
 
 __all__ = ["Listener", "TaskEnd", "TaskExecutor", "TaskHandle", "TaskPhase"]
 
@@ -200,6 +202,44 @@ class TaskExecutor(Service):
         self._check_component(name)
         dispatcher = self._running
         return self._call(lambda: dispatcher.repairs.reset(name))
+
+    def start_by_hand(self, name: str) -> ComponentState:
+        """Start a component for a user (``dura component start``) and wait until it is
+        ready: supervised like the others (its exit is a fault), kept running until a
+        stop by hand."""
+        self.launcher.kind(name)  # refuses an unknown name, as the launcher words it
+        dispatcher = self._running
+
+        def start() -> ComponentState:
+            dispatcher.repairs.started_by_hand(name)
+            return dispatcher.configurator.start_by_hand(name)
+
+        return self._call(start, timeout=HAND_TIMEOUT)
+
+    def stop_by_hand(self, name: str) -> ComponentState:
+        """Stop a component for a user and wait until it is gone.
+
+        Raises:
+            DuraError: a task holds it (it stops when no task needs it).
+        """
+        self.launcher.kind(name)
+        dispatcher = self._running
+
+        def stop() -> ComponentState:
+            users = sorted(
+                t.id
+                for t in dispatcher.ledger.holding()
+                if t.behavior == name or name in t.providers.values()
+            )
+            if users:
+                ids = ", ".join(users)
+                raise DuraError(
+                    f"'{name}' serves task {ids}: it stops when no task needs it "
+                    f"(or stop the task: dura task stop {users[0]})"
+                )
+            return dispatcher.configurator.stop_by_hand(name, held=False)
+
+        return self._call(stop, timeout=HAND_TIMEOUT)
 
     def tasks(self) -> list[dict[str, Any]]:
         """Every task with its phase and configuration (newest last), from the snapshot."""

@@ -104,7 +104,7 @@ class Supervisor:
             with contextlib.suppress(ComponentError, BusError):
                 task.handle.cancel()
         task.handle = None
-        self.configurator.stop(task.behavior, reason)
+        self.configurator.release(task.behavior, reason)
 
     def pause(self, task: Task) -> None:
         """A user pauses the task (now, or as soon as its behavior runs).
