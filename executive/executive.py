@@ -44,6 +44,8 @@ class Executive:
         log_dir: where component logs go (default ``./.dura/logs``).
         resource_rate: how often the resource monitor publishes, in Hz.
         grace: seconds a component gets at each step of a stop.
+        linger: seconds a functionality no task and no upcoming plan step needs keeps
+            running before it stops.
         folder: the working folder whose ``.dura/`` holds the bus credentials (created on
             the first run, user-only) and the logs (default: the current folder).
     """
@@ -58,6 +60,7 @@ class Executive:
         resource_rate: float = 1.0,
         grace: float = 3.0,
         folder: Path | None = None,
+        linger: float = 0.0,
     ) -> None:
         self.robot = robot
         self.endpoint = endpoint or robot.endpoint
@@ -67,6 +70,7 @@ class Executive:
         self.credentials_path = security.credentials_file(self.folder, robot.name)
         self.resource_rate = resource_rate
         self.grace = grace
+        self.linger = linger
         self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> Executive:
@@ -121,7 +125,7 @@ class Executive:
     def services(self, context: Context) -> list[Service]:
         """The services of the executive, in the order they start (and stop reversed):
         monitoring first, so that it watches every component the executive starts."""
-        self.tasks = TaskExecutor(context, self.launcher)
+        self.tasks = TaskExecutor(context, self.launcher, linger=self.linger)
         self.high_level = HighLevel(
             context,
             PlanTasks(self.tasks, self.robot),

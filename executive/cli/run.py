@@ -54,6 +54,14 @@ def register(sub: Any) -> None:
         help="time a component gets to stop, before SIGTERM and again before SIGKILL (default 3)",
     )
     p.add_argument(
+        "--linger",
+        type=seconds(),
+        default=0.0,
+        metavar="SECONDS",
+        help="keep a functionality running this long after no task and no upcoming plan "
+        "step needs it (default 0: stop it then)",
+    )
+    p.add_argument(
         "--dashboard",
         type=port,
         metavar="PORT",
@@ -76,6 +84,7 @@ def run(args: argparse.Namespace) -> int:
         log_dir=args.log_dir.resolve(),
         resource_rate=args.resource_rate,
         grace=args.grace,
+        linger=args.linger,
     )
     with executive, contextlib.ExitStack() as dashboard:
         endpoint = local_endpoint(executive.endpoint)

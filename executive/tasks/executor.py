@@ -25,7 +25,7 @@ from __future__ import annotations
 import contextlib
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, TypeVar
 
 from executive.bus.api.tasks import (
@@ -74,14 +74,24 @@ class TaskExecutor(Service):
         context: robot, bus and knowledge base.
         launcher: starts and stops the component processes.
         time_limit: seconds one schedule may take.
+        linger: seconds a functionality that no task and no upcoming plan step needs
+            keeps running before it stops.
     """
 
     name = "task-executor"
 
-    def __init__(self, context: Context, launcher: Launcher, *, time_limit: float = 1.0) -> None:
+    def __init__(
+        self,
+        context: Context,
+        launcher: Launcher,
+        *,
+        time_limit: float = 1.0,
+        linger: float = 0.0,
+    ) -> None:
         super().__init__(context)
         self.launcher = launcher
         self.time_limit = time_limit
+        self.linger = linger
         self.robot = context.robot
         self.kb = context.kb
         self._worker = Worker("task executor", after_each=self._publish)
@@ -103,6 +113,7 @@ class TaskExecutor(Service):
             post=self._worker.post,
             publish=self._publish,
             time_limit=self.time_limit,
+            linger=self.linger,
         )
         with self.kb.transaction():  # tasks of an executive that died
             for task in self.kb.tasks():
@@ -175,6 +186,13 @@ class TaskExecutor(Service):
 
         self._worker.post(take)
         return TaskHandle(self, task)
+
+    def expect(self, behaviors: Sequence[str]) -> None:
+        """The behaviors of the plan's steps still to come, in order (none: no plan):
+        what they need keeps running between the steps. Returns at once."""
+        dispatcher = self._running
+        upcoming = tuple(behaviors)
+        self._worker.post(lambda: dispatcher.expect(upcoming))
 
     def pause(self, task_id: str) -> None:
         dispatcher = self._running

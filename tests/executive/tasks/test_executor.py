@@ -74,3 +74,20 @@ def test_a_task_ended_by_its_requester_or_by_a_user_says_who_ended_it(
             TaskEnd.USER,
             "stopped by the user",
         )
+
+
+def test_a_functionality_lingers_after_its_last_task_then_stops(
+    endpoint: str, tmp_path: Path
+) -> None:
+    robot = slow_camera_robot(delay=0.1, picture=0.5)
+    with executor(robot, endpoint, tmp_path, linger=3.0) as (tasks, r):
+        first = tasks.start_task("take_picture", {"place": "lab"})
+        assert first.wait(30) and first.phase is TaskPhase.SUCCEEDED, first.reason
+        assert r.launcher.state("slow_cam").state is Lifecycle.READY  # it lingers
+        second = tasks.start_task("take_picture", {"place": "office"})
+        assert second.wait(30) and second.phase is TaskPhase.SUCCEEDED, second.reason
+        assert wait_for(lambda: r.launcher.state("slow_cam").state is Lifecycle.STOPPED, 30)
+        starts = [e for e in r.kb.events(kind="COMPONENT_STARTING") if e.subject == "slow_cam"]
+        assert len(starts) == 1  # the second picture found it running
+        last = r.kb.events(kind="CONFIGURATION")[-1]
+        assert last.data["stop"] == ["slow_cam"] and "linger" in last.data["why"]
