@@ -204,12 +204,12 @@ class Component:
         Raises:
             BusError: the executive refused it (unknown predicate or object) or is gone.
         """
-        STATE_SET.call(self.bus, FactChange(fact), timeout=5.0)
+        STATE_SET.call(self.bus, FactChange(fact, source=self.name), timeout=5.0)
 
     @final
     def unset_fact(self, fact: str) -> None:
         """Make a fact false in the robot's world (see :meth:`set_fact`)."""
-        STATE_UNSET.call(self.bus, FactChange(fact), timeout=5.0)
+        STATE_UNSET.call(self.bus, FactChange(fact, source=self.name), timeout=5.0)
 
     @final
     def at_rate(self, hz: float, step: Callable[[], None]) -> None:

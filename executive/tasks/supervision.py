@@ -82,7 +82,8 @@ class Supervisor:
         if task.paused_by_user:
             with contextlib.suppress(ComponentError):
                 self.launcher.pause(task.behavior)
-        self.ledger.event("TASK_STARTED", task, providers=task.providers, attempt=attempt)
+        task.starts += 1
+        self.ledger.event("TASK_STARTED", task, providers=task.providers, attempt=task.starts)
 
     def failed(self, task: Task, reason: str) -> None:
         """The task's behavior failed: restart it, or, beyond its restarts, fail the task."""
@@ -92,7 +93,8 @@ class Supervisor:
         if action is TaskAction.RESTART:
             self.stop(task, "restarting after a failure")
             self.ledger.set_phase(task, TaskPhase.STARTING)
-            self.ledger.event("TASK_RESTARTED", task, reason=reason)
+            task.restarts += 1
+            self.ledger.event("TASK_RESTARTED", task, reason=reason, attempt=task.restarts)
             self.launch(task)
         else:
             self._end(task, TaskEnd.BEHAVIOR_FAILED, reason)
@@ -162,7 +164,10 @@ class Supervisor:
             self.ledger.event("TASK_RESUMED", task, reason="configuration repaired")
             return
         self.ledger.set_phase(task, TaskPhase.STARTING)
-        self.ledger.event("TASK_RESTARTED", task, reason="configuration repaired")
+        task.restarts += 1
+        self.ledger.event(
+            "TASK_RESTARTED", task, reason="configuration repaired", attempt=task.restarts
+        )
         self.launch(task)
 
     def _on_result(self, task: Task, attempt: int, result: GoalResult) -> None:

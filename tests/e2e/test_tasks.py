@@ -104,6 +104,9 @@ def test_a_behavior_that_keeps_failing_fails_its_task_after_max_restarts(
     kinds = [e["kind"] for e in trace(robot, move)]
     assert kinds.count("TASK_RESTARTED") == 2 and kinds[-1] == "TASK_FAILED"
     assert kinds.count("TASK_STARTED") == 3
+    attempts = {kind: [e["data"]["attempt"] for e in trace(robot, move) if e["kind"] == kind]
+                for kind in ("TASK_STARTED", "TASK_RESTARTED")}  # fmt: skip
+    assert attempts == {"TASK_STARTED": [1, 2, 3], "TASK_RESTARTED": [1, 2]}
 
 
 def test_constraints_earliest_start_deadline_and_start_together(dura_robot: Start) -> None:
