@@ -1,4 +1,5 @@
-"""The launcher's bus API for the command line: list, start, stop and logs of components.
+"""The launcher's bus API for the command line: list, start, stop and logs of components,
+and fault injection.
 
 The verbs are declared in :mod:`executive.bus.api.components`; requests are checked
 there. Achievements (``component/achieve``) are served by the launcher itself
@@ -13,12 +14,14 @@ import contextlib
 from typing import Any, Protocol
 
 from executive.bus.api.components import (
+    COMPONENT_INJECT,
     COMPONENT_LIST,
     COMPONENT_LOGS,
     COMPONENT_START,
     COMPONENT_STOP,
     ComponentName,
     ComponentsReply,
+    Injection,
     LogQuery,
     LogReply,
 )
@@ -26,6 +29,7 @@ from executive.bus.payloads import ComponentState
 from executive.bus.service import Context, Service
 from executive.bus.verb import Empty
 from executive.runtime.launcher import Launcher
+from executive.sdk.fault_injection import Fault
 
 
 class ByHand(Protocol):
@@ -48,7 +52,8 @@ class _LauncherByHand:
 
 
 class ComponentApi(Service):
-    """Serves list, start, stop and logs of the robot's components (the task executor
+    """Serves list, start, stop, logs and fault injection of the robot's components (the
+    task executor
     serves restart, fault and reset: they count as faults).
 
     Args:
@@ -70,6 +75,7 @@ class ComponentApi(Service):
             COMPONENT_LOGS.serve(bus, self._logs),
             COMPONENT_START.serve(bus, self._start),
             COMPONENT_STOP.serve(bus, self._stop),
+            COMPONENT_INJECT.serve(bus, self._inject),
         ]
 
     def stop(self) -> None:
@@ -92,6 +98,12 @@ class ComponentApi(Service):
 
     def _stop(self, request: ComponentName) -> ComponentState:
         return self.by_hand.stop_by_hand(request.name)
+
+    def _inject(self, request: Injection) -> ComponentState:
+        """Check the fault here (its mode and options), then send it to the component."""
+        fault = Fault.parse({"mode": request.mode, **request.options})
+        self.launcher.inject_fault(request.name, fault.to_spec())
+        return self.launcher.state(request.name)
 
     def _logs(self, request: LogQuery) -> LogReply:
         name = request.name

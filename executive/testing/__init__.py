@@ -28,18 +28,22 @@ __all__ = ["GoalEnded", "RobotProcess", "dura_robot"]
 
 @pytest.fixture
 def dura_robot(tmp_path: Path) -> Iterator[Callable[..., RobotProcess]]:
-    """Start robots: ``dura_robot(description, name="robot", changes=None)`` → a running
-    RobotProcess. ``changes`` modify a copy of the description, nested like its YAML
-    (``{"behaviors": {"move_to": {"max_restarts": 0}}}``)."""
+    """Start robots: ``dura_robot(description, name="robot", changes=None, endpoint=None)``
+    → a running RobotProcess. ``changes`` modify a copy of the description, nested like its
+    YAML (``{"behaviors": {"move_to": {"max_restarts": 0}}}``); ``endpoint`` is where the
+    executive listens (default: a free loopback port)."""
     started: list[RobotProcess] = []
 
     def start(
-        description: str | Path, name: str = "robot", changes: Mapping[str, Any] | None = None
+        description: str | Path,
+        name: str = "robot",
+        changes: Mapping[str, Any] | None = None,
+        endpoint: str | None = None,
     ) -> RobotProcess:
         folder = tmp_path / name
         if changes:
             description = robot_variant(Path(description), folder / "description", changes)
-        robot = RobotProcess(Path(description), folder)
+        robot = RobotProcess(Path(description), folder, endpoint)
         started.append(robot)
         robot.start()
         return robot
