@@ -32,6 +32,7 @@ from executive.tasks.diagnosis_model import DiagnosisModelSync
 from executive.tasks.fault_handling import FaultHandler
 from executive.tasks.faults import Faults
 from executive.tasks.ledger import TaskLedger
+from executive.tasks.parameters import RuntimeParameters
 from executive.tasks.supervision import Post, Supervisor
 from executive.tasks.task import Task, TaskControl, TaskEnd, TaskPhase
 
@@ -82,11 +83,14 @@ class Dispatcher:
             context.robot, ledger=self.ledger, launcher=launcher,
             configurator=self.configurator, faults=self.faults, end=self.end, post=post,
         )  # fmt: skip
-        self.repairs = FaultHandler(
+        self.repairs = repairs = FaultHandler(
             context.robot, context.kb, ledger=self.ledger, launcher=launcher,
             configurator=self.configurator, supervisor=self.supervisor, faults=self.faults,
             end=self.end, reschedule=self.reschedule, post=post,
         )  # fmt: skip
+        self.parameters = RuntimeParameters(
+            context.robot, context.kb, launcher, restart=repairs.warm_restart
+        )
 
     def request(self, task: Task) -> None:
         """A new task asks for its configuration."""

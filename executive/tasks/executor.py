@@ -13,7 +13,7 @@ components (:mod:`executive.tasks.diagnosis_model`).
 
 This module is the service: one worker thread owns the tasks and runs every step
 (:mod:`executive.tasks.dispatch`); the public methods post to it, and the bus API
-(:mod:`executive.bus.api.tasks`) calls them. Status queries (:meth:`TaskExecutor.tasks`,
+(:mod:`executive.bus.api.tasks`, :mod:`executive.bus.api.parameters`) calls them. Status queries (:meth:`TaskExecutor.tasks`,
 :meth:`TaskExecutor.schedule`) answer from a :class:`~executive.tasks.snapshot.Snapshot`
 the worker replaces after each job and before each component start, never from the
 worker itself. Every step is an
@@ -28,6 +28,12 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, TypeVar
 
+from executive.bus.api.parameters import (
+    PARAMETER_GET,
+    PARAMETER_LIST,
+    PARAMETER_SET,
+    ParameterReply,
+)
 from executive.bus.api.tasks import (
     COMPONENT_FAULT,
     COMPONENT_RESET,
@@ -259,6 +265,16 @@ class TaskExecutor(Service):
 
         return self._call(stop, timeout=HAND_TIMEOUT)
 
+    def set_parameter(self, name: str, key: str, value: Any) -> ParameterReply:
+        """Change a component's parameter: checked against the description, stored, and
+        handed to the component if it runs (by its hook, or by a warm restart).
+
+        Raises:
+            DuraError: no such component, or a value of the wrong type (the reason).
+        """
+        dispatcher = self._running
+        return self._call(lambda: dispatcher.parameters.set(name, key, value), timeout=HAND_TIMEOUT)
+
     def tasks(self) -> list[dict[str, Any]]:
         """Every task with its phase and configuration (newest last), from the snapshot."""
         return self._snapshot.task_list()
@@ -314,6 +330,9 @@ class TaskExecutor(Service):
             COMPONENT_RESTART.serve(bus, self._restart_request),
             COMPONENT_FAULT.serve(bus, self._fault_request),
             COMPONENT_RESET.serve(bus, self._reset_request),
+            PARAMETER_SET.serve(bus, lambda r: self.set_parameter(r.component, r.key, r.value)),
+            PARAMETER_GET.serve(bus, lambda r: dispatcher.parameters.get(r.component, r.key)),
+            PARAMETER_LIST.serve(bus, lambda r: dispatcher.parameters.list(r.component)),
         ]
 
     def _start_request(self, request: TaskStart) -> TaskStarted:

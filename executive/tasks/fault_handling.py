@@ -19,7 +19,7 @@ from executive.bus.api.tasks import FaultReply
 from executive.bus.payloads import ComponentState, Lifecycle
 from executive.runtime.launcher import Launcher
 from executive.tasks.configurator import Configurator
-from executive.tasks.faults import Faults
+from executive.tasks.faults import Faults, TaskAction
 from executive.tasks.ledger import TaskLedger
 from executive.tasks.supervision import End, Post, Supervisor
 from executive.tasks.task import TaskEnd
@@ -104,6 +104,24 @@ class FaultHandler:
                 self.configurator.stop(name, "permanently faulty")
             self._reschedule(f"{name} is permanently faulty")
         return self.reply(name)
+
+    def warm_restart(self, name: str, reason: str) -> ComponentState:
+        """Restart a running component that is not faulty (new parameters): the tasks on
+        it are held while it restarts, as during a repair, and go on afterwards; a
+        restart that fails is a fault."""
+        hit = [t for t in self.ledger.holding() if name in (t.behavior, *t.providers.values())]
+        behavior = self.robot.components[name].kind is Kind.BEHAVIOR
+        for task in hit:
+            reconfigurable = self.robot.behaviors[task.behavior].reconfigurable
+            action = TaskAction.PAUSE if reconfigurable and not behavior else TaskAction.RESTART
+            self.supervisor.interrupt(task, action, name)
+        state = self.configurator.restart(name, reason)
+        if state.state is not Lifecycle.READY:
+            self.fault(name, f"could not restart: {state.reason}")
+            return self.launcher.state(name)
+        for task in hit:
+            self.supervisor.go_on(task)
+        return state
 
     def reply(self, name: str) -> FaultReply:
         """The component's state with its fault count."""
