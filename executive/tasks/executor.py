@@ -59,9 +59,11 @@ from executive.bus.payloads import ComponentState
 from executive.bus.service import Context, Service
 from executive.bus.worker import Worker
 from executive.runtime.launcher import Launcher
+from executive.tasks.arguments import check_objects
 from executive.tasks.dispatch import Dispatcher
 from executive.tasks.snapshot import Snapshot
 from executive.tasks.task import Listener, Task, TaskEnd, TaskHandle, TaskPhase
+from knowledge.domain import DomainInfo, read_domain
 from knowledge.errors import DuraError, KnowledgeError
 from knowledge.records import TaskState
 
@@ -108,6 +110,7 @@ class TaskExecutor(Service):
         self._lock = threading.Lock()
         self._arrivals: dict[str, Task] = {}
         self._snapshot = Snapshot()
+        self._domain_info: DomainInfo | None = None
 
     # --- lifecycle -----------------------------------------------------------------------
 
@@ -338,12 +341,22 @@ class TaskExecutor(Service):
     def _start_request(self, request: TaskStart) -> TaskStarted:
         spec = self.robot.tasks.get(request.task)
         behavior = spec.behavior if spec is not None else request.task
+        if spec is not None:  # the objects it names must be in the world, of their types
+            check_objects(spec, request.goal, self._domain(), self.kb.objects())
         handle = self.start_task(
             behavior, request.goal, name=request.task, duration=request.duration,
             earliest=request.earliest or 0.0, deadline=request.deadline,
             together=tuple(request.together),
         )  # fmt: skip
         return TaskStarted(handle.id, behavior)
+
+    def _domain(self) -> DomainInfo:
+        """The domain's signatures, read at the first task asked for by hand (reading
+        imports unified-planning, which the executive need not wait for at start)."""
+        with self._lock:
+            if self._domain_info is None:
+                self._domain_info = read_domain(self.robot.domain)
+            return self._domain_info
 
     def _on_task(self, request: TaskId, act: Callable[[Task], None]) -> TaskReply:
         """Act on a task on the worker; the task as it is afterwards."""

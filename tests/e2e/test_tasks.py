@@ -41,9 +41,12 @@ def cli(robot: RobotProcess) -> Dura:
     return dura
 
 
+def tasks_of(dura: Dura) -> list[dict[str, Any]]:
+    return list(json.loads(dura("task", "list", "--json").stdout)["tasks"])
+
+
 def task(dura: Dura, task_id: str) -> dict[str, Any]:
-    tasks = json.loads(dura("task", "list", "--json").stdout)["tasks"]
-    return dict(next(t for t in tasks if t["id"] == task_id))
+    return dict(next(t for t in tasks_of(dura) if t["id"] == task_id))
 
 
 def start(dura: Dura, *args: str) -> str:
@@ -156,6 +159,13 @@ def test_tasks_pause_resume_and_stop_by_hand(dura_robot: Start) -> None:
     assert refused.stderr == f"dura: task {picture} (take_picture) is not interruptible\n"
     unknown = dura("task", "stop", "99")
     assert (unknown.returncode, unknown.stderr) == (1, "dura: no task 99\n")
+    narnia = dura("task", "start", "move_to", "--arg", "start=narnia", "--arg", "target=lab")
+    assert (narnia.returncode, narnia.stderr) == (
+        1,
+        "dura: task 'move_to': start=narnia: no object 'narnia' of type 'place' (objects of "
+        "that type: dock, lab, office)\n",
+    )
+    assert all(t["goal"].get("start") != "narnia" for t in tasks_of(dura))
 
     assert dura("task", "stop", move).returncode == 0
     assert wait_for(lambda: task(dura, move)["state"] == "cancelled", 30)
