@@ -46,6 +46,8 @@ class Executive:
         grace: seconds a component gets at each step of a stop.
         linger: seconds a functionality no task and no upcoming plan step needs keeps
             running before it stops.
+        sequential_starts: change configurations one component after another, stopping
+            first (by default: all at once, before the old ones stop).
         folder: the working folder whose ``.dura/`` holds the bus credentials (created on
             the first run, user-only) and the logs (default: the current folder).
     """
@@ -61,6 +63,7 @@ class Executive:
         grace: float = 3.0,
         folder: Path | None = None,
         linger: float = 0.0,
+        sequential_starts: bool = False,
     ) -> None:
         self.robot = robot
         self.endpoint = endpoint or robot.endpoint
@@ -71,6 +74,7 @@ class Executive:
         self.resource_rate = resource_rate
         self.grace = grace
         self.linger = linger
+        self.sequential_starts = sequential_starts
         self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> Executive:
@@ -125,7 +129,9 @@ class Executive:
     def services(self, context: Context) -> list[Service]:
         """The services of the executive, in the order they start (and stop reversed):
         monitoring first, so that it watches every component the executive starts."""
-        self.tasks = TaskExecutor(context, self.launcher, linger=self.linger)
+        self.tasks = TaskExecutor(
+            context, self.launcher, linger=self.linger, sequential=self.sequential_starts
+        )
         self.high_level = HighLevel(
             context,
             PlanTasks(self.tasks, self.robot),

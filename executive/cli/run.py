@@ -62,6 +62,14 @@ def register(sub: Any) -> None:
         "step needs it (default 0: stop it then)",
     )
     p.add_argument(
+        "--starts",
+        choices=("parallel", "sequential"),
+        default="parallel",
+        help="how a configuration changes: parallel (default) starts the new components "
+        "all at once before the old ones stop; sequential stops first, then starts one "
+        "after another in dependency order",
+    )
+    p.add_argument(
         "--dashboard",
         type=port,
         metavar="PORT",
@@ -85,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
         resource_rate=args.resource_rate,
         grace=args.grace,
         linger=args.linger,
+        sequential_starts=args.starts == "sequential",
     )
     with executive, contextlib.ExitStack() as dashboard:
         endpoint = local_endpoint(executive.endpoint)

@@ -46,11 +46,14 @@ class SystemConfiguration:
 
     ``tasks`` maps a task id to its providers: capability → functionality, closed
     under ``requires`` (as the scheduler assigns them). ``reserved`` maps a reason to
-    keep functionalities running (an upcoming step, a linger) to providers likewise.
+    keep functionalities running (an upcoming step, a linger) to providers likewise, and
+    ``standby`` a warm spare (``standby: true``) to the providers it runs on; what only
+    a spare holds runs paused.
     """
 
     tasks: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
     reserved: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
+    standby: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
 
     @property
     def users(self) -> dict[str, frozenset[str]]:
@@ -72,18 +75,29 @@ class SystemConfiguration:
         """The functionalities a task holds (not only a reservation)."""
         return frozenset(f for providers in self.tasks.values() for f in providers.values())
 
+    @property
+    def idle(self) -> frozenset[str]:
+        """The functionalities only spares hold: they run paused."""
+        active = frozenset(
+            f for _, providers in (*self.tasks.items(), *self.reserved.items())
+            for f in providers.values()
+        )  # fmt: skip
+        return self.functionalities - active
+
     def holders(self) -> list[tuple[str, Mapping[str, str]]]:
-        """Every task and reservation with its providers."""
-        return [*self.tasks.items(), *self.reserved.items()]
+        """Every task, reservation and spare with its providers."""
+        return [*self.tasks.items(), *self.reserved.items(), *self.standby.items()]
 
     def with_task(self, task: str, providers: Mapping[str, str]) -> SystemConfiguration:
         """This configuration with a task's providers added (or replaced)."""
-        return SystemConfiguration({**self.tasks, task: dict(providers)}, self.reserved)
+        return SystemConfiguration(
+            {**self.tasks, task: dict(providers)}, self.reserved, self.standby
+        )
 
     def without_task(self, task: str) -> SystemConfiguration:
         """This configuration without a task: what only it held can stop."""
         return SystemConfiguration(
-            {t: p for t, p in self.tasks.items() if t != task}, self.reserved
+            {t: p for t, p in self.tasks.items() if t != task}, self.reserved, self.standby
         )
 
     def transition(

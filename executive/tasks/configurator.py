@@ -1,11 +1,14 @@
 """Configuration changes carried out on the launcher: the system configuration that runs,
 and the components the task executor started and keeps running.
 
-A change stops what no task holds any more (dependents first) and starts what is
-missing (dependencies first), as :meth:`SystemConfiguration.transition` orders it. A
-component the executor starts and that becomes ready joins the diagnosis model; one
-it stops leaves it. A start that fails is reported back: it is a fault of that
-component, which the fault handling counts.
+A change makes before it breaks: the warm spares a task needs now resume and what is
+missing starts, all at once (a configuration change costs one component start, not the
+sum), and only then does what no task holds any more stop. (Sequentially, as
+:meth:`SystemConfiguration.transition` orders it, for robots that need it: stops first,
+dependents first, then starts, dependencies first.) Spares no task needs run paused. A
+component the executor starts and that becomes ready joins the diagnosis model; one it
+stops leaves it. A start that fails is reported back: it is a fault of that component,
+which the fault handling counts.
 
 A component started by hand (``dura component start``) is kept running like the
 others, and no configuration change stops it: only a stop by hand (when no task holds
@@ -14,13 +17,20 @@ it) or a permanent fault does.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping
+import logging
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 
 from executive.bus.payloads import ComponentState, Lifecycle
 from executive.runtime.launcher import Launcher
 from executive.tasks.configuration import SystemConfiguration, Transition
 from executive.tasks.diagnosis_model import DiagnosisModelSync
+from knowledge.errors import ComponentError
 from knowledge.knowledge_base import KnowledgeBase
+
+log = logging.getLogger("dura.task_executor")
+
+RUNNING = (Lifecycle.READY, Lifecycle.PAUSED)  # a started component is in one of these
 
 
 class Configurator:
@@ -32,6 +42,9 @@ class Configurator:
         model: the diagnosis model to keep in line.
         before_start: called before each component start (which may take seconds), so
             that the executor's status shows what is being started.
+        sequential: change configurations as dura first did: stop what goes first, then
+            start what comes one after another, in dependency order (for robots whose
+            components need their providers up when they start).
     """
 
     def __init__(
@@ -41,10 +54,12 @@ class Configurator:
         model: DiagnosisModelSync,
         *,
         before_start: Callable[[], None] = lambda: None,
+        sequential: bool = False,
     ) -> None:
         self.kb = kb
         self.launcher = launcher
         self.model = model
+        self.sequential = sequential
         self._before_start = before_start
         self._configuration = SystemConfiguration()
         self._expected: set[str] = set()  # components we started and keep running
@@ -59,30 +74,80 @@ class Configurator:
         self, target: SystemConfiguration, transition: Transition, why: str
     ) -> Mapping[str, str]:
         """Change to ``target`` by ``transition``; the functionalities that did not start,
-        each with the launcher's reason."""
+        each with the launcher's reason.
+
+        Make before break: spares needed now resume and what is missing starts, all at
+        once, before what is no longer needed stops (``sequential``: stop first, then
+        start one after another in dependency order).
+        """
         self._configuration = target
-        if transition.empty:
+        resume = [n for n in sorted(target.functionalities - target.idle)
+                  if self.launcher.state(n).state is Lifecycle.PAUSED]  # fmt: skip
+        pause = [n for n in sorted(target.idle) if self.launcher.state(n).state is Lifecycle.READY]
+        if transition.empty and not resume and not pause:
             return {}
-        self.kb.log_event(
-            "CONFIGURATION",
-            ", ".join(sorted(target.functionalities)) or "nothing",
-            {"stop": list(transition.stop), "start": list(transition.start), "why": why},
-        )
-        for name in transition.stop:
-            self.release(name, "no task needs it")
-        failed = [n for n in transition.start if self.start(n).state is not Lifecycle.READY]
+        if not transition.empty:
+            self.kb.log_event(
+                "CONFIGURATION",
+                ", ".join(sorted(target.functionalities)) or "nothing",
+                {"stop": list(transition.stop), "start": list(transition.start), "why": why,
+                 "resume": resume},
+            )  # fmt: skip
+        if self.sequential:
+            for name in transition.stop:
+                self.release(name, "no task needs it")
+        for name in resume:
+            self._switch(name, pause=False)
+        failed = self._start_all(transition.start)
+        for name in pause:
+            self._switch(name, pause=True)
+        if not self.sequential:
+            self._stop_all(transition.stop)
         return {name: self.launcher.state(name).reason for name in failed}
 
     def start(self, name: str) -> ComponentState:
-        """Start a component (a functionality or a behavior) and wait until it is ready."""
+        """Start a component (a functionality or a behavior) and wait until it is ready
+        (paused, for a spare no task needs)."""
         self._expected.add(name)
         self._before_start()
-        state = self.launcher.start(name)
-        if state.state is Lifecycle.READY:
-            self.model.add(name)
-        else:
+        return self._started(name, self.launcher.start(name))
+
+    def _started(self, name: str, state: ComponentState) -> ComponentState:
+        if state.state is not Lifecycle.READY:
             self._expected.discard(name)
+            return state
+        self.model.add(name)
+        if name in self._configuration.idle:
+            return self._switch(name, pause=True)
         return state
+
+    def _start_all(self, names: Sequence[str]) -> list[str]:
+        """Start components, all at once unless sequential; those that did not start."""
+        if self.sequential or len(names) < 2:
+            return [n for n in names if self.start(n).state not in RUNNING]
+        self._expected.update(names)
+        self._before_start()
+        with ThreadPoolExecutor(len(names), thread_name_prefix="start") as pool:
+            states = list(pool.map(self.launcher.start, names))
+        return [n for n, s in zip(names, states, strict=True)
+                if self._started(n, s).state not in RUNNING]  # fmt: skip
+
+    def _stop_all(self, names: Sequence[str]) -> None:
+        """Stop what no task needs (unless started by hand), all at once."""
+        stopping = [n for n in names if n not in self._by_hand]
+        for name in stopping:
+            self._expected.discard(name)
+            self.model.remove(name)
+        with ThreadPoolExecutor(max(1, len(stopping)), thread_name_prefix="stop") as pool:
+            list(pool.map(lambda n: self.launcher.stop(n, "no task needs it"), stopping))
+
+    def _switch(self, name: str, *, pause: bool) -> ComponentState:
+        """Pause a spare no task needs, or resume one a task needs now."""
+        try:
+            return self.launcher.pause(name) if pause else self.launcher.resume(name)
+        except ComponentError as e:  # it ended meanwhile: its exit is handled as such
+            log.warning("cannot %s '%s': %s", "pause" if pause else "resume", name, e)
+            return self.launcher.state(name)
 
     def stop(self, name: str, reason: str) -> None:
         self._expected.discard(name)

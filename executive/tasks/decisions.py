@@ -181,6 +181,7 @@ def keep_running(
     faulty: Collection[str],
     upcoming: Sequence[str] = (),
     lingering: Iterable[str] = (),
+    standby: bool = True,
 ) -> Decision:
     """The decision with functionalities kept running that no task holds now.
 
@@ -190,6 +191,8 @@ def keep_running(
         faulty: the permanently faulty components (never kept).
         upcoming: the behaviors of the plan's steps still to come, in order.
         lingering: functionalities that linger after their last task.
+        standby: keep the warm spares (functionalities with ``standby: true``) and
+            what they run on, started if need be.
     """
     target = decision.configuration
     offered: dict[str, str] = {}  # capability -> a running functionality providing it
@@ -209,9 +212,56 @@ def keep_running(
         below = _closure(spec.requires, offered, robot, faulty)
         if below is not None and f not in faulty:
             reserved[f"lingering: {f}"] = {**below, (spec.provides or (f,))[0]: f}
-    configuration = SystemConfiguration(target.tasks, reserved)
+    spares: dict[str, Mapping[str, str]] = {}
+    for spec in robot.functionalities.values() if standby else ():
+        if spec.standby:
+            wanted = _spare(spec, offered, robot, faulty)
+            if wanted is not None:
+                spares[f"standby: {spec.name}"] = wanted
+    configuration = SystemConfiguration(target.tasks, reserved, spares)
     functionalities = list(robot.functionalities.values())
     return _changes(decision, running, configuration, functionalities)
+
+
+def _spare(
+    spec: FunctionalitySpec,
+    offered: Mapping[str, str],
+    robot: RobotDescription,
+    faulty: Collection[str],
+) -> dict[str, str] | None:
+    """A spare and the providers it runs on: what runs where it can, else the best-rated
+    usable provider; ``None`` if it cannot run."""
+    if spec.name in faulty:
+        return None
+    providers = {(spec.provides or (spec.name,))[0]: spec.name}
+    chosen = _choose(spec.requires, offered, robot, faulty, frozenset({spec.name}))
+    return None if chosen is None else {**providers, **chosen}
+
+
+def _choose(
+    needs: Iterable[str],
+    offered: Mapping[str, str],
+    robot: RobotDescription,
+    faulty: Collection[str],
+    visiting: frozenset[str],
+) -> dict[str, str] | None:
+    """Usable providers for ``needs`` and what they require, preferring what runs."""
+    out: dict[str, str] = {}
+    for capability in needs:
+        candidates = sorted(
+            (f for f in robot.functionalities.values() if capability in f.provides),
+            key=lambda f: (f.name != offered.get(capability), -f.rating, f.name),
+        )
+        for f in candidates:
+            if f.name in faulty or f.name in visiting:
+                continue
+            below = _choose(f.requires, offered, robot, faulty, visiting | {f.name})
+            if below is not None:
+                out.update({capability: f.name, **below})
+                break
+        else:
+            return None
+    return out
 
 
 def _closure(

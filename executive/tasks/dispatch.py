@@ -51,6 +51,8 @@ class Dispatcher:
         time_limit: seconds one schedule may take.
         linger: seconds a functionality no task (and no upcoming step) needs keeps
             running before it stops.
+        sequential: change configurations one component after another, stopping first
+            (:class:`~executive.tasks.configurator.Configurator`).
     """
 
     def __init__(
@@ -63,10 +65,12 @@ class Dispatcher:
         publish: Callable[[], None],
         time_limit: float = 1.0,
         linger: float = 0.0,
+        sequential: bool = False,
     ) -> None:
         self.robot = context.robot
         self.time_limit = time_limit
         self.linger = linger
+        self.standby = True  # keep the warm spares (until the executive stops)
         self._post = post
         self._timer: threading.Timer | None = None
         self.upcoming: tuple[str, ...] = ()  # behaviors of the plan's steps to come
@@ -78,6 +82,7 @@ class Dispatcher:
             launcher,
             DiagnosisModelSync(context.bus, context.robot),
             before_start=publish,
+            sequential=sequential,
         )
         self.supervisor = Supervisor(
             context.robot, ledger=self.ledger, launcher=launcher,
@@ -122,7 +127,7 @@ class Dispatcher:
         self.upcoming = behaviors
         running = self.configurator.configuration
         if not running.reserved:
-            return  # nothing kept: the next schedule takes them into account
+            return  # nothing reserved: the next schedule takes them into account
         now, faulty = time.time(), self.faults.faulty()
         kept = self._keep(Decision(configuration=SystemConfiguration(running.tasks)), running,
                           faulty, now)  # fmt: skip
@@ -136,7 +141,8 @@ class Dispatcher:
 
         def keep(lingering: set[str]) -> Decision:
             return keep_running(decision, running, robot=self.robot, faulty=faulty,
-                                upcoming=self.upcoming, lingering=lingering)  # fmt: skip
+                                upcoming=self.upcoming, lingering=lingering,
+                                standby=self.standby)  # fmt: skip
 
         needed = keep(set())
         if self.linger <= 0:
@@ -174,7 +180,7 @@ class Dispatcher:
         """Cancel every task and stop what they held."""
         for task in self.ledger:
             self.end(task, TaskEnd.SHUTDOWN, "the executive stops", reschedule=False)
-        self.upcoming, self.linger = (), 0.0  # keep nothing running
+        self.upcoming, self.linger, self.standby = (), 0.0, False  # keep nothing running
         self._lingering.clear()
         self.reschedule("the executive stops")  # no task left: everything stops, no timer
 

@@ -84,6 +84,8 @@ class TaskExecutor(Service):
         time_limit: seconds one schedule may take.
         linger: seconds a functionality that no task and no upcoming plan step needs
             keeps running before it stops.
+        sequential: change configurations one component after another, stopping first
+            (by default the new components start all at once, before the old stop).
     """
 
     name = "task-executor"
@@ -95,11 +97,13 @@ class TaskExecutor(Service):
         *,
         time_limit: float = 1.0,
         linger: float = 0.0,
+        sequential: bool = False,
     ) -> None:
         super().__init__(context)
         self.launcher = launcher
         self.time_limit = time_limit
         self.linger = linger
+        self.sequential = sequential
         self.robot = context.robot
         self.kb = context.kb
         self._worker = Worker("task executor", after_each=self._publish)
@@ -123,6 +127,7 @@ class TaskExecutor(Service):
             publish=self._publish,
             time_limit=self.time_limit,
             linger=self.linger,
+            sequential=self.sequential,
         )
         with self.kb.transaction():  # tasks of an executive that died
             for task in self.kb.tasks():
@@ -132,6 +137,8 @@ class TaskExecutor(Service):
         self._snapshot = Snapshot(faulty=dispatcher.faults.faulty())
         self.launcher.add_listener(dispatcher.repairs.on_component_state)
         self._worker.start()
+        if any(f.standby for f in self.robot.functionalities.values()):
+            self._worker.post(lambda: dispatcher.reschedule("warm spares start"))
         self._declared = self._serve()
 
     def stop(self) -> None:

@@ -19,7 +19,7 @@ import socket
 import subprocess
 import sys
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -90,9 +90,16 @@ class RobotProcess:
         description: the robot description (YAML).
         folder: where the knowledge base, the logs and the executive's output go.
         endpoint: where the executive listens (default: a free loopback port).
+        options: more ``dura run`` options, e.g. ``["--linger", "2"]``.
     """
 
-    def __init__(self, description: Path, folder: Path, endpoint: str | None = None) -> None:
+    def __init__(
+        self,
+        description: Path,
+        folder: Path,
+        endpoint: str | None = None,
+        options: Sequence[str] = (),
+    ) -> None:
         self.description = Path(description).resolve()
         self.robot = load_robot(self.description)
         self.folder = Path(folder)
@@ -100,6 +107,7 @@ class RobotProcess:
         self.endpoint = endpoint or free_endpoint()
         self.kb_path = self.folder / f"{self.robot.name}.db"
         self.output = self.folder / "executive.log"
+        self.options = list(options)
         self._process: subprocess.Popen[bytes] | None = None
         self._bus: Bus | None = None
 
@@ -118,7 +126,7 @@ class RobotProcess:
             raise DuraError(f"the executive of '{self.robot.name}' runs already")
         argv = [sys.executable, "-m", "executive.cli", "run", str(self.description)]
         argv += ["--endpoint", self.endpoint, "--db", str(self.kb_path)]
-        argv += ["--log-dir", str(self.folder / "logs"), "--grace", "1"]
+        argv += ["--log-dir", str(self.folder / "logs"), "--grace", "1", *self.options]
         with self.output.open("ab") as out:
             self._process = subprocess.Popen(
                 argv, cwd=self.folder, stdout=out, stderr=subprocess.STDOUT, env=os.environ.copy()

@@ -205,3 +205,26 @@ def test_a_lingering_functionality_keeps_what_it_requires_running() -> None:
     after = kept(decision(running=was), was, lingering=frozenset({"lidar_filter"}))
     assert after.configuration.functionalities == {"lidar_filter", "lidar"}
     assert after.transition.stop == ("robot_base",)
+
+
+def spare(*names: str) -> RobotDescription:
+    """The use case with these functionalities as warm spares."""
+    robot = usecase_robot()
+    functionalities = {
+        n: dataclasses.replace(f, standby=n in names) for n, f in robot.functionalities.items()
+    }
+    return dataclasses.replace(robot, functionalities=functionalities)
+
+
+def test_a_warm_spare_and_what_it_runs_on_are_kept_idle_while_no_task_needs_them() -> None:
+    robot = spare("cam_to_lidar")
+    was = on(running("1", LIDAR))
+    after = keep_running(decision(running=was), was, robot=robot, faulty=frozenset())
+    assert after.configuration.functionalities == {"cam", "cam_to_lidar"}
+    assert after.configuration.idle == {"cam", "cam_to_lidar"}
+    assert set(after.transition.start) == {"cam", "cam_to_lidar"}
+    held = keep_running(decision(running("1", CAM)), on(running("1", CAM)), robot=robot,
+                        faulty=frozenset())  # fmt: skip
+    assert held.configuration.idle == frozenset()  # a task holds it: it runs
+    gone = keep_running(decision(running=was), was, robot=robot, faulty=frozenset({"cam"}))
+    assert gone.configuration.functionalities == frozenset()  # no usable camera: no spare
