@@ -153,6 +153,11 @@ class Launcher:
         """
         return self._control.stop(name, reason)
 
+    def stop_soon(self, name: str, reason: str = "stopped") -> None:
+        """Begin to stop a component and return at once; the stop goes on meanwhile, and
+        a start of the component waits for it."""
+        self._control.stop_soon(name, reason)
+
     def restart(self, name: str) -> ComponentState:
         """Stop (if running) and start again with the component's configuration."""
         self.stop(name, reason="restarting")

@@ -291,16 +291,24 @@ class LifecycleControl:
 
     # --- stopping ---------------------------------------------------------------------
 
-    def stop(self, name: str, reason: str = "stopped") -> ComponentState:
-        """Stop a component and wait until its process is gone; returns its final state."""
+    def stop(
+        self, name: str, reason: str = "stopped", *, begun: threading.Event | None = None
+    ) -> ComponentState:
+        """Stop a component and wait until its process is gone; returns its final state.
+
+        ``begun`` is set once the stop holds the component (a start waits for it)."""
         slot = self._slot(name)
         with slot.lock:
-            with self._lock:
-                run = slot.run
-                if run is None or run.exited.is_set():
-                    return slot.state
-                run.stopping = True
-                self._set(slot, Lifecycle.STOPPING, pid=run.process.program(), reason=reason)
+            try:
+                with self._lock:
+                    run = slot.run
+                    if run is None or run.exited.is_set():
+                        return slot.state
+                    run.stopping = True
+                    self._set(slot, Lifecycle.STOPPING, pid=run.process.program(), reason=reason)
+            finally:
+                if begun is not None:
+                    begun.set()
             if run.announced:
                 with contextlib.suppress(BusError):
                     self._request(name, Stop(), self.grace)
@@ -308,6 +316,17 @@ class LifecycleControl:
                 self._terminate(run)
             run.exited.wait()
             return slot.state
+
+    def stop_soon(self, name: str, reason: str = "stopped") -> None:
+        """Begin to stop a component and return: the stop goes on on a thread of its own,
+        and a start of the component waits for it."""
+        self._slot(name)  # refuses an unknown name here
+        begun = threading.Event()
+        threading.Thread(
+            target=self.stop, args=(name, reason), kwargs={"begun": begun},
+            name=f"stop-{name}", daemon=True,
+        ).start()  # fmt: skip
+        begun.wait()
 
     def _terminate(self, run: _Run) -> None:
         """SIGTERM to the process group; after the grace period its supervisor kills

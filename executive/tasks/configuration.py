@@ -29,14 +29,20 @@ class Transition:
         stop: functionalities to stop, in this order (those that require others first).
         start: functionalities to start, in this order (those that others require first).
         keep: functionalities that keep running.
+        resume: idle spares a task or reservation needs now, in this order (those that
+            require others first: a consumer is listening when its provider resumes).
+        pause: functionalities that keep running but only spares hold now.
     """
 
     stop: tuple[str, ...] = ()
     start: tuple[str, ...] = ()
     keep: frozenset[str] = frozenset()
+    resume: tuple[str, ...] = ()
+    pause: tuple[str, ...] = ()
 
     @property
     def empty(self) -> bool:
+        """Nothing starts or stops (spares may resume or pause)."""
         return not self.stop and not self.start
 
 
@@ -108,12 +114,15 @@ class SystemConfiguration:
         The order follows the configurations themselves: a functionality depends on
         the provider a task's configuration chose for each capability it requires.
         """
+        specs = list(functionalities)
         running, wanted = self.functionalities, target.functionalities
-        stop, start = running - wanted, wanted - running
+        stop, start, keep = running - wanted, wanted - running, running & wanted
         return Transition(
-            stop=tuple(reversed(_order(self, stop, functionalities))),
-            start=_order(target, start, functionalities),
-            keep=running & wanted,
+            stop=tuple(reversed(_order(self, stop, specs))),
+            start=_order(target, start, specs),
+            keep=keep,
+            resume=tuple(reversed(_order(target, (self.idle & keep) - target.idle, specs))),
+            pause=_order(target, (target.idle & keep) - self.idle, specs),
         )
 
 

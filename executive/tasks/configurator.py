@@ -81,9 +81,8 @@ class Configurator:
         start one after another in dependency order).
         """
         self._configuration = target
-        resume = [n for n in sorted(target.functionalities - target.idle)
-                  if self.launcher.state(n).state is Lifecycle.PAUSED]  # fmt: skip
-        pause = [n for n in sorted(target.idle) if self.launcher.state(n).state is Lifecycle.READY]
+        resume = [n for n in transition.resume if self.launcher.state(n).state is Lifecycle.PAUSED]
+        pause = [n for n in transition.pause if self.launcher.state(n).state is Lifecycle.READY]
         if transition.empty and not resume and not pause:
             return {}
         if not transition.empty:
@@ -149,15 +148,20 @@ class Configurator:
             log.warning("cannot %s '%s': %s", "pause" if pause else "resume", name, e)
             return self.launcher.state(name)
 
-    def stop(self, name: str, reason: str) -> None:
+    def stop(self, name: str, reason: str, *, wait: bool = True) -> None:
+        """Stop a component; ``wait=False``: return at once, the stop goes on meanwhile
+        (a start of the same component waits for it)."""
         self._expected.discard(name)
         self.model.remove(name)
-        self.launcher.stop(name, reason)
+        if wait:
+            self.launcher.stop(name, reason)
+        else:
+            self.launcher.stop_soon(name, reason)
 
-    def release(self, name: str, reason: str) -> None:
+    def release(self, name: str, reason: str, *, wait: bool = True) -> None:
         """No task needs it any more: stop it, unless it was started by hand."""
         if name not in self._by_hand:
-            self.stop(name, reason)
+            self.stop(name, reason, wait=wait)
 
     def start_by_hand(self, name: str) -> ComponentState:
         """Start a component for a user, kept running until the user stops it."""

@@ -99,14 +99,17 @@ class Supervisor:
         else:
             self._end(task, TaskEnd.BEHAVIOR_FAILED, reason)
 
-    def stop(self, task: Task, reason: str) -> None:
-        """Stop the task's behavior; whatever its current goal reports is stale then."""
+    def stop(self, task: Task, reason: str, *, wait: bool = True) -> None:
+        """Stop the task's behavior; whatever its current goal reports is stale then.
+
+        ``wait=False``: return once the goal is cancelled, the process stops meanwhile
+        (its next start waits for that)."""
         task.attempt += 1
         if task.handle is not None and not task.handle.done():
             with contextlib.suppress(ComponentError, BusError):
                 task.handle.cancel()
         task.handle = None
-        self.configurator.release(task.behavior, reason)
+        self.configurator.release(task.behavior, reason, wait=wait)
 
     def pause(self, task: Task) -> None:
         """A user pauses the task (now, or as soon as its behavior runs).
@@ -144,8 +147,8 @@ class Supervisor:
             with contextlib.suppress(ComponentError):
                 self.launcher.pause(task.behavior)
             self.ledger.event("TASK_PAUSED", task, reason=f"{component} is being repaired")
-        elif action is TaskAction.RESTART:
-            self.stop(task, f"{component} is being repaired")
+        elif action is TaskAction.RESTART:  # the repair need not wait for the stop
+            self.stop(task, f"{component} is being repaired", wait=False)
         task.repair = action
         self.ledger.set_phase(task, TaskPhase.REPAIRING)
 
