@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from executive.bus import security
+from executive.bus.clock import system_clock
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus
@@ -50,6 +51,8 @@ class Executive:
             first (by default: all at once, before the old ones stop).
         folder: the working folder whose ``.dura/`` holds the bus credentials (created on
             the first run, user-only) and the logs (default: the current folder).
+        record: record the bus traffic to this MCAP file (``dura run --record``).
+        record_max_size: bytes at which the recording is rotated (default: the recorder's).
     """
 
     def __init__(
@@ -64,6 +67,8 @@ class Executive:
         folder: Path | None = None,
         linger: float = 0.0,
         sequential_starts: bool = False,
+        record: Path | None = None,
+        record_max_size: int | None = None,
     ) -> None:
         self.robot = robot
         self.endpoint = endpoint or robot.endpoint
@@ -75,9 +80,12 @@ class Executive:
         self.grace = grace
         self.linger = linger
         self.sequential_starts = sequential_starts
+        self.record = record
+        self.record_max_size = record_max_size
         self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> Executive:
+        clock = system_clock()  # a bad DURA_TIME_SCALE stops the executive here, with why
         with contextlib.ExitStack() as stack:
             lock = stack.enter_context(RunLock(self.kb_path))  # one executive per KB
             if lock.predecessor is not None:
@@ -100,7 +108,7 @@ class Executive:
             self.kb.log_event(
                 "EXECUTIVE_STARTED",
                 self.robot.name,
-                {"endpoint": self.endpoint, "pid": os.getpid()},
+                {"endpoint": self.endpoint, "pid": os.getpid(), "time_scale": clock.scale},
             )
             stack.callback(self.kb.log_event, "EXECUTIVE_STOPPED", self.robot.name)
             self.launcher = stack.enter_context(
@@ -118,7 +126,9 @@ class Executive:
             if self.robot.ros2 is not None:  # Cyclone DDS loads only for a ROS 2 robot
                 from executive.ros2.link import Ros2Link
 
-                self.ros2 = stack.enter_context(Ros2Link(self.robot.ros2))
+                nodes = {c.ros2.node: name for name, c in self.robot.components.items()
+                         if c.ros2 is not None and c.ros2.node is not None}  # fmt: skip
+                self.ros2 = stack.enter_context(Ros2Link(self.robot.ros2, nodes=nodes))
             for service in self.services(Context(self.robot, self.bus, self.kb)):
                 service.start()
                 stack.callback(service.stop)
@@ -129,6 +139,7 @@ class Executive:
     def services(self, context: Context) -> list[Service]:
         """The services of the executive, in the order they start (and stop reversed):
         monitoring first, so that it watches every component the executive starts."""
+        ros2 = self.ros2
         self.tasks = TaskExecutor(
             context, self.launcher, linger=self.linger, sequential=self.sequential_starts
         )
@@ -136,14 +147,26 @@ class Executive:
             context,
             PlanTasks(self.tasks, self.robot),
             status={"tasks": self.tasks.tasks, "components": self._components},
+            sources=[ros2.topics] if ros2 is not None else [],
         )
-        ros2 = self.ros2
         extra: list[Service] = []
+        last: list[Service] = []
         if ros2 is not None:
+            from executive.ros2.goals import Ros2Goals
+            from executive.ros2.graph_model import Ros2GraphModel
             from executive.ros2.state import Ros2StatePublisher
 
             extra.append(Ros2StatePublisher(context, ros2.spec, link=ros2))
+            extra.append(Ros2GraphModel(context, ros2.discovery))
+            last.append(Ros2Goals(context, ros2))  # once the high level takes goals
+        recording: list[Service] = []
+        if self.record is not None:  # first: it sees every other service's traffic
+            from executive.bags.recording import DEFAULT_MAX_SIZE, Recording
+
+            size = self.record_max_size or DEFAULT_MAX_SIZE
+            recording.append(Recording(context, self.record, max_size=size))
         return [
+            *recording,
             ComponentApi(context, self.launcher, by_hand=self.tasks),
             ResourceMonitor(context, rate=self.resource_rate),
             ObserverManager(context, sources=[ros2.topics] if ros2 is not None else []),
@@ -152,6 +175,7 @@ class Executive:
             *extra,
             self.tasks,
             self.high_level,
+            *last,
         ]
 
     def _components(self) -> list[dict[str, Any]]:

@@ -37,6 +37,10 @@ class BusError(DuraError):
     """The message bus failed: no answer, no executive, a malformed message."""
 
 
+class BagError(DuraError):
+    """A recording (a ROS 2 bag, an MCAP file) cannot be read, mapped or written."""
+
+
 class ComponentError(DuraError):
     """A component process refused a command, or could not be started or reached."""
 

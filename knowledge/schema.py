@@ -108,6 +108,10 @@ MIGRATIONS: tuple[tuple[str, ...], ...] = (
     );
     CREATE INDEX events_kind ON events(kind);
     """),
+    # 2: maintenance goals, re-posted whenever they stop holding
+    _statements("""
+    ALTER TABLE goals ADD COLUMN keep INTEGER NOT NULL DEFAULT 0
+    """),
 )
 
 VERSION = len(MIGRATIONS)

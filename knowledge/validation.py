@@ -6,13 +6,12 @@ and returns every finding, so ``dura validate`` can list each problem on a line.
 
 from __future__ import annotations
 
+import graphlib
 import importlib.util
 import os
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
-
-import networkx as nx
 
 from knowledge.description import (
     PYTHONS,
@@ -26,6 +25,8 @@ from knowledge.domain import DomainInfo, parse_problem, read_domain
 from knowledge.errors import DomainError
 from knowledge.finding import Finding, Report, Severity, finding_of
 from knowledge.robot import read_robot
+from knowledge.ros2_components import check_ros2_components
+from knowledge.sensing_spec import check_sensing
 from knowledge.yamlsource import did_you_mean
 
 RESERVED_PREFIXES = ("AB", "/AB")
@@ -95,12 +96,22 @@ def check_capabilities(robot: RobotDescription, report: Report) -> None:
                     f"{c.kind.value} '{c.name}' requires unknown capability '{capability}'"
                     f"{did_you_mean(capability, capabilities)}",
                 )
+    needs = {
+        f.name: list(dict.fromkeys(p.name for c in f.requires for p in robot.providers(c)))
+        for f in robot.functionalities.values()
+    }
+    try:
+        graphlib.TopologicalSorter(needs).prepare()
+        return  # no cycle: networkx (a tenth of a second to import) only names cycles
+    except graphlib.CycleError:
+        pass
+    import networkx as nx
+
     graph: nx.DiGraph = nx.DiGraph()
-    for f in robot.functionalities.values():
-        graph.add_node(f.name)
-        for capability in f.requires:
-            for provider in robot.providers(capability):
-                graph.add_edge(f.name, provider.name)
+    for name, providers in needs.items():
+        graph.add_node(name)
+        for provider in providers:
+            graph.add_edge(name, provider)
     reported: set[frozenset[str]] = set()
     for cycle in nx.simple_cycles(graph):
         key = frozenset(cycle)
@@ -171,6 +182,7 @@ def _components_checks(robot: RobotDescription, report: Report) -> None:
     check_capabilities(robot, report)
     check_topics(robot, report)
     check_commands(robot, report)
+    check_ros2_components(robot, report)
 
 
 def check_commands(robot: RobotDescription, report: Report) -> None:
@@ -178,6 +190,8 @@ def check_commands(robot: RobotDescription, report: Report) -> None:
     exists), so a typo is met here and not as a permanent fault at run time."""
     folder = robot.path.parent
     for c in robot.components.values():
+        if not c.command and c.ros2 is not None and c.ros2.call is not None:
+            continue  # dura's own client of a ROS 2 action or service: no program
         problem = command_problem(c.command, folder)
         if problem:
             report.error(c.line_of("command"), f"{c.kind.value} '{c.name}': {problem}")
@@ -250,14 +264,17 @@ def validate(path: Path, text: str | None = None) -> Validation:
             domain_report = Report(str(robot.domain))
             check_tasks(robot, domain, report, domain_report)
             findings.extend(domain_report.findings)
+            objects: dict[str, str] = {}
             if robot.problem is not None and robot.problem.is_file():
                 try:
                     text_of_problem = robot.problem.read_text(encoding="utf-8")
-                    parse_problem(robot.domain, text_of_problem, str(robot.problem))
+                    problem = parse_problem(robot.domain, text_of_problem, str(robot.problem))
+                    objects = {o.name: str(o.type) for o in problem.all_objects}
                 except (OSError, UnicodeDecodeError) as e:
                     report.error(None, f"cannot read problem {robot.problem}: {e}")
                 except DomainError as e:
                     findings.append(finding_of(e, str(path)))
+            check_sensing(robot, domain, objects, report)
     all_findings = tuple(sorted(findings + report.findings, key=_order))
     return Validation(robot, domain, all_findings)
 

@@ -19,8 +19,16 @@ ALLOWED: dict[str, set[str]] = {
     "executive.bus": {"knowledge"},
     "monitoring": {"executive.bus", "knowledge"},
     "executive.sdk": {"executive.bus", "knowledge"},
-    "executive.runtime": {"executive.bus", "executive.sdk", "knowledge"},
+    # the host of ROS 2 programs drives their nodes through the ROS 2 layer
+    "executive.runtime": {"executive.bus", "executive.sdk", "executive.ros2", "knowledge"},
     "executive.ros2": {"executive.bus", "knowledge"},
+    # a bag's ROS 2 messages are read as live ones are: ROS 2's message and decoder
+    "executive.bags": {
+        "executive.bus",
+        "executive.ros2.message",
+        "executive.ros2.cdr",
+        "knowledge",
+    },
     "executive.planning": {"executive.bus", "knowledge"},
     # the task executor runs plan steps through the plan executer's port
     "executive.tasks": {
@@ -32,13 +40,21 @@ ALLOWED: dict[str, set[str]] = {
         "executive.planning.expression",
         "knowledge",
     },
-    "executive.testing": {"executive.bus", "executive.sdk", "knowledge"},
+    # the replay helper composes the bag reader and the offline replay of monitoring
+    "executive.testing": {
+        "executive.bus",
+        "executive.sdk",
+        "executive.bags",
+        "monitoring",
+        "knowledge",
+    },
     "executive.dashboard": {"executive.bus", "executive.planning", "knowledge"},
     "executive.executive": {
         "executive.bus",
         "executive.runtime",
         "executive.sdk",
         "executive.ros2",
+        "executive.bags",
         "executive.tasks",
         "executive.planning",
         "executive.dashboard",
@@ -50,6 +66,7 @@ ALLOWED: dict[str, set[str]] = {
         "executive.runtime",
         "executive.sdk",
         "executive.ros2",
+        "executive.bags",
         "executive.tasks",
         "executive.planning",
         "executive.testing",

@@ -74,3 +74,19 @@ def rate(text: str) -> float:
     if not 0 < value <= LIMIT:
         raise argparse.ArgumentTypeError(f"must be more than 0 and at most {LIMIT} Hz, not {text}")
     return value
+
+
+def factor(text: str) -> float:
+    """A positive factor (a speed-up), at most ``LIMIT``."""
+    value = _number(text)
+    if not 0 < value <= LIMIT:
+        raise argparse.ArgumentTypeError(f"must be more than 0 and at most {LIMIT}, not {text}")
+    return value
+
+
+def megabytes(text: str) -> int:
+    """A size in MiB (fractions allowed, at least 64 KiB), as bytes."""
+    value = _number(text)
+    if not 1 / 16 <= value <= 1 << 20:
+        raise argparse.ArgumentTypeError(f"must be from 0.0625 to {1 << 20} MB, not {text}")
+    return round(value * (1 << 20))

@@ -18,7 +18,6 @@ from executive.bus.security import Login
 from executive.bus.session import Bus
 from executive.bus.verb import Codec, Verb
 from knowledge.errors import DuraError
-from knowledge.robot import read_robot
 
 RUN_FILE = Path(".dura") / "executive.json"
 
@@ -57,6 +56,8 @@ def remove_run_file() -> None:
 def _target(args: argparse.Namespace) -> tuple[str, str, Login | None]:
     """The robot's name, the endpoint of its executive and the operator's login."""
     if args.robot is not None:
+        from knowledge.robot import read_robot  # YAML and the schema: only with --robot
+
         robot, findings = read_robot(args.robot)
         if robot is None:
             errors = [f for f in findings if f.is_error]

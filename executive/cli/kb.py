@@ -1,8 +1,10 @@
-"""``dura kb show``: the knowledge base, readably or as JSON."""
+"""``dura kb show|check|repair``: the knowledge base, readably or as JSON; whether it is
+sound; a repair that keeps what can be read."""
 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -10,6 +12,7 @@ from typing import Any
 from executive.cli.arguments import count
 from executive.cli.output import add_json_flag, print_json, section, shown, table
 from knowledge.errors import DuraError
+from knowledge.health import check, repair
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.robot import read_robot
 
@@ -24,16 +27,32 @@ def register(sub: Any) -> None:
         description="Print a robot's knowledge base. Name the robot description (its KB "
         "is ./.dura/<robot>.db unless it says otherwise) or the database file.",
     )
-    where = show.add_mutually_exclusive_group(required=True)
-    where.add_argument(
-        "robot", metavar="ROBOT.yaml", type=Path, nargs="?", help="the robot description"
-    )
-    where.add_argument("--db", type=Path, help="the knowledge base file")
     show.add_argument(
         "--events", type=count, default=20, metavar="N", help="how many recent events (20)"
     )
-    add_json_flag(show)
     show.set_defaults(run=run_show)
+    check = kb_sub.add_parser(
+        "check",
+        help="check that the knowledge base is sound (every page readable, every table there)",
+        description="Read every page of a knowledge base and say what is wrong with it, "
+        "without changing it. Exit 0 if it is sound, 1 if not.",
+    )
+    check.set_defaults(run=run_check)
+    repair = kb_sub.add_parser(
+        "repair",
+        help="move a damaged knowledge base aside and keep every row that can be read",
+        description="Move the damaged file aside (FILE.damaged-<time>, never deleted) and "
+        "write a sound knowledge base with every row that can still be read. Stop the "
+        "executive first.",
+    )
+    repair.set_defaults(run=run_repair)
+    for cmd in (show, check, repair):
+        where = cmd.add_mutually_exclusive_group(required=True)
+        where.add_argument(
+            "robot", metavar="ROBOT.yaml", type=Path, nargs="?", help="the robot description"
+        )
+        where.add_argument("--db", type=Path, help="the knowledge base file")
+        add_json_flag(cmd)
 
 
 def database_path(args: argparse.Namespace) -> Path:
@@ -108,4 +127,40 @@ def run_show(args: argparse.Namespace) -> int:
             for e in data["events"]
         ],
     )
+    return 0
+
+
+def run_check(args: argparse.Namespace) -> int:
+    health = check(database_path(args))
+    if args.json:
+        print_json(
+            {"file": str(health.path), "sound": health.sound, "problems": list(health.problems),
+             "rows": health.rows}
+        )  # fmt: skip
+        return 0 if health.sound else 1
+    if not health.sound:
+        for problem in health.problems:
+            print(f"{shown(health.path)}: {problem}", file=sys.stderr)
+        return 1
+    rows = ", ".join(f"{n} {t}" for t, n in health.rows.items() if n)
+    print(f"{shown(health.path)}: sound ({rows or 'empty'})")
+    return 0
+
+
+def run_repair(args: argparse.Namespace) -> int:
+    path = database_path(args)
+    health = check(path)
+    if health.sound:
+        raise DuraError(f"{shown(path)}: sound, nothing to repair")
+    done = repair(path)
+    if args.json:
+        print_json(
+            {"file": str(done.path), "damaged_file": str(done.kept_aside), "kept": done.kept,
+             "lost": done.lost}
+        )  # fmt: skip
+        return 0
+    kept = sum(done.kept.values())
+    lost = sum(done.lost.values())
+    print(f"{shown(done.path)}: repaired: kept {kept} rows, could not read {lost}")
+    print(f"the damaged file is kept as {shown(done.kept_aside)}")
     return 0

@@ -11,7 +11,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from executive.cli.arguments import rate, seconds
+from executive.cli.arguments import megabytes, rate, seconds
 from executive.cli.client import remove_run_file, write_run_file
 from executive.cli.dashboard import add_dashboard_address, port
 from executive.cli.output import add_json_flag, print_json, shown
@@ -76,6 +76,18 @@ def register(sub: Any) -> None:
         help="also serve the live dashboard on this port (see 'dura dashboard --help')",
     )
     add_dashboard_address(p, "dashboard-")
+    p.add_argument(
+        "--record",
+        type=Path,
+        metavar="OUT.mcap",
+        help="record the robot's bus traffic to MCAP, as 'dura record' does",
+    )
+    p.add_argument(
+        "--record-max-size",
+        type=megabytes,
+        metavar="MB",
+        help="rotate the recording at this size (default 100)",
+    )
     add_json_flag(p)
     p.set_defaults(run=run)
 
@@ -94,6 +106,8 @@ def run(args: argparse.Namespace) -> int:
         grace=args.grace,
         linger=args.linger,
         sequential_starts=args.starts == "sequential",
+        record=args.record.resolve() if args.record is not None else None,
+        record_max_size=args.record_max_size,
     )
     with executive, contextlib.ExitStack() as dashboard:
         endpoint = local_endpoint(executive.endpoint)

@@ -40,6 +40,7 @@ from typing import Any, ClassVar, TypeVar, final
 from executive.bus import keys
 from executive.bus.api.components import COMPONENT_ACHIEVE, Achievement
 from executive.bus.api.planning import STATE_SET, STATE_UNSET, FactChange
+from executive.bus.clock import Clock, system_clock
 from executive.bus.payloads import ComponentPhase
 from executive.bus.security import ENV_PASSWORD, ENV_USER, Login
 from executive.bus.session import Bus, Message
@@ -103,8 +104,9 @@ class Component:
         self.params: dict[str, Any] = {}
         self.achievements: dict[str, Any] = {}
         self.log = logging.getLogger(f"dura.component.{name}")
+        self.clock: Clock = system_clock()  # robot time (DURA_TIME_SCALE)
         self._framework = Framework(self)
-        self.faults = FaultInjector(on_hang=self._framework.hang)
+        self.faults = FaultInjector(on_hang=self._framework.hang, clock=self.clock)
 
     # --- hooks ------------------------------------------------------------------------
 
@@ -213,8 +215,9 @@ class Component:
 
     @final
     def at_rate(self, hz: float, step: Callable[[], None]) -> Rate:
-        """Call ``step`` ``hz`` times a second while running (held while paused);
-        returns the loop's :class:`Rate`, whose ``hz`` may change while it runs (in
+        """Call ``step`` ``hz`` times a second of robot time while running (held while
+        paused): with ``DURA_TIME_SCALE=N``, N times as often on the wall clock. Returns
+        the loop's :class:`Rate`, whose ``hz`` may change while it runs (in
         :meth:`on_reconfigure`).
 
         Deadlines are absolute, so the rate does not drift; a loop that falls more
@@ -231,7 +234,7 @@ class Component:
                 except Exception:
                     framework.fail(f"the rate loop {getattr(step, '__name__', step)!r}")
                     return
-                period = 1.0 / rate.hz
+                period = self.clock.wall(1.0 / rate.hz)
                 due += period / self.faults.rate_factor()
                 now = time.monotonic()
                 if due < now - period:

@@ -11,39 +11,54 @@ end of the test, with all its components::
         goal = robot.submit_goal("(picture_taken lab)")
         robot.wait_for(goal, "achieved", timeout=60)
         assert "(picture_taken lab)" in robot.facts("picture_taken")
+
+Its sibling ``dura_replay`` puts monitoring in the loop: it replays a recording (a ROS 2
+bag, or a run recorded with ``dura record``) through a robot's observers, diagnosis and
+repair rules, with the recording's time as the clock, and returns the timeline
+(:func:`executive.testing.replay.replay_bag`)::
+
+    def test_the_lidar_dropout_is_diagnosed(dura_replay):
+        timeline = dura_replay("bags/lidar_dropout", "robot.yaml")
+        assert timeline.diagnosed() == [("lidar",)]
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from executive.testing.harness import GoalEnded, RobotProcess, robot_variant
+from executive.testing.harness import GoalEnded, RobotProcess, WaitTimedOut, robot_variant
 
-__all__ = ["GoalEnded", "RobotProcess", "dura_robot"]
+if TYPE_CHECKING:
+    from monitoring.timeline import Timeline
+
+__all__ = ["GoalEnded", "RobotProcess", "WaitTimedOut", "dura_replay", "dura_robot"]
 
 
 @pytest.fixture
 def dura_robot(tmp_path: Path) -> Iterator[Callable[..., RobotProcess]]:
-    """Start robots: ``dura_robot(description, name="robot", changes=None, endpoint=None)``
-    → a running RobotProcess. ``changes`` modify a copy of the description, nested like its
-    YAML (``{"behaviors": {"move_to": {"max_restarts": 0}}}``); ``endpoint`` is where the
-    executive listens (default: a free loopback port)."""
+    """Start robots: ``dura_robot(description, name="robot", changes=None,
+    time_scale=None, endpoint=None)`` → a running RobotProcess. ``changes`` modify a copy
+    of the description, nested like its YAML (``{"behaviors": {"move_to": {"max_restarts":
+    0}}}``); ``time_scale=10`` runs robot time ten times faster than the wall clock
+    (default: ``DURA_TIME_SCALE`` of the test's environment, else 1); ``endpoint`` is
+    where the executive listens (default: a free loopback port)."""
     started: list[RobotProcess] = []
 
     def start(
         description: str | Path,
         name: str = "robot",
         changes: Mapping[str, Any] | None = None,
+        time_scale: float | None = None,
         endpoint: str | None = None,
     ) -> RobotProcess:
         folder = tmp_path / name
         if changes:
             description = robot_variant(Path(description), folder / "description", changes)
-        robot = RobotProcess(Path(description), folder, endpoint)
+        robot = RobotProcess(Path(description), folder, endpoint, time_scale=time_scale)
         started.append(robot)
         robot.start()
         return robot
@@ -51,3 +66,12 @@ def dura_robot(tmp_path: Path) -> Iterator[Callable[..., RobotProcess]]:
     yield start
     for robot in reversed(started):
         robot.stop()
+
+
+@pytest.fixture
+def dura_replay() -> Callable[..., Timeline]:
+    """Replay recordings: ``dura_replay(bag, robot, maps=(), begin=None, end=None)`` → the
+    :class:`monitoring.timeline.Timeline` of the robot's monitoring over the recording."""
+    from executive.testing.replay import replay_bag  # monitoring and bag readers: only when used
+
+    return replay_bag

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any, Self
 
 from knowledge.errors import KnowledgeError
+from knowledge.health import check
 from knowledge.records import Event
 from knowledge.schema import MIGRATIONS, VERSION
 
@@ -49,6 +50,10 @@ class Database:
         self._depth = 0
         self._listeners: list[Callable[[Event], None]] = []
         self._logged: list[Event] = []  # events of the open transaction
+        if self.path.exists():  # never start afresh over a damaged file: that loses it all
+            health = check(self.path, thorough=False)
+            if not health.sound:
+                raise KnowledgeError(health.summary())
         try:
             if readonly:
                 if not self.path.is_file():

@@ -22,11 +22,15 @@ from executive.bus.keys import DIAGNOSES, OBSERVATIONS
 from executive.bus.payloads import ObservationInfo
 from executive.bus.service import Context, Service
 from knowledge.errors import BusError, ConfigError, DuraError
+from monitoring.diagnosis import learning
 from monitoring.diagnosis.engine import DiagnosisEngine
-from monitoring.diagnosis.model import ModelObserver, ModelUpdate, SystemDescription, UpdateAction
+from monitoring.diagnosis.model import ModelUpdate
 from monitoring.diagnosis.result import DiagnosisResult, Status
 
 log = logging.getLogger("dura.diagnosis")
+
+SETTLE = 0.02  # seconds to wait for the rest of a burst of changes before diagnosing
+PERIOD = 1.0  # seconds between repetitions of a faulty result
 
 
 class DiagnosisService(Service):
@@ -56,8 +60,8 @@ class DiagnosisService(Service):
         exonerate: bool = False,
         max_card: int | None = None,
         timeout: float = 2.0,
-        settle: float = 0.02,
-        period: float = 1.0,
+        settle: float = SETTLE,
+        period: float = PERIOD,
         learn: bool = False,
     ) -> None:
         super().__init__(context)
@@ -83,6 +87,7 @@ class DiagnosisService(Service):
         self._entities = [
             bus.subscribe(OBSERVATIONS, self._on_observation),
             api.DIAGNOSIS_MODEL_CHANGE.serve(bus, self._on_model),
+            api.DIAGNOSIS_EXONERATE.serve(bus, self._on_exonerate),
         ]
 
     def stop(self) -> None:
@@ -121,27 +126,13 @@ class DiagnosisService(Service):
                 self._changed.notify()
 
     def _learn(self, info: ObservationInfo) -> bool:
-        """Add the observer that made an observation to the model, if it fits the model's
-        nodes (observers describe themselves by their observations); whether it did."""
-        try:
-            observer = ModelObserver.make(info.type, info.resource, info.callerids)
-        except ConfigError:
-            return False
-        if self.engine.model.problem(observer) is not None:
-            return False
-        self.engine.update(ModelUpdate(UpdateAction.ADD, observers=(observer,)))
-        log.info("learned observer %s from its observation", observer)
-        return True
+        """Add the observer that made an observation to the model, if it fits (see
+        :mod:`.learning`); whether it did."""
+        return learning.learn(self.engine, info)
 
     def _without_orphans(self, update: ModelUpdate) -> ModelUpdate:
         """A REMOVE of nodes also removes the observers that watch only what they had."""
-        if not self.learn or update.action is not UpdateAction.REMOVE or not update.nodes:
-            return update
-        gone = {n.name for n in update.nodes}
-        model = self.engine.model
-        rest = SystemDescription(tuple(n for n in model.nodes if n.name not in gone), ())
-        orphans = tuple(o for o in model.observers if o not in update.observers and rest.problem(o))
-        return ModelUpdate(update.action, update.nodes, update.observers + orphans)
+        return learning.without_orphans(self.engine.model, update) if self.learn else update
 
     def _report_ignored(self, reason: str) -> None:
         """Say once why observations of one kind are ignored."""
@@ -164,6 +155,20 @@ class DiagnosisService(Service):
             log.info("model update refused: %s", e)
             return api.ModelReply(False, error=str(e))
         return api.ModelReply(True, model.to_payload())
+
+    def _on_exonerate(self, request: api.ExonerationChange) -> api.Exoneration:
+        """Switch exoneration (an OK topic observation clears its topics) at run time; the
+        diagnosis is computed again at once. The switch lasts until the service stops."""
+        wanted = request.on
+        with self._changed:
+            if wanted is None or wanted == self.engine.exonerate:
+                return api.Exoneration(self.engine.exonerate)
+            self.engine.exonerate = wanted
+            self._dirty = True
+            self._changed.notify()
+        log.info("exoneration %s", "on" if wanted else "off")
+        self.context.kb.log_event("EXONERATION", "diagnosis", {"on": wanted})
+        return api.Exoneration(wanted)
 
     # --- the diagnosing thread ----------------------------------------------------------
 

@@ -81,6 +81,7 @@ class RuleEngine:
         self._fired_at: dict[str, float] = {}
         self._spent: set[str] = set()
         self._triggered: set[str] = set()
+        self._last: tuple[str, Answer] | None = None  # the last program and its answer
         self._evaluate(self._rule_facts([]))  # reject invalid ASP files now
 
     # --- input --------------------------------------------------------------------------
@@ -130,6 +131,10 @@ class RuleEngine:
         return last is None or now - last >= rule.recall_duration
 
     def _evaluate(self, program: str) -> Answer:
+        # The answer is a function of the program: most evaluations repeat the last one
+        # (the newest observations did not change), so clingo runs only on a change.
+        if self._last is not None and self._last[0] == program:
+            return self._last[1]
         asp = Asp()
         asp.load(PROGRAM)
         for path in self.asp_files:
@@ -141,6 +146,7 @@ class RuleEngine:
             raise ConfigError(
                 f"the ASP rules of {', '.join(map(str, self.asp_files))} have no answer set"
             )
+        self._last = (program, outcome.answers[-1])
         return outcome.answers[-1]
 
     def _rule_facts(self, ready: list[str]) -> str:

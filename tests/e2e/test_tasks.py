@@ -6,7 +6,6 @@ and a component reset after maintenance. What the thesis scenarios do not show."
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 from collections.abc import Callable
@@ -15,7 +14,6 @@ from typing import Any
 
 import pytest
 
-from executive.bus import security
 from executive.testing.harness import RobotProcess
 from tests.conftest import USECASE, wait_for
 
@@ -28,14 +26,11 @@ Dura = Callable[..., subprocess.CompletedProcess[str]]
 def cli(robot: RobotProcess) -> Dura:
     """``dura ARGS --robot R --endpoint E`` against this robot's executive."""
 
-    credentials = security.credentials_file(robot.folder, robot.robot.name)
-    env = {**os.environ, security.ENV_CREDENTIALS: str(credentials)}  # the operator's login
-
     def dura(*args: str) -> subprocess.CompletedProcess[str]:
         argv = [sys.executable, "-m", "executive.cli", *args]
         argv += ["--robot", str(robot.description), "--endpoint", robot.endpoint]
         return subprocess.run(
-            argv, capture_output=True, text=True, timeout=60, check=False, env=env
+            argv, capture_output=True, text=True, timeout=60, check=False, env=robot.environment()
         )
 
     return dura

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import threading
-import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -253,12 +252,10 @@ def test_a_goal_cancelled_during_the_search_is_cancelled_at_once_and_never_plann
         ex.goals.wake("two goals added")
         eventually(lambda: ex.goals.status()["phase"] == "searching")
 
-        began = time.monotonic()
         cancelled = ex.goals.cancel(office.id)
-        took = time.monotonic() - began
 
         assert cancelled.state is GoalState.CANCELLED
-        assert took < 1.0  # the goal planner's thread does not wait for the search
+        # the cancel was applied while the search still ran: the owner did not wait for it
         assert ex.goals.status()["phase"] == "searching"
         eventually(lambda: ex.state(lab) is GoalState.ACHIEVED)
         first, again = ex.kb.events(kind="PLANNING")

@@ -262,9 +262,7 @@ def test_status_answers_from_a_snapshot_while_the_executer_is_busy(
     handing_over.start()
     try:
         assert runner.entered.wait(10)  # the executer's thread waits in the runner
-        began = time.monotonic()
-        status = r.executer.status()
-        assert time.monotonic() - began < 0.5
+        status = r.executer.status()  # answered while its thread is held in the runner
         assert status["plan"] is None  # as of the last job: the plan is not handed over yet
     finally:
         runner.release.set()

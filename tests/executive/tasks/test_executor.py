@@ -4,10 +4,7 @@ queries from its snapshot, and why a task ended as code reads it."""
 from __future__ import annotations
 
 import dataclasses
-import time
-from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 import pytest
 
@@ -20,14 +17,6 @@ from tests.executive.runtime.rig import USECASE_ROBOT, Rig, robot, usecase
 from tests.executive.tasks.executor_rig import executor, slow_camera_robot
 
 pytestmark = pytest.mark.slow
-
-QUICK = 1.0  # seconds: a status query answers well within this (the slow start takes 4)
-
-
-def timed(query: Callable[[], Any]) -> float:
-    began = time.monotonic()
-    query()
-    return time.monotonic() - began
 
 
 def test_status_queries_answer_from_the_snapshot_while_a_component_starts_slowly(
@@ -45,9 +34,10 @@ def test_status_queries_answer_from_the_snapshot_while_a_component_starts_slowly
             "task/list": lambda: TASK_LIST.call(r.bus),
             "schedule/show": lambda: SCHEDULE_SHOW.call(r.bus),
         }
-        took = {name: timed(query) for name, query in queries.items()}
-        assert r.launcher.state("slow_cam").state is Lifecycle.STARTING  # still starting
-        assert all(t < QUICK for t in took.values()), took
+        for query in queries.values():
+            query()
+        # every query answered while the camera was still starting: none waited for it
+        assert r.launcher.state("slow_cam").state is Lifecycle.STARTING
         listed = {t["id"]: t["state"] for t in TASK_LIST.call(r.bus).tasks}
         assert listed == {first.id: "starting", second.id: "waiting"}
         assert SCHEDULE_SHOW.call(r.bus).running == ["slow_cam"]

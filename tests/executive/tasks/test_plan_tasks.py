@@ -11,8 +11,7 @@ import pytest
 
 from executive.bus.api.tasks import TASK_STOP, TaskId
 from executive.planning.partial_order import Step
-from executive.planning.plan_executer import StepReport
-from executive.planning.task_runner import Progress
+from executive.planning.task_runner import Progress, StepReport
 from executive.tasks.executor import TaskExecutor
 from executive.tasks.plan_tasks import PlanTasks
 from executive.tasks.task import TaskEnd

@@ -1,0 +1,172 @@
+"""An opened recording: its topics and its messages as bus messages, and how its topics
+map to a robot's.
+
+A recording is a ROS 2 bag (rosbag2: a folder with ``metadata.yaml``, or one ``.mcap``
+or ``.db3`` file) or an MCAP file of a dura run (``dura record``). Its messages become
+:class:`executive.bus.session.Message` objects as observers receive them live: the
+recording's receive time as ``received``, its publish time as ``sent`` where it has
+one, the publisher's name as caller id where it has one, and a payload decoded only
+when read.
+
+Each recorded topic is *routed* to a bus key. A ROS 2 topic goes to the robot
+description's topic of the same name (its leading slash dropped: ``/scan`` is
+``scan``), or to the one ``--map BAG_TOPIC=TOPIC`` names; a dura recording's channels
+are bus keys already (``topic/scan``, ``resources``, ``component/lidar/state``). A
+message without a caller id gets the one component of the robot that publishes its
+topic, if there is exactly one.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Collection, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from executive.bus.keys import DIAGNOSES, EVENTS, RESOURCES, topic
+from executive.bus.session import Message
+from knowledge.description import RobotDescription
+from knowledge.errors import BagError
+from knowledge.yamlsource import did_you_mean
+
+DURA_PROFILE = "dura"  # the MCAP profile of dura's recordings
+DURA_KEYS = (RESOURCES, DIAGNOSES, EVENTS)  # replayed as they are, besides topics and states
+
+
+@dataclass(frozen=True)
+class BagTopic:
+    """One recorded topic (a channel of an MCAP file, a topic of a rosbag2)."""
+
+    name: str  # as recorded: /scan, or a bus key in a dura recording: topic/scan
+    type: str  # a ROS 2 message type, or the JSON schema's name
+    count: int = 0
+    callers: tuple[str, ...] = ()  # publishers the recording names (dura recordings)
+
+
+@dataclass(frozen=True)
+class Route:
+    """Where the messages of a recorded topic go: a bus key, with a caller id for
+    messages that have none."""
+
+    key: str
+    caller: str = ""
+
+
+@dataclass
+class Bag(ABC):
+    """An opened recording; close it (or use it as a context manager) when done."""
+
+    path: Path
+    format: str  # "rosbag2 (mcap)", "rosbag2 (sqlite3)", "dura recording (mcap)"
+    start: float  # seconds: the first message's receive time
+    end: float  # seconds: the last message's receive time
+    topics: tuple[BagTopic, ...] = ()
+    robot: str | None = None  # the robot a dura recording is of
+    keys_are_bus_keys: bool = False  # a dura recording: topics are bus keys
+    skipped: list[str] = field(default_factory=list)  # why some topics cannot be read
+
+    def __enter__(self) -> Bag:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:  # noqa: B027 - an optional hook
+        """Release the files."""
+
+    @property
+    def count(self) -> int:
+        return sum(t.count for t in self.topics)
+
+    @abstractmethod
+    def messages(
+        self, routes: Mapping[str, Route], start: float | None = None, end: float | None = None
+    ) -> Iterator[Message]:
+        """Yield the messages of the routed topics from ``start`` to ``end`` (seconds,
+        both included) in order of reception, after the component states before
+        ``start`` (they say which components run when the window opens).
+
+        Raises:
+            BagError: the file is truncated or corrupt, or a routed topic unreadable.
+        """
+
+    def check(self, routes: Mapping[str, Route]) -> None:  # noqa: B027 - an optional hook
+        """Refuse routes to topics that cannot be read (an unknown message type).
+
+        Raises:
+            BagError: naming the file, the topic and the reason.
+        """
+
+
+def _bag_topic(bag: Bag, name: str) -> BagTopic | None:
+    names = {t.name: t for t in bag.topics}
+    return names.get(name) or names.get("/" + name.lstrip("/")) or names.get(name.lstrip("/"))
+
+
+def robot_topic(bag: Bag, name: str) -> str | None:
+    """Return the robot topic a recorded topic goes to by default (its name), if any."""
+    if bag.keys_are_bus_keys:
+        return name.removeprefix("topic/") if name.startswith("topic/") else None
+    return name.strip("/") or None
+
+
+def routes(
+    bag: Bag,
+    robot: RobotDescription,
+    maps: Sequence[str] = (),
+    *,
+    watched: Collection[str] = (),
+) -> dict[str, Route]:
+    """Route each recorded topic to a bus key (see the module docstring).
+
+    Args:
+        maps: ``BAG_TOPIC=TOPIC`` pairs that route a recorded topic to a robot topic.
+        watched: topics the robot's observers watch, besides its components' topics.
+
+    Raises:
+        BagError: a map names a topic the bag or the robot does not have, or no topic
+            of the bag goes to a topic of the robot.
+    """
+    known = set(robot.topics) | set(watched)
+    publishers: dict[str, list[str]] = {}
+    for component in robot.components.values():
+        for name in component.publishes:
+            publishers.setdefault(name, []).append(component.name)
+    where = str(bag.path)
+    chosen: dict[str, str] = {}
+    for pair in maps:
+        source, sep, wanted = pair.partition("=")
+        wanted = wanted.strip().strip("/")
+        if not sep or not source.strip() or not wanted:
+            raise BagError(f"--map {pair}: write BAG_TOPIC=TOPIC, e.g. /front/scan=scan")
+        found = _bag_topic(bag, source.strip())
+        if found is None:
+            names = [t.name for t in bag.topics]
+            raise BagError(
+                f"{where}: no topic '{source}' to map{did_you_mean(source, names)} "
+                f"(it has {', '.join(names) or 'none'})"
+            )
+        if wanted not in known:
+            raise BagError(
+                f"--map {pair}: robot '{robot.name}' has no topic '{wanted}'"
+                f"{did_you_mean(wanted, sorted(known))}"
+            )
+        chosen[found.name] = wanted
+    found_routes: dict[str, Route] = {}
+    for recorded in bag.topics:
+        target = chosen.get(recorded.name) or robot_topic(bag, recorded.name)
+        if target is not None and target in known:
+            only = publishers.get(target, [])
+            found_routes[recorded.name] = Route(topic(target), only[0] if len(only) == 1 else "")
+    if not found_routes:
+        listed = ", ".join(t.name for t in bag.topics) or "none"
+        raise BagError(
+            f"{where}: none of its topics ({listed}) is a topic of robot '{robot.name}' "
+            f"({', '.join(sorted(known)) or 'none'}); map them with --map BAG_TOPIC=TOPIC"
+        )
+    if bag.keys_are_bus_keys:
+        for recorded in bag.topics:
+            name = recorded.name
+            if name in DURA_KEYS or (name.startswith("component/") and name.endswith("/state")):
+                found_routes[name] = Route(name)
+    return found_routes

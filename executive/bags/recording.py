@@ -1,0 +1,285 @@
+"""Record a robot's bus traffic to MCAP: component topics, observations, diagnoses,
+resources, events and component states, so that a run can be opened in MCAP tools
+(Foxglove, ``mcap``) and replayed later (``dura replay``).
+
+A recording is an MCAP file of profile ``dura`` (a ``dura`` metadata record names the
+robot). Each bus key is a channel per publisher: its topic is the key (``topic/scan``,
+``observations``, ``component/lidar/state``), its messages are the payloads as sent
+(JSON, with a JSON schema of dura's payloads, :mod:`executive.bags.schemas`), its
+``caller_id`` metadata the publisher, each message's ``log_time`` the time it arrived
+and its ``publish_time`` the time it was sent.
+
+It is bounded: when the file reaches ``max_size`` bytes it is closed and renamed
+``OUT.1.mcap`` (older ones move up to ``OUT.<keep>.mcap``; the oldest goes) and a new
+``OUT.mcap`` begins, with the latest state of every component first, so that each
+file replays on its own. A file that exists when recording starts is rotated too.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import threading
+import time
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import IO, Any
+
+from mcap.writer import CompressionType
+from mcap.writer import Writer as McapWriter
+
+from executive.bags.bag import DURA_PROFILE
+from executive.bags.schemas import schema_bytes, schema_name
+from executive.bus.keys import DIAGNOSES, EVENTS, OBSERVATIONS, RESOURCES, component
+from executive.bus.service import Context, Service
+from executive.bus.session import Bus, Message, encode
+from knowledge.errors import BagError
+
+log = logging.getLogger("dura.record")
+
+MB = 1 << 20
+DEFAULT_MAX_SIZE = 100 * MB
+DEFAULT_KEEP = 3
+RECORDED = ("topic/**", OBSERVATIONS, DIAGNOSES, RESOURCES, EVENTS, component("*", "state"))
+SNAPSHOT_CALLER = "executive"  # who publishes component states
+
+
+def rotated(path: Path, number: int) -> Path:
+    """Return the ``number``-th older file of a recording: ``OUT.1.mcap``."""
+    return path.with_name(f"{path.stem}.{number}{path.suffix}")
+
+
+class Recorder:
+    """Writes bus messages of one robot to an MCAP file, rotated by size; thread-safe.
+
+    Args:
+        path: the file (``OUT.mcap``); older files go beside it.
+        robot: the robot's name (in the file's metadata).
+        max_size: bytes after which the file is rotated.
+        keep: how many older files to keep.
+
+    Raises:
+        BagError: the file cannot be written.
+    """
+
+    def __init__(
+        self,
+        path: Path,
+        robot: str,
+        *,
+        max_size: int = DEFAULT_MAX_SIZE,
+        keep: int = DEFAULT_KEEP,
+        library: str = "dura",
+    ) -> None:
+        self.path = Path(path)
+        self.robot = robot
+        self.max_size = max_size
+        self.keep = keep
+        self.library = library
+        self.messages = 0  # written, in all files
+        self.files = 0  # begun
+        self._lock = threading.Lock()
+        self._states: dict[str, Message] = {}  # the newest state of each component
+        self._file: IO[bytes] | None = None
+        self._writer: McapWriter | None = None
+        self._schemas: dict[str, int] = {}
+        self._channels: dict[tuple[str, str], int] = {}
+        self._sequence: dict[int, int] = {}
+        self._last = 0.0  # the newest message's arrival: when the next file begins
+        with self._lock:
+            if self.path.exists():
+                self._shift()
+            self._begin()
+
+    # --- writing --------------------------------------------------------------------
+
+    def write(self, message: Message) -> bool:
+        """Record a message (keys dura does not record are ignored); whether it did.
+
+        Raises:
+            BagError: the file cannot be written (the recorder is closed then).
+        """
+        schema = schema_name(message.key)
+        if schema is None:
+            return False
+        with self._lock:
+            writer = self._writer
+            if writer is None:
+                return False
+            try:
+                self._add(writer, message, schema)
+                if message.key.startswith("component/"):
+                    self._states[message.key] = message
+                if self._file is not None and self._file.tell() >= self.max_size:
+                    self._rotate()
+            except OSError as e:
+                self._abandon()
+                raise BagError(
+                    f"{self.path}: cannot write the recording ({e.strerror or e})"
+                ) from e
+        return True
+
+    def has_state(self, key: str) -> bool:
+        """Tell whether a state of that key was recorded."""
+        with self._lock:
+            return key in self._states
+
+    def close(self) -> None:
+        """Finish the file (idempotent)."""
+        with self._lock:
+            self._finish()
+
+    def __enter__(self) -> Recorder:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # --- the file -------------------------------------------------------------------
+
+    def _add(self, writer: McapWriter, message: Message, schema: str) -> None:
+        channel = self._channel(writer, message.key, message.caller_id, schema)
+        received = round(message.received * 1e9)
+        sent = round(message.sent * 1e9) if message.sent is not None else received
+        sequence = self._sequence[channel] = self._sequence.get(channel, 0) + 1
+        writer.add_message(channel, received, message.raw, sent, sequence)
+        self.messages += 1
+        self._last = max(self._last, message.received)
+
+    def _channel(self, writer: McapWriter, key: str, caller: str, schema: str) -> int:
+        found = self._channels.get((key, caller))
+        if found is None:
+            schema_id = self._schemas.get(schema)
+            if schema_id is None:
+                schema_id = writer.register_schema(schema, "jsonschema", schema_bytes(schema))
+                self._schemas[schema] = schema_id
+            metadata = {"caller_id": caller} if caller else {}
+            found = writer.register_channel(key, "json", schema_id, metadata)
+            self._channels[key, caller] = found
+        return found
+
+    def _begin(self) -> None:
+        try:
+            self._file = self.path.open("wb")
+        except OSError as e:
+            raise BagError(f"{self.path}: cannot write the recording ({e.strerror or e})") from e
+        chunk = max(4096, min(MB, self.max_size // 8))
+        writer = McapWriter(self._file, chunk_size=chunk, compression=CompressionType.ZSTD)
+        writer.start(profile=DURA_PROFILE, library=self.library)
+        writer.add_metadata(DURA_PROFILE, {"robot": self.robot, "format": "1"})
+        self._writer = writer
+        self._schemas, self._channels, self._sequence = {}, {}, {}
+        self.files += 1
+        for state in self._states.values():  # each file replays on its own
+            snapshot = Message(state.key, state.raw, state.caller_id, state.sent, self._last)
+            self._add(writer, snapshot, "dura.ComponentState")
+
+    def _finish(self) -> None:
+        writer, file = self._writer, self._file
+        self._writer, self._file = None, None
+        if writer is not None:
+            writer.finish()  # type: ignore[no-untyped-call]
+        if file is not None:
+            file.close()
+
+    def _abandon(self) -> None:
+        """Close after a failure without finishing (the file is cut off)."""
+        file = self._file
+        self._writer, self._file = None, None
+        if file is not None:
+            with contextlib.suppress(OSError):
+                file.close()
+
+    def _rotate(self) -> None:
+        self._finish()
+        self._shift()
+        self._begin()
+
+    def _shift(self) -> None:
+        """Move ``OUT.mcap`` to ``OUT.1.mcap``, and each older file one further."""
+        if self.keep == 0:
+            self.path.unlink(missing_ok=True)
+            return
+        rotated(self.path, self.keep).unlink(missing_ok=True)
+        for number in range(self.keep - 1, 0, -1):
+            older = rotated(self.path, number)
+            if older.exists():
+                older.rename(rotated(self.path, number + 1))
+        self.path.rename(rotated(self.path, 1))
+
+
+class BusRecording:
+    """A recorder fed by a bus session: it subscribes to every recorded key.
+
+    Args:
+        bus: the robot's bus.
+        recorder: where messages go.
+        on_failure: called once if writing fails (e.g. the disk is full).
+    """
+
+    def __init__(
+        self, bus: Bus, recorder: Recorder, on_failure: Callable[[BagError], None] | None = None
+    ) -> None:
+        self.bus = bus
+        self.recorder = recorder
+        self.failure: BagError | None = None
+        self._on_failure = on_failure
+        self._entities: list[Any] = []
+
+    def start(self, states: Sequence[Mapping[str, Any]] = ()) -> None:
+        """Subscribe; then record ``states`` (component state payloads: who runs now)
+        for the components no state was recorded of meanwhile."""
+        for key in RECORDED:
+            self._entities.append(self.bus.subscribe(key, self._on_message, decoded=False))
+        for state in states:
+            key = component(str(state["component"]), "state")
+            if not self.recorder.has_state(key):
+                now = time.time()
+                raw = encode(state)
+                self._on_message(Message(key, raw, SNAPSHOT_CALLER, None, now))
+
+    def stop(self) -> None:
+        for entity in self._entities:
+            with contextlib.suppress(Exception):  # already gone with the bus
+                entity.undeclare()
+        self._entities = []
+        self.recorder.close()
+
+    def _on_message(self, message: Message) -> None:
+        try:
+            self.recorder.write(message)
+        except BagError as e:
+            if self.failure is None:
+                self.failure = e
+                log.error("recording stopped: %s", e)
+                if self._on_failure is not None:
+                    self._on_failure(e)
+
+
+class Recording(Service):
+    """The executive's own recording (``dura run --record``): it starts before the other
+    services, so it sees every component state from the first."""
+
+    name = "recording"
+
+    def __init__(self, context: Context, path: Path, *, max_size: int = DEFAULT_MAX_SIZE) -> None:
+        super().__init__(context)
+        self.path = path
+        self.max_size = max_size
+        self._recording: BusRecording | None = None
+
+    def start(self) -> None:
+        recorder = Recorder(self.path, self.context.robot.name, max_size=self.max_size)
+        self._recording = BusRecording(self.context.bus, recorder)
+        self._recording.start()
+
+    def stop(self) -> None:
+        if self._recording is not None:
+            self._recording.stop()
+            self._recording = None
+
+
+def state_payloads(components: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Extract the state payloads from the launcher's component list (``component/list``)."""
+    keys = ("component", "state", "pid", "exit_code", "signal", "reason", "stamp")
+    return [{k: c.get(k) for k in keys if k in c} for c in components]

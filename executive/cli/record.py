@@ -1,0 +1,94 @@
+"""``dura record [--robot ROBOT.yaml] OUT.mcap``: record a running robot's bus traffic."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+from pathlib import Path
+from typing import Any
+
+from executive.bags.recording import (
+    DEFAULT_KEEP,
+    DEFAULT_MAX_SIZE,
+    MB,
+    BusRecording,
+    Recorder,
+    state_payloads,
+)
+from executive.bus.api.components import COMPONENT_LIST
+from executive.bus.keys import EXECUTIVE_ALIVE
+from executive.cli.arguments import count, megabytes
+from executive.cli.client import add_client_options, connect
+from executive.cli.output import add_json_flag, print_json, shown
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser(
+        "record",
+        help="record a running robot's bus traffic to MCAP",
+        description="Record what a running robot says on its bus (component topics, "
+        "observations, diagnoses, resources, events and component states) to an MCAP file "
+        "with JSON schemas, for MCAP tools and 'dura replay'. It stops on Ctrl-C or "
+        "SIGTERM, or when the executive stops. The file is rotated at --max-size "
+        "(OUT.mcap becomes OUT.1.mcap, ...), with --keep older files kept.",
+    )
+    p.add_argument("out", metavar="OUT.mcap", type=Path, help="the recording")
+    add_client_options(p)
+    p.add_argument(
+        "--max-size",
+        type=megabytes,
+        default=DEFAULT_MAX_SIZE,
+        metavar="MB",
+        help=f"rotate the file at this size (default {DEFAULT_MAX_SIZE // MB})",
+    )
+    p.add_argument(
+        "--keep",
+        type=count,
+        default=DEFAULT_KEEP,
+        metavar="N",
+        help=f"older files to keep (default {DEFAULT_KEEP})",
+    )
+    add_json_flag(p)
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+    with connect(args) as bus:
+        seen = threading.Event()
+
+        def on_executive(_: str, alive: bool) -> None:
+            if alive:
+                seen.set()
+            elif seen.is_set():
+                stop.set()  # the executive stopped: so does its recording
+
+        bus.watch_alive(EXECUTIVE_ALIVE, on_executive)
+        states = state_payloads(COMPONENT_LIST.call(bus).components)
+        recorder = Recorder(args.out, bus.robot, max_size=args.max_size, keep=args.keep)
+        recording = BusRecording(bus, recorder, on_failure=lambda _: stop.set())
+        recording.start(states)
+        if not args.json:
+            print(
+                f"dura: recording robot '{bus.robot}' to {shown(args.out)} (rotated at "
+                f"{args.max_size / MB:g} MB, {args.keep} older files kept); Ctrl-C stops it"
+            )
+            sys.stdout.flush()
+        try:
+            stop.wait()
+        finally:
+            recording.stop()
+    if recording.failure is not None:
+        raise recording.failure
+    if args.json:
+        print_json({"path": str(args.out), "messages": recorder.messages, "files": recorder.files})
+    else:
+        print(
+            f"dura: recorded {recorder.messages} messages of robot '{bus.robot}' in "
+            f"{recorder.files} file(s), the newest {shown(args.out)}"
+        )
+    return 0

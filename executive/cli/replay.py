@@ -1,0 +1,207 @@
+"""``dura replay BAG --robot ROBOT.yaml``: a recording through the robot's observers,
+diagnosis and repair rules, with the recording's time as the clock."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from typing import Any, TextIO
+
+from executive.bus.session import Message
+from executive.cli.arguments import factor, seconds
+from executive.cli.output import add_json_flag, print_json, shown
+from executive.testing.replay import BagReplay
+from knowledge.robot import load_robot
+from monitoring.replay import Replay
+from monitoring.timeline import Entry, RepairEntry, Timeline
+
+PROGRESS_AFTER = 1.0  # seconds of replay before progress shows (on a terminal only)
+PROGRESS_EVERY = 0.25  # seconds between two progress lines
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser(
+        "replay",
+        help="replay a recording through the robot's observers, diagnosis and rules",
+        description="Replay a ROS 2 bag (rosbag2: MCAP or sqlite3) or a recording of a dura "
+        "run ('dura record') through the robot's observers, the diagnosis engine and the "
+        "repair rules, with the recording's time as the clock, as fast as possible or at "
+        "--rate. Repair actions are reported, never run. Prints a timeline of the "
+        "observations that changed, the diagnoses and the would-be repairs, then how long "
+        "each diagnosis held. Recorded topics go to the robot's topics of the same name "
+        "(without the leading slash) or as --map says. Exit 1 on a bad recording or a "
+        "missing mapping.",
+    )
+    p.add_argument("bag", metavar="BAG", type=Path, help="a rosbag2 folder, .mcap or .db3 file")
+    p.add_argument(
+        "--robot", metavar="ROBOT.yaml", type=Path, required=True, help="the robot description"
+    )
+    p.add_argument(
+        "--rate",
+        type=factor,
+        metavar="R",
+        help="play at R times the recorded speed (default: at once)",
+    )
+    p.add_argument(
+        "--from", dest="begin", type=seconds(zero=True), metavar="S",
+        help="start S seconds after the recording's start",
+    )  # fmt: skip
+    p.add_argument(
+        "--to", dest="end", type=seconds(zero=True), metavar="S",
+        help="end S seconds after the recording's start",
+    )  # fmt: skip
+    p.add_argument(
+        "--map", action="append", default=[], metavar="BAG_TOPIC=TOPIC",
+        help="replay a recorded topic as one of the robot's (repeatable)",
+    )  # fmt: skip
+    add_json_flag(p)
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    robot = load_robot(args.robot)
+    printer = None if args.json else Printer(sys.stdout)
+    with BagReplay(
+        args.bag,
+        robot,
+        maps=args.map,
+        begin=args.begin,
+        end=args.end,
+        on_entry=printer.entry if printer is not None else None,
+    ) as session:
+        bag = session.bag
+        if printer is not None:
+            printer.header(session)
+        messages: Iterable[Message] = session.messages()
+        if args.rate:
+            messages = paced(messages, session.replay, session.start, args.rate)
+        if printer is not None and sys.stderr.isatty():
+            messages = Progress(sys.stderr, session.start, session.end).wrap(messages)
+        timeline = session.run(messages)
+    if printer is not None:
+        printer.summary(timeline)
+    else:
+        print_json(
+            {
+                "bag": str(args.bag),
+                "format": bag.format,
+                "robot": robot.name,
+                "routes": {name: vars(route) for name, route in session.routes.items()},
+                **timeline.to_payload(),
+            }
+        )
+    return 0
+
+
+def paced(
+    messages: Iterable[Message], replay: Replay, start: float, rate: float
+) -> Iterator[Message]:
+    """Yield each message at its time at ``rate`` times the recorded speed, running what
+    is due between them at its own time."""
+    began = time.monotonic()
+    for message in messages:
+        while True:
+            due = began + (message.received - start) / rate
+            now = time.monotonic()
+            if now >= due:
+                break
+            time.sleep(min(0.05, due - now))
+            replay.advance(start + (time.monotonic() - began) * rate)
+        yield message
+
+
+class Progress:
+    """How far a long replay is, on one line of a terminal."""
+
+    def __init__(self, out: TextIO, start: float, end: float) -> None:
+        self.out, self.start, self.end = out, start, end
+        self.began = time.monotonic()
+        self.shown = 0.0
+
+    def wrap(self, messages: Iterable[Message]) -> Iterator[Message]:
+        try:
+            for message in messages:
+                now = time.monotonic()
+                if now - self.began >= PROGRESS_AFTER and now - self.shown >= PROGRESS_EVERY:
+                    self.shown = now
+                    done = message.received - self.start
+                    length = max(self.end - self.start, 1e-9)
+                    self.out.write(
+                        f"\r  replayed {done:.1f} of {length:.1f} s ({100 * done / length:.0f}%)"
+                    )
+                    self.out.flush()
+                yield message
+        finally:
+            self.clear()
+
+    def clear(self) -> None:
+        if self.shown:
+            self.out.write("\r\033[K")
+            self.out.flush()
+            self.shown = 0.0
+
+
+class Printer:
+    """The timeline for people: a header, each entry as it happens, a summary."""
+
+    def __init__(self, out: TextIO) -> None:
+        self.out = out
+
+    def header(self, session: BagReplay) -> None:
+        bag, start, end = session.bag, session.start, session.end
+        mapped = ", ".join(
+            f"{name} → {route.key.removeprefix('topic/')}"
+            + (f" (from {route.caller})" if route.caller else "")
+            for name, route in session.routes.items()
+            if route.key.startswith("topic/")
+        )
+        self.out.write(
+            f"{shown(bag.path)}: {bag.format}, {bag.end - bag.start:.3f} s, {bag.count} "
+            f"messages; robot '{session.robot.name}'; {mapped}\n"
+        )
+        if bag.robot is not None and bag.robot != session.robot.name:
+            self.out.write(f"note: recorded of robot '{bag.robot}'\n")
+        if start > bag.start or end < bag.end:
+            self.out.write(f"window: {start - bag.start:.3f} to {end - bag.start:.3f} s\n")
+        for reason in session.replay.skipped:
+            self.out.write(f"not replayed: {reason}\n")
+        self.out.write(f"{'TIME':>9}  {'WHAT':<11}  DETAIL\n")
+        self.out.flush()
+
+    def entry(self, entry: Entry) -> None:
+        self.out.write(f"{entry.time:9.3f}  {entry.kind.value:<11}  {entry.describe()}\n")
+        self.out.flush()
+
+    def summary(self, timeline: Timeline) -> None:
+        out = self.out
+        length = timeline.end - timeline.begin
+        out.write(f"\nsummary: {length:.3f} s replayed, {timeline.messages} messages\n")
+        holds = timeline.holds()
+        if not holds:
+            out.write("  nothing was diagnosed\n")
+        for hold in holds:
+            periods = ", ".join(f"{a:.3f}-{b:.3f}" for a, b in hold.periods)
+            still = ", still at the end" if hold.held_at_end else ""
+            out.write(
+                f"  diagnosis {', '.join(hold.diagnosis)}: held {hold.total:.3f} s ({periods}{still})\n"
+            )
+        fired: dict[tuple[str, str], list[float]] = {}
+        for repair in timeline.repairs():
+            fired.setdefault((repair.rule, repair.action), []).append(repair.time)
+        for (rule, action), times in fired.items():
+            when = ", ".join(f"{t:.3f}" for t in times)
+            out.write(f"  rule {rule} would {action}: {len(times)} time(s) ({when})\n")
+        for hold in timeline.recorded_holds():
+            periods = ", ".join(f"{a:.3f}-{b:.3f}" for a, b in hold.periods)
+            out.write(
+                f"  recorded (live) diagnosis {', '.join(hold.diagnosis)}: held {hold.total:.3f} s "
+                f"({periods})\n"
+            )
+        for entry in timeline.recorded:
+            if isinstance(entry, RepairEntry):
+                out.write(
+                    f"  recorded (live) rule {entry.rule} fired: {entry.action} ({entry.time:.3f})\n"
+                )

@@ -1,0 +1,403 @@
+"""Replay recorded messages through a robot's observers, diagnosis and repair rules,
+with the recording's time as the clock: monitoring tuned on recorded data.
+
+A :class:`Replay` is the monitoring part of the executive without threads, bus or wall
+clock, single-threaded and deterministic. It takes bus messages (``topic/<name>``,
+``resources``, ``component/<name>/state``, ...) in order of their reception time,
+from wherever they come (a ROS 2 bag, a recording of a dura run, a test), and between
+two messages runs everything that was due, as the executive's services would have:
+
+- each observer of the robot description (ids ``<component>/<index>``, built as the
+  observer manager builds them) observes while its component is ready: it starts
+  afresh when its component becomes ready, reports first after its start-up time (at
+  least one loop) and then once per loop, at the recording's times; messages reach
+  it with the recording's reception (and, where it has them, send) times;
+- the diagnosis engine learns its observers from their observations and keeps its
+  nodes to the components that are ready; it diagnoses ``settle`` seconds after a
+  verdict or the model changed and repeats a faulty result every ``period`` seconds,
+  as the diagnosis service does;
+- the repair rules are evaluated on every observation and every diagnosis, with the
+  recording's time as their clock; an action that fires is reported
+  (:class:`RepairEntry`: "would restart lidar"), never run.
+
+A recording without component states (a ROS 2 bag) counts every component as ready
+from the start. An observer that listens to a key the recording does not have is not
+replayed (:attr:`Timeline.skipped` says why). A recording of a dura run also holds
+what the live run diagnosed and repaired: that goes to :attr:`Timeline.recorded`.
+"""
+
+from __future__ import annotations
+
+import heapq
+import logging
+from collections.abc import Callable, Collection, Iterable, Sequence
+from dataclasses import dataclass
+
+from executive.bus.keys import DIAGNOSES, EVENTS
+from executive.bus.payloads import ComponentState, Lifecycle
+from executive.bus.session import Message
+from knowledge.description import RobotDescription
+from knowledge.errors import BusError
+from monitoring.diagnosis.engine import DiagnosisEngine
+from monitoring.diagnosis.model import Node, UpdateAction
+from monitoring.diagnosis.service import PERIOD, SETTLE
+from monitoring.diagnosis.timed import TimedDiagnosis
+from monitoring.observer import Environment, Handler, Observer, ObserverResult, make_observer
+from monitoring.observer_config import config_of
+from monitoring.repair.engine import RuleEngine
+from monitoring.repair.rule import RuleSet, read_rules
+from monitoring.timeline import (
+    DiagnosisEntry,
+    Entry,
+    ObservationEntry,
+    RepairEntry,
+    StateEntry,
+    Timeline,
+    recorded_diagnosis,
+    recorded_repair,
+)
+
+log = logging.getLogger("dura.replay")
+
+STOPPED = (Lifecycle.STOPPING, Lifecycle.STOPPED, Lifecycle.EXITED, Lifecycle.FAILED)
+
+
+def watched_topics(robot: RobotDescription) -> set[str]:
+    """Return the topics the robot's observers listen to.
+
+    Raises:
+        ConfigError: an observer of the robot description is invalid.
+    """
+    found: set[str] = set()
+    for component in robot.components.values():
+        for spec in component.observers:
+            observer = make_observer(config_of(spec, path=str(robot.path)))
+            found.update(
+                k.removeprefix("topic/") for k, _ in observer.inputs() if k.startswith("topic/")
+            )
+    return found
+
+
+def state_component(key: str) -> str | None:
+    """Return the component of a ``component/<name>/state`` key, else ``None``."""
+    parts = key.split("/")
+    return parts[1] if len(parts) == 3 and parts[0] == "component" and parts[2] == "state" else None
+
+
+@dataclass
+class _Slot:
+    index: int
+    id: str
+    component: str
+    observer: Observer
+    inputs: list[tuple[str, Handler]]
+    active: bool = False
+    generation: int = 0  # due times of older generations are void
+
+
+class Replay:
+    """Monitoring of one robot, driven by recorded messages (see the module docstring).
+
+    Args:
+        robot: the robot description whose observers and rules to replay.
+        provided: the keys the recording has messages on (``topic/scan``, ``resources``,
+            ``component/lidar/state``).
+        origin: the recording's time of the timeline's 0 (its first message).
+        start: when to start observing (default: ``origin``).
+        rule_sets: the repair rules (default: the robot description's rules files).
+        exonerate, max_card, timeout: the diagnosis engine's options (as live: off,
+            none, 2 s).
+        settle, period: the diagnosis service's timing (as live).
+        on_entry: called with each timeline entry as it happens.
+
+    Raises:
+        ConfigError, AspError: an observer or a rules file of the robot is invalid.
+    """
+
+    def __init__(
+        self,
+        robot: RobotDescription,
+        *,
+        provided: Collection[str],
+        origin: float,
+        start: float | None = None,
+        rule_sets: Sequence[RuleSet] | None = None,
+        exonerate: bool = False,
+        max_card: int | None = None,
+        timeout: float | None = 2.0,
+        settle: float = SETTLE,
+        period: float = PERIOD,
+        on_entry: Callable[[Entry], None] | None = None,
+    ) -> None:
+        self.robot = robot
+        self.origin = origin
+        self.start = origin if start is None else start
+        self.now = self.start
+        self._on_entry = on_entry
+        self._with_states = any(state_component(k) is not None for k in provided)
+        self._states: dict[str, Lifecycle] = {}
+        self._reasons: dict[str, str] = {}
+        self._slots: list[_Slot] = []
+        self._feeds: dict[str, tuple[Handler, ...]] = {}
+        self._skipped: list[str] = []
+        self._load_observers(set(provided))
+        engine = DiagnosisEngine(exonerate=exonerate, max_card=max_card, timeout=timeout)
+        self.diagnosis = TimedDiagnosis(engine, settle=settle, period=period)
+        if rule_sets is None:
+            rule_sets = [read_rules(path) for path in robot.rules]
+        self.rules = RuleEngine(rule_sets, clock=lambda: self.now) if rule_sets else None
+        self._due: list[tuple[float, int, int]] = []  # observer loops: (time, slot, generation)
+        self._verdicts: dict[tuple[str, str, tuple[str, ...], tuple[str, ...]], object] = {}
+        self._recorded_last: tuple[object, ...] | None = None
+        self._begun = False
+        self._entries: list[Entry] = []
+        self._recorded: list[DiagnosisEntry | RepairEntry] = []
+        self.messages = 0
+
+    # --- set-up ---------------------------------------------------------------------
+
+    def _load_observers(self, provided: set[str]) -> None:
+        """Make the robot's observers as the observer manager does; keep those whose
+        inputs the recording has."""
+        robot = self.robot
+        for component in robot.components.values():
+            for i, spec in enumerate(component.observers):
+                observer_id = f"{component.name}/{i}"
+                environment = Environment(
+                    owner=component.name,
+                    behavior=component.name if component.name in robot.behaviors else None,
+                    component_state=self._states.get,
+                )
+                where = f"{component.kind.value} '{component.name}'"
+                config = config_of(spec, path=str(robot.path), owner=where)
+                observer = make_observer(config, environment)
+                inputs = observer.inputs()
+                missing = sorted({key for key, _ in inputs if key not in provided})
+                if missing:
+                    names = ", ".join(k.removeprefix("topic/") for k in missing)
+                    self._skipped.append(f"{observer_id} ({config.type}): no {names} recorded")
+                    continue
+                index = len(self._slots)
+                self._slots.append(_Slot(index, observer_id, component.name, observer, inputs))
+
+    @property
+    def observers(self) -> list[str]:
+        """The ids of the observers that are replayed."""
+        return [slot.id for slot in self._slots]
+
+    @property
+    def skipped(self) -> list[str]:
+        """The observers that are not replayed, each with the reason."""
+        return list(self._skipped)
+
+    @property
+    def listened(self) -> set[str]:
+        """The keys whose messages matter: the replayed observers' inputs, component
+        states, and what the recording says was diagnosed and repaired."""
+        return {key for slot in self._slots for key, _ in slot.inputs} | {DIAGNOSES, EVENTS}
+
+    # --- input ----------------------------------------------------------------------
+
+    def run(self, messages: Iterable[Message], end: float | None = None) -> Timeline:
+        """Replay messages (in order of reception), then up to ``end`` (default: the last
+        message), and return the timeline."""
+        last = self.start
+        for message in messages:
+            self.deliver(message)
+            last = max(last, message.received)
+        return self.finish(last if end is None else end)
+
+    def deliver(self, message: Message) -> None:
+        """Run what was due until the message was received, then take it in."""
+        t = message.received
+        name = state_component(message.key)
+        if t < self.start:
+            if name is not None:  # before the window: only who is ready counts
+                self._component_state(message, t, quiet=True)
+            return
+        self.advance(t)
+        self.messages += 1
+        if name is not None:
+            self._component_state(message, self.now)
+        elif message.key == DIAGNOSES:
+            self._recorded_diagnosis(message, self.now)
+        elif message.key == EVENTS:
+            self._recorded_event(message, self.now)
+        for handler in self._feeds.get(message.key, ()):
+            try:
+                handler(message)
+            except BusError as e:  # as the bus drops a malformed message
+                log.debug("dropped a message on %s: %s", message.key, e)
+            except Exception:
+                log.exception("observer handler for %s failed", message.key)
+
+    def advance(self, until: float) -> None:
+        """Run every observer loop and diagnosis that is due until ``until``."""
+        if not self._begun:
+            if until < self.start:
+                return
+            self._begin()
+        due = self._due
+        diagnosis = self.diagnosis
+        while True:  # the earliest of the next loop and the diagnosis' wake; loops first
+            wake = diagnosis.wake_at
+            if due and due[0][0] <= until and (wake is None or due[0][0] <= wake):
+                t, index, generation = heapq.heappop(due)
+                self.now = max(self.now, t)
+                slot = self._slots[index]
+                if slot.active and slot.generation == generation:
+                    self._loop(slot, t)
+            elif wake is not None and wake <= until:
+                self.now = max(self.now, wake)
+                self._diagnosed(wake)
+            else:
+                break
+        self.now = max(self.now, until)
+
+    def finish(self, end: float) -> Timeline:
+        """Run what is due until ``end`` and return the timeline of the whole replay."""
+        self.advance(max(end, self.start))
+        return Timeline(
+            origin=self.origin,
+            begin=self._time(self.start),
+            end=self._time(max(end, self.start)),
+            entries=tuple(self._entries),
+            recorded=tuple(self._recorded),
+            messages=self.messages,
+            skipped=tuple(self._skipped),
+        )
+
+    # --- components -----------------------------------------------------------------
+
+    def _begin(self) -> None:
+        self._begun = True
+        self.now = self.start
+        if not self._with_states:  # a bag of a robot without dura: everything runs
+            for name in self.robot.components:
+                self._states[name] = Lifecycle.READY
+        ready = [n for n, state in self._states.items() if state is Lifecycle.READY]
+        self._model(UpdateAction.ADD, ready, self.start)
+        for slot in self._slots:
+            self._refresh(slot, self.start)
+
+    def _component_state(self, message: Message, t: float, *, quiet: bool = False) -> None:
+        try:
+            state = ComponentState.from_payload(message.payload)
+        except (BusError, KeyError, ValueError, TypeError) as e:
+            log.warning("malformed component state on %s: %s", message.key, e)
+            return
+        name = state.component
+        if name not in self.robot.components:
+            return
+        old = self._states.get(name)
+        self._states[name] = state.state
+        if quiet or old is state.state:
+            return
+        self._emit(StateEntry(self._time(t), name, state.state.value, state.reason))
+        if state.state is Lifecycle.READY:
+            self._model(UpdateAction.ADD, [name], t)
+        elif state.state in STOPPED:
+            self._model(UpdateAction.REMOVE, [name], t)
+        for slot in self._slots:
+            if slot.component == name:
+                self._refresh(slot, t)
+
+    def _model(self, action: UpdateAction, names: list[str], t: float) -> None:
+        """Add or remove nodes as the task executor does when components start or stop."""
+        specs = [self.robot.components[name] for name in names]
+        nodes = [Node(c.name, tuple(c.subscribes), tuple(c.publishes)) for c in specs]
+        self.diagnosis.change_model(action, nodes, t)
+
+    def _refresh(self, slot: _Slot, t: float) -> None:
+        """(De)activate an observer as its component's state says."""
+        should = self._states.get(slot.component) is Lifecycle.READY
+        if should == slot.active:
+            return
+        slot.active = should
+        slot.generation += 1
+        for key, handler in slot.inputs:
+            handlers = self._feeds.get(key, ())
+            if should:
+                self._feeds[key] = (*handlers, handler)
+            else:
+                self._feeds[key] = tuple(h for h in handlers if h is not handler)
+        if should:
+            slot.observer.start(t)
+            due = t + slot.observer.first_report
+            heapq.heappush(self._due, (due, slot.index, slot.generation))
+        else:
+            for old in [k for k in self._verdicts if k[0] == slot.id]:
+                del self._verdicts[old]
+
+    # --- observers ------------------------------------------------------------------
+
+    def _loop(self, slot: _Slot, t: float) -> None:
+        heapq.heappush(self._due, (t + slot.observer.period, slot.index, slot.generation))
+        try:
+            results = slot.observer.observe(t)
+        except Exception:
+            log.exception("observer %s failed", slot.id)
+            return
+        for result in results:
+            self._observed(slot, result, t)
+
+    def _observed(self, slot: _Slot, result: ObserverResult, t: float) -> None:
+        info = result.info
+        key = (slot.id, info.type, info.resource, info.callerids)
+        verdict = (info.observation, info.observation_msg)
+        if self._verdicts.get(key) != verdict:
+            self._verdicts[key] = verdict
+            self._emit(ObservationEntry(self._time(t), slot.id, info, dict(result.values)))
+        self.diagnosis.observe(info, t)
+        if self.rules is not None:
+            self.rules.observe(info)
+            self._fire(self.rules, t)
+
+    # --- diagnosis and rules ----------------------------------------------------------
+
+    def _diagnosed(self, t: float) -> None:
+        published = self.diagnosis.wake(t)
+        if published is None:
+            return
+        result = published.result
+        if published.changed:
+            failed = tuple(str(o) for o in result.failed)
+            self._emit(DiagnosisEntry(self._time(t), result.status.value, result.diagnoses, failed))
+        if self.rules is not None:
+            self.rules.diagnosed(result.to_info(t))
+            self._fire(self.rules, t)
+
+    def _fire(self, rules: RuleEngine, t: float) -> None:
+        for fired in rules.evaluate():
+            action = fired.rule.action.describe()
+            self._emit(RepairEntry(self._time(t), fired.rule.name, action, fired.firing.faulty))
+
+    # --- what the recording says --------------------------------------------------------
+
+    def _recorded_diagnosis(self, message: Message, t: float) -> None:
+        try:
+            entry = recorded_diagnosis(message.payload, self._time(t))
+        except (BusError, KeyError, ValueError, TypeError) as e:
+            log.warning("malformed recorded diagnosis: %s", e)
+            return
+        if (entry.status, entry.diagnoses) != self._recorded_last:
+            self._recorded_last = (entry.status, entry.diagnoses)
+            self._recorded.append(entry)
+
+    def _recorded_event(self, message: Message, t: float) -> None:
+        try:
+            entry = recorded_repair(message.payload, self._time(t))
+        except BusError:
+            return
+        if entry is not None:
+            self._recorded.append(entry)
+
+    # --- output ---------------------------------------------------------------------
+
+    def _time(self, t: float) -> float:
+        return round(t - self.origin, 6)
+
+    def _emit(self, entry: Entry) -> None:
+        self._entries.append(entry)
+        if self._on_entry is not None:
+            self._on_entry(entry)

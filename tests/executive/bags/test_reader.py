@@ -1,0 +1,197 @@
+"""Recordings read as bus messages: rosbag2 in MCAP and sqlite3 written by ``rosbags``,
+MCAP files with publish times, topics routed to a robot's, and bad recordings refused."""
+
+from __future__ import annotations
+
+import contextlib
+import shutil
+import sqlite3
+from pathlib import Path
+
+import pytest
+
+from executive.bags.bag import Route, routes
+from executive.bags.reader import open_bag
+from knowledge.description import RobotDescription
+from knowledge.errors import BagError
+from knowledge.robot import load_robot
+from monitoring.replay import Replay
+from tests.conftest import USECASE
+from tests.executive.bags.recorded import (
+    T0,
+    scan_times,
+    write_mcap,
+    write_scan_bag,
+    write_unknown_type_bag,
+)
+
+
+@pytest.fixture(scope="module")
+def robot() -> RobotDescription:
+    return load_robot(USECASE)
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_a_rosbag2_is_read_as_bus_messages_with_the_bags_times_and_decoded_payloads(
+    tmp_path: Path, robot: RobotDescription, storage: str
+) -> None:
+    with open_bag(write_scan_bag(tmp_path / "bag", storage)) as bag:
+        assert bag.format == f"rosbag2 ({storage})"
+        assert (bag.start, bag.end, bag.count) == (T0, T0 + 19.9, 180)
+        found = routes(bag, robot)
+        assert found == {"/scan": Route("topic/scan", "lidar")}  # the only publisher of scan
+        messages = list(bag.messages(found))
+    assert [m.received for m in messages] == [t / 1e9 for t in scan_times()]
+    first = messages[0]
+    assert (first.key, first.caller_id) == ("topic/scan", "lidar")
+    assert first.sent == (T0 if storage == "mcap" else None)  # sqlite3 has no publish time
+    assert first.stamp == T0  # header.stamp
+    assert first.payload["ranges"][:2] == [2.0, 2.0]
+    assert first.payload["header"]["frame_id"] == "laser"
+
+
+def test_a_window_yields_only_the_messages_in_it(tmp_path: Path, robot: RobotDescription) -> None:
+    with open_bag(write_scan_bag(tmp_path / "bag")) as bag:
+        messages = list(bag.messages(routes(bag, robot), T0 + 1.0, T0 + 2.0))
+    assert [round(m.received - T0, 3) for m in messages] == [1.0 + k / 10 for k in range(11)]
+
+
+def test_publish_times_are_the_send_times_the_frequency_observer_measures(
+    tmp_path: Path, robot: RobotDescription
+) -> None:
+    # sent at 10 Hz, received in bursts of five every half second
+    records = [(T0 * 10**9 + (k // 5 + 1) * 5 * 10**8, T0 * 10**9 + k * 10**8) for k in range(60)]
+    with open_bag(write_mcap(tmp_path / "jazzy.mcap", records)) as bag:
+        messages = list(bag.messages(routes(bag, robot)))
+    assert messages[3].sent == T0 + 0.3 and messages[3].received == T0 + 0.5
+    timeline = Replay(robot, provided={"topic/scan"}, origin=T0).run(messages)
+    frequency = timeline.observations("lidar/0")[0]
+    assert frequency.values["frequency"] == pytest.approx(10.0)
+
+
+def test_a_caller_id_recorded_on_the_channel_is_the_messages_caller(
+    tmp_path: Path, robot: RobotDescription
+) -> None:
+    records = [(T0 * 10**9 + k * 10**8,) * 2 for k in range(3)]
+    path = write_mcap(tmp_path / "s.mcap", records, metadata={"caller_id": "front_lidar"})
+    with open_bag(path) as bag:
+        assert bag.topics[0].callers == ("front_lidar",)
+        assert {m.caller_id for m in bag.messages(routes(bag, robot))} == {"front_lidar"}
+
+
+def test_a_map_routes_a_recorded_topic_to_a_topic_of_the_robot(
+    tmp_path: Path, robot: RobotDescription
+) -> None:
+    with open_bag(write_scan_bag(tmp_path / "bag", topic="/front/scan")) as bag:
+        with pytest.raises(
+            BagError, match=r"none of its topics \(/front/scan\) is a topic of robot 'usecase'"
+        ):
+            routes(bag, robot)
+        assert routes(bag, robot, ["/front/scan=scan"]) == {
+            "/front/scan": Route("topic/scan", "lidar")
+        }
+        with pytest.raises(
+            BagError, match=r"no topic '/front/scna' to map \(did you mean '/front/scan'\?\)"
+        ):
+            routes(bag, robot, ["/front/scna=scan"])
+        with pytest.raises(
+            BagError, match=r"--map /front/scan=scna: robot 'usecase' has no topic 'scna'"
+        ):
+            routes(bag, robot, ["/front/scan=scna"])
+        with pytest.raises(BagError, match=r"--map /front/scan: write BAG_TOPIC=TOPIC"):
+            routes(bag, robot, ["/front/scan"])
+
+
+def test_a_humble_bag_without_definitions_reads_its_types_from_the_type_store(
+    tmp_path: Path, robot: RobotDescription
+) -> None:
+    path = write_scan_bag(tmp_path / "bag", "sqlite3", version=8)
+    (database,) = path.glob("*.db3")
+    with contextlib.closing(sqlite3.connect(database)) as db, db:
+        db.execute("DELETE FROM message_definitions")
+    with open_bag(path) as bag:
+        first = next(bag.messages(routes(bag, robot)))
+    assert first.payload["scan_time"] == pytest.approx(0.1)
+
+
+def test_a_type_that_neither_the_bag_nor_the_store_defines_is_an_error_naming_it(
+    tmp_path: Path, robot: RobotDescription
+) -> None:
+    path = write_unknown_type_bag(tmp_path / "bag")
+    with open_bag(path) as bag, pytest.raises(BagError) as error:
+        bag.check(routes(bag, robot))
+    assert str(error.value) == (
+        f"{path}: unknown message type 'acme_msgs/msg/Sweep' of topic '/scan' (the bag does "
+        "not define it and rosbags' latest types do not know it)"
+    )
+
+
+def test_an_mcap_channel_without_a_schema_is_of_an_unknown_type(
+    tmp_path: Path, robot: RobotDescription
+) -> None:
+    path = write_mcap(tmp_path / "s.mcap", [(T0 * 10**9, T0 * 10**9)], schema=False)
+    with open_bag(path) as bag, pytest.raises(BagError, match=r"unknown message type '\?'"):
+        list(bag.messages(routes(bag, robot)))
+
+
+def truncated(source: Path, target: Path, keep: float) -> Path:
+    data = source.read_bytes()
+    target.write_bytes(data[: int(len(data) * keep)])
+    return target
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_a_truncated_file_is_an_error_naming_it(tmp_path: Path, storage: str) -> None:
+    (source,) = write_scan_bag(tmp_path / "bag", storage).glob("bag.*")
+    cut = truncated(source, tmp_path / f"cut{source.suffix}", 0.6)
+    with pytest.raises(BagError, match=f"^{cut}: truncated or corrupt"):
+        open_bag(cut)
+
+
+def test_a_corrupt_chunk_is_an_error_naming_the_file_when_it_is_read(
+    tmp_path: Path, robot: RobotDescription
+) -> None:
+    records = [(t, t) for t in scan_times()]
+    source = write_mcap(tmp_path / "scan.mcap", records)  # chunks compressed with zstd
+    data = bytearray(source.read_bytes())
+    middle = len(data) // 3
+    data[middle : middle + 64] = bytes(64)  # zeros inside a compressed chunk
+    corrupt = tmp_path / "corrupt.mcap"
+    corrupt.write_bytes(bytes(data))
+    with (
+        open_bag(corrupt) as bag,
+        pytest.raises(BagError, match=f"^{corrupt}: truncated or corrupt"),
+    ):
+        list(bag.messages(routes(bag, robot)))
+
+
+def test_what_is_not_a_recording_is_refused(tmp_path: Path) -> None:
+    (tmp_path / "notes.txt").write_text("hello")
+    with pytest.raises(BagError, match=r"notes\.txt: not a ROS 2 bag or an MCAP file"):
+        open_bag(tmp_path / "notes.txt")
+    with pytest.raises(BagError, match="not a rosbag2 folder"):
+        open_bag(tmp_path)
+    shutil.rmtree(tmp_path)
+    with pytest.raises(BagError, match="cannot read it"):
+        open_bag(tmp_path / "gone.mcap")
+
+
+def test_a_bag_split_into_several_mcap_files_is_read_as_one_in_order(
+    tmp_path: Path, robot: RobotDescription
+) -> None:
+    folder = tmp_path / "split"
+    folder.mkdir()
+    times = scan_times(None, 2.0)
+    write_mcap(folder / "split_0.mcap", [(t, t) for t in times[:12]])
+    write_mcap(folder / "split_1.mcap", [(t, t) for t in times[12:]])
+    (folder / "metadata.yaml").write_text(
+        "rosbag2_bagfile_information:\n  version: 9\n  storage_identifier: mcap\n"
+        "  relative_file_paths: [split_0.mcap, split_1.mcap]\n  ros_distro: jazzy\n"
+    )
+    with open_bag(folder) as bag:
+        assert (bag.format, bag.count) == ("rosbag2 (mcap)", 20)
+        received = [m.received for m in bag.messages(routes(bag, robot))]
+    assert received == [t / 1e9 for t in times]
+    (folder / "split_1.mcap").unlink()
+    with pytest.raises(BagError, match=r"files of the bag are missing: .*split_1\.mcap"):
+        open_bag(folder)

@@ -1,0 +1,133 @@
+"""Recordings of dura's bus traffic: MCAP with JSON schemas that MCAP tools and
+``dura replay`` read back, rotated by size."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from mcap.reader import make_reader
+
+from executive.bags.bag import Route
+from executive.bags.reader import open_bag
+from executive.bags.recording import Recorder, rotated
+from executive.bags.schemas import SCHEMAS
+from executive.bus.keys import DIAGNOSES, OBSERVATIONS, RESOURCES, component, topic
+from executive.bus.payloads import (
+    ComponentState,
+    DiagnosisInfo,
+    Lifecycle,
+    NodeInfo,
+    ObservationInfo,
+    ResourceInfo,
+)
+from executive.bus.session import Message, encode
+
+T0 = 1_700_000_000.0
+
+
+def message(key: str, payload: dict[str, object], caller: str, t: float) -> Message:
+    return Message(key, encode(payload), caller, t - 0.001, t)
+
+
+def test_a_recording_is_mcap_with_a_json_schema_per_payload_and_a_channel_per_publisher(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "run.mcap"
+    with Recorder(path, "usecase") as recorder:
+        recorder.write(message(topic("scan"), {"stamp": T0, "ranges": [1.0]}, "lidar", T0))
+        recorder.write(message(topic("scan"), {"stamp": T0}, "cam_to_lidar", T0 + 0.1))
+        state = ComponentState("lidar", Lifecycle.READY, stamp=T0)
+        recorder.write(message(component("lidar", "state"), state.to_payload(), "executive", T0))
+        assert not recorder.write(message("component/lidar/cmd", {}, "cli", T0))  # not recorded
+    with path.open("rb") as f:
+        reader = make_reader(f)
+        assert reader.get_header().profile == "dura"
+        (metadata,) = reader.iter_metadata()
+        assert (metadata.name, metadata.metadata["robot"]) == ("dura", "usecase")
+        records = list(reader.iter_messages())
+    channels = [(c.topic, c.metadata.get("caller_id"), s.name) for s, c, _ in records]
+    assert channels == [
+        ("topic/scan", "lidar", "dura.TopicMessage"),
+        ("component/lidar/state", "executive", "dura.ComponentState"),
+        ("topic/scan", "cam_to_lidar", "dura.TopicMessage"),
+    ]
+    _, _, first = records[0]
+    assert (first.log_time, first.publish_time) == (round(T0 * 1e9), round((T0 - 0.001) * 1e9))
+    assert json.loads(first.data) == {"stamp": T0, "ranges": [1.0]}
+    assert records[1][0].encoding == "jsonschema" and records[1][1].message_encoding == "json"
+
+
+def test_the_schemas_name_every_field_of_the_payloads(tmp_path: Path) -> None:
+    payloads = {
+        "dura.Observation": ObservationInfo("frequency", ("scan",), 1).to_payload(),
+        "dura.Diagnosis": DiagnosisInfo("DIAGNOSED", (("lidar",),)).to_payload(),
+        "dura.Resources": ResourceInfo("h", (NodeInfo("lidar", 1, "h", 1.0, 2),)).to_payload(),
+        "dura.ComponentState": ComponentState("lidar", Lifecycle.READY).to_payload(),
+    }
+    for name, payload in payloads.items():
+        schema = SCHEMAS[name]
+        assert set(payload) <= set(schema["properties"]), name
+        assert set(schema["required"]) <= set(payload), name
+    assert SCHEMAS["dura.ComponentState"]["properties"]["state"]["enum"][1] == "ready"
+    assert SCHEMAS["dura.Observation"]["properties"]["values"]["type"] == "object"
+
+
+def test_a_recording_reads_back_as_the_messages_it_recorded(tmp_path: Path) -> None:
+    path = tmp_path / "run.mcap"
+    with Recorder(path, "usecase") as recorder:
+        for k in range(5):
+            recorder.write(message(topic("scan"), {"stamp": T0 + k}, "lidar", T0 + k))
+        recorder.write(message(OBSERVATIONS, {"type": "frequency"}, "executive", T0 + 5))
+        recorder.write(message(RESOURCES, {"hostname": "h", "nodes": []}, "executive", T0 + 5))
+    with open_bag(path) as bag:
+        assert (bag.format, bag.robot, bag.keys_are_bus_keys) == (
+            "dura recording (mcap)",
+            "usecase",
+            True,
+        )
+        assert [t.name for t in bag.topics] == [OBSERVATIONS, RESOURCES, "topic/scan"]
+        messages = list(bag.messages({"topic/scan": Route(topic("scan"))}))
+    assert [(m.key, m.caller_id, m.received, m.payload["stamp"]) for m in messages] == [
+        (topic("scan"), "lidar", T0 + k, T0 + k) for k in range(5)
+    ]
+    assert messages[0].sent == T0 - 0.001
+
+
+def test_a_recording_is_rotated_by_size_and_each_file_begins_with_the_component_states(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "run.mcap"
+    state = ComponentState("lidar", Lifecycle.READY, stamp=T0).to_payload()
+    noise = {"stamp": T0, "ranges": [float(i) for i in range(2000)]}  # poorly compressible
+    with Recorder(path, "usecase", max_size=64 * 1024, keep=2) as recorder:
+        recorder.write(message(component("lidar", "state"), state, "executive", T0))
+        for k in range(400):
+            noise["seq"] = k
+            recorder.write(message(topic("scan"), noise, "lidar", T0 + k / 10))
+        assert recorder.files > 3
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.1.mcap", "run.2.mcap", "run.mcap"]
+    for file in (path, rotated(path, 1), rotated(path, 2)):
+        assert file.stat().st_size < 64 * 1024 + 32 * 1024
+        with open_bag(file) as bag:
+            routes = {name.name: Route(name.name) for name in bag.topics}
+            first = next(bag.messages(routes))
+        assert first.key == "component/lidar/state" and first.payload["state"] == "ready"
+
+
+def test_an_existing_recording_is_rotated_away_not_overwritten(tmp_path: Path) -> None:
+    path = tmp_path / "run.mcap"
+    Recorder(path, "usecase").close()
+    before = path.read_bytes()
+    Recorder(path, "usecase").close()
+    assert rotated(path, 1).read_bytes() == before
+
+
+def test_a_diagnosis_payload_is_recorded_under_its_key(tmp_path: Path) -> None:
+    path = tmp_path / "run.mcap"
+    diagnosis = DiagnosisInfo("DIAGNOSED", (("lidar",),), stamp=T0).to_payload()
+    with Recorder(path, "usecase") as recorder:
+        recorder.write(message(DIAGNOSES, diagnosis, "executive", T0))
+    with open_bag(path) as bag:
+        (recorded,) = bag.messages({DIAGNOSES: Route(DIAGNOSES)})
+    assert DiagnosisInfo.from_payload(recorded.payload).diagnoses == (("lidar",),)

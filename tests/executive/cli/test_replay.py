@@ -1,0 +1,184 @@
+"""``dura replay`` as a user runs it: bags written with ``rosbags`` (MCAP and sqlite3)
+through the use-case robot's real observers, diagnosis (clingo) and repair rules."""
+
+from __future__ import annotations
+
+import io
+import json
+import time
+from collections.abc import Callable
+from pathlib import Path
+from subprocess import CompletedProcess
+
+import pytest
+
+from executive.bus.session import Message
+from executive.cli import replay as replay_command
+from monitoring.timeline import Timeline
+from tests.conftest import USECASE
+from tests.executive.bags.recorded import T0, scan_times, write_scan_bag, write_unknown_type_bag
+
+Dura = Callable[..., CompletedProcess[str]]
+
+
+def replay(dura: Dura, bag: Path, *args: str) -> CompletedProcess[str]:
+    return dura("replay", str(bag), "--robot", str(USECASE), *args)
+
+
+def timeline(result: CompletedProcess[str]) -> list[tuple[float, str, str]]:
+    assert result.returncode == 0, result.stderr
+    found = []
+    for entry in json.loads(result.stdout)["timeline"]:
+        what = {
+            "observation": lambda e: f"{e['observer']} {e['type']} {e['observation_msg']}",
+            "diagnosis": lambda e: f"{e['status']} {e['diagnoses']}",
+            "repair": lambda e: f"{e['rule']}: {e['action']}",
+        }[entry["kind"]](entry)
+        found.append((entry["time"], entry["kind"], what))
+    return found
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_a_lidar_that_stops_for_two_seconds_is_observed_diagnosed_and_would_be_restarted_at_the_bags_times(
+    dura: Dura, tmp_path: Path, storage: str
+) -> None:
+    result = replay(dura, write_scan_bag(tmp_path / "bag", storage), "--json")
+    assert timeline(result) == [
+        (2.0, "observation", "lidar/0 frequency ok"),
+        (2.0, "observation", "lidar/1 timeout ok"),
+        (10.5, "observation", "lidar/0 frequency stopped"),  # 0.6 s after the last scan at 9.9
+        (10.5, "observation", "lidar/1 timeout timeout"),
+        (10.52, "diagnosis", "DIAGNOSED [['lidar']]"),  # settled 20 ms, as live
+        (10.52, "repair", "restart_lidar: restart lidar"),
+        (12.125, "observation", "lidar/1 timeout ok"),  # the first 8 Hz loop after 12.0
+        (12.5, "observation", "lidar/0 frequency ok"),
+        (12.52, "diagnosis", "OK []"),
+    ]
+    summary = json.loads(result.stdout)["summary"]
+    assert summary["diagnoses"] == [
+        {"diagnosis": ["lidar"], "total": 2.0, "periods": [[10.52, 12.52]], "held_at_end": False}
+    ]
+    assert json.loads(result.stdout)["origin"] == T0
+
+
+def test_replaying_the_same_bag_twice_prints_the_same(dura: Dura, tmp_path: Path) -> None:
+    bag = write_scan_bag(tmp_path / "bag")
+    first, second = replay(dura, bag), replay(dura, bag)
+    assert first.returncode == 0, first.stderr
+    assert first.stdout == second.stdout
+    lines = first.stdout.splitlines()
+    assert (
+        lines[0]
+        == f"{bag}: rosbag2 (mcap), 19.900 s, 180 messages; robot 'usecase'; /scan → scan (from lidar)"
+    )
+    assert (
+        "   10.520  diagnosis    DIAGNOSED: lidar (failed: frequency[scan]; timeout[scan])" in lines
+    )
+    assert (
+        "   10.520  repair       rule restart_lidar would restart lidar (possibly faulty: lidar)"
+        in lines
+    )
+    assert lines[-3:] == [
+        "summary: 19.900 s replayed, 180 messages",
+        "  diagnosis lidar: held 2.000 s (10.520-12.520)",
+        "  rule restart_lidar would restart lidar: 1 time(s) (10.520)",
+    ]
+    json_first, json_second = replay(dura, bag, "--json"), replay(dura, bag, "--json")
+    assert json_first.stdout == json_second.stdout
+
+
+def test_a_window_and_a_map_replay_part_of_a_bag_under_another_name(
+    dura: Dura, tmp_path: Path
+) -> None:
+    bag = write_scan_bag(tmp_path / "bag", topic="/front/scan")
+    result = replay(dura, bag, "--map", "/front/scan=scan", "--from", "8", "--to", "11", "--json")
+    assert timeline(result)[:2] == [
+        (10.0, "observation", "lidar/0 frequency ok"),  # start-up: 2 s after the window opens
+        (10.0, "observation", "lidar/1 timeout ok"),
+    ]
+    data = json.loads(result.stdout)
+    assert (data["begin"], data["end"]) == (8.0, 11.0)
+    assert data["routes"] == {"/front/scan": {"key": "topic/scan", "caller": "lidar"}}
+
+
+def test_at_a_rate_the_bag_takes_its_time(dura: Dura, tmp_path: Path) -> None:
+    bag = write_scan_bag(tmp_path / "bag", times=scan_times(None, 3.0))
+    began = time.monotonic()
+    paced = replay(dura, bag, "--rate", "2", "--json")
+    took = time.monotonic() - began
+    assert took >= 1.45  # 2.9 s of bag at twice its speed (plus the start of Python)
+    assert timeline(paced) == timeline(replay(dura, bag, "--json"))
+
+
+def cut(bag: Path, keep: float) -> Path:
+    (source,) = bag.glob("bag.*")
+    target = bag.parent / f"cut{source.suffix}"
+    data = source.read_bytes()
+    target.write_bytes(data[: int(len(data) * keep)])
+    return target
+
+
+BAD = {
+    "unknown type": (
+        lambda p: write_unknown_type_bag(p / "bag"),
+        (),
+        "unknown message type 'acme_msgs/msg/Sweep' of topic '/scan'",
+    ),
+    "truncated mcap": (
+        lambda p: cut(write_scan_bag(p / "bag"), 0.5),
+        (),
+        "truncated or corrupt MCAP",
+    ),
+    "truncated sqlite3": (
+        lambda p: cut(write_scan_bag(p / "bag", "sqlite3"), 0.5),
+        (),
+        "truncated or corrupt",
+    ),
+    "no topic of the robot": (
+        lambda p: write_scan_bag(p / "bag", topic="/front/scan"),
+        (),
+        "none of its topics (/front/scan) is a topic of robot 'usecase'",
+    ),
+    "a map of a topic the bag lacks": (
+        lambda p: write_scan_bag(p / "bag"),
+        ("--map", "/rear/scan=scan"),
+        "no topic '/rear/scan' to map",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", BAD, ids=list(BAD))
+def test_bad_input_is_one_line_naming_the_file_and_the_reason(
+    dura: Dura, tmp_path: Path, case: str
+) -> None:
+    make, args, reason = BAD[case]
+    path = make(tmp_path)
+    result = replay(dura, path, *args)
+    assert result.returncode == 1
+    assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr
+    assert result.stderr.startswith(f"dura: {path}: ")
+    assert reason in result.stderr
+
+
+def test_progress_shows_on_a_terminal_after_a_while_and_is_cleared_at_the_end(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(replay_command, "PROGRESS_AFTER", 0.0)
+    monkeypatch.setattr(replay_command, "PROGRESS_EVERY", 0.0)
+    out = io.StringIO()
+    messages = [Message("topic/scan", b"{}", "lidar", None, T0 + k) for k in range(5)]
+    progress = replay_command.Progress(out, T0, T0 + 4)
+    assert list(progress.wrap(messages)) == messages
+    shown = out.getvalue()
+    assert "\r  replayed 2.0 of 4.0 s (50%)" in shown
+    assert shown.endswith("\r\033[K")
+
+
+def test_the_dura_replay_fixture_pins_a_bags_diagnoses_in_a_test(
+    dura_replay: Callable[..., Timeline], tmp_path: Path
+) -> None:
+    timeline = dura_replay(write_scan_bag(tmp_path / "bag"), USECASE)
+    assert timeline.diagnosed() == [("lidar",)]
+    assert [(r.time, r.action) for r in timeline.repairs()] == [(10.52, "restart lidar")]
+    (hold,) = timeline.holds()
+    assert hold.periods == ((10.52, 12.52),)
