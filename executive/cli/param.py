@@ -7,13 +7,20 @@ import argparse
 import json
 from typing import Any
 
-from executive.cli.output import add_json_flag
+from executive.bus.api.parameters import (
+    PARAMETER_GET,
+    PARAMETER_LIST,
+    PARAMETER_SET,
+    ComponentParameters,
+    ParameterChange,
+    ParameterKey,
+)
+from executive.cli import exits_at_once
+from executive.cli.client import add_client_options, ask
+from executive.cli.output import add_json_flag, print_json, table
 
 
 def register(sub: Any) -> None:
-    # only argparse here: the bus and the client load when a command runs
-    from executive.cli.client import add_client_options
-
     p = sub.add_parser(
         "param",
         help="read and change component parameters at run time",
@@ -22,6 +29,7 @@ def register(sub: Any) -> None:
         "(it overrides the description), and handed to the running component: through its "
         "on_reconfigure hook, or by a warm restart for a component without one.",
     )
+    exits_at_once(p)
     psub = p.add_subparsers(dest="param_command", metavar="PARAM_COMMAND")
     psub.required = True
     listing = psub.add_parser("list", help="every parameter of a component, with its source")
@@ -55,10 +63,6 @@ def value_of(text: str) -> Any:
 
 
 def run_list(args: argparse.Namespace) -> int:
-    from executive.bus.api.parameters import PARAMETER_LIST, ComponentParameters
-    from executive.cli.client import ask
-    from executive.cli.output import print_json, table
-
     reply = ask(args, PARAMETER_LIST, ComponentParameters(args.component))
     if args.json:
         print_json(reply.to_payload())
@@ -69,10 +73,6 @@ def run_list(args: argparse.Namespace) -> int:
 
 
 def run_get(args: argparse.Namespace) -> int:
-    from executive.bus.api.parameters import PARAMETER_GET, ParameterKey
-    from executive.cli.client import ask
-    from executive.cli.output import print_json
-
     reply = ask(args, PARAMETER_GET, ParameterKey(args.component, args.key))
     if args.json:
         print_json(reply.to_payload())
@@ -82,10 +82,6 @@ def run_get(args: argparse.Namespace) -> int:
 
 
 def run_set(args: argparse.Namespace) -> int:
-    from executive.bus.api.parameters import PARAMETER_SET, ParameterChange
-    from executive.cli.client import ask
-    from executive.cli.output import print_json
-
     change = ParameterChange(args.component, args.key, value_of(args.value))
     reply = ask(args, PARAMETER_SET, change)
     if args.json:

@@ -112,7 +112,7 @@ def _failover_runs(
     }
     description = robot_variant(USECASE, folder / "robot", changes)
     samples: list[float] = []
-    with RobotProcess(description, folder / "run", options=options) as robot:
+    with RobotProcess(description, folder / "run", run_args=options) as robot:
         arrived: list[float] = []
         robot.bus.subscribe(
             topic("scan_filtered"),
