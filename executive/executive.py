@@ -19,8 +19,9 @@ from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus
 from executive.planning.high_level import HighLevel
-from executive.runtime.component_api import ComponentApi
+from executive.runtime.component_api import ComponentApi, listed
 from executive.runtime.launcher import Launcher
+from executive.runtime.run_lock import RunLock, end_leftovers
 from executive.tasks.executor import TaskExecutor
 from executive.tasks.plan_tasks import PlanTasks
 from knowledge.description import RobotDescription
@@ -44,6 +45,10 @@ class Executive:
         log_dir: where component logs go (default ``./.dura/logs``).
         resource_rate: how often the resource monitor publishes, in Hz.
         grace: seconds a component gets at each step of a stop.
+        linger: seconds a functionality no task and no upcoming plan step needs keeps
+            running before it stops.
+        sequential_starts: change configurations one component after another, stopping
+            first (by default: all at once, before the old ones stop).
         folder: the working folder whose ``.dura/`` holds the bus credentials (created on
             the first run, user-only) and the logs (default: the current folder).
         record: record the bus traffic to this MCAP file (``dura run --record``).
@@ -60,6 +65,8 @@ class Executive:
         resource_rate: float = 1.0,
         grace: float = 3.0,
         folder: Path | None = None,
+        linger: float = 0.0,
+        sequential_starts: bool = False,
         record: Path | None = None,
         record_max_size: int | None = None,
     ) -> None:
@@ -71,6 +78,8 @@ class Executive:
         self.credentials_path = security.credentials_file(self.folder, robot.name)
         self.resource_rate = resource_rate
         self.grace = grace
+        self.linger = linger
+        self.sequential_starts = sequential_starts
         self.record = record
         self.record_max_size = record_max_size
         self._stack = contextlib.ExitStack()
@@ -78,6 +87,9 @@ class Executive:
     def __enter__(self) -> Executive:
         clock = system_clock()  # a bad DURA_TIME_SCALE stops the executive here, with why
         with contextlib.ExitStack() as stack:
+            lock = stack.enter_context(RunLock(self.kb_path))  # one executive per KB
+            if lock.predecessor is not None:
+                end_leftovers(lock.predecessor)
             robot, components = self.robot, list(self.robot.components)
             credentials = security.ensure_credentials(self.credentials_path, robot.name, components)
             users = self.credentials_path.with_suffix(".users")
@@ -107,6 +119,7 @@ class Executive:
                     log_dir=self.log_dir,
                     grace=self.grace,
                     credentials=credentials,
+                    run_id=lock.run_id,
                 )
             )
             self.ros2: Ros2Link | None = None
@@ -127,7 +140,9 @@ class Executive:
         """The services of the executive, in the order they start (and stop reversed):
         monitoring first, so that it watches every component the executive starts."""
         ros2 = self.ros2
-        self.tasks = TaskExecutor(context, self.launcher)
+        self.tasks = TaskExecutor(
+            context, self.launcher, linger=self.linger, sequential=self.sequential_starts
+        )
         self.high_level = HighLevel(
             context,
             PlanTasks(self.tasks, self.robot),
@@ -152,7 +167,7 @@ class Executive:
             recording.append(Recording(context, self.record, max_size=size))
         return [
             *recording,
-            ComponentApi(context, self.launcher),
+            ComponentApi(context, self.launcher, by_hand=self.tasks),
             ResourceMonitor(context, rate=self.resource_rate),
             ObserverManager(context, sources=[ros2.topics] if ros2 is not None else []),
             DiagnosisService(context, learn=True),
@@ -164,10 +179,7 @@ class Executive:
         ]
 
     def _components(self) -> list[dict[str, Any]]:
-        return [
-            {"kind": self.launcher.kind(s.component).value, **s.to_payload()}
-            for s in self.launcher.states()
-        ]
+        return [listed(self.launcher, s) for s in self.launcher.states()]
 
     def __exit__(self, *exc: object) -> None:
         self._stack.close()

@@ -95,6 +95,7 @@ class FunctionalitySpec(ComponentSpec):
     shareable: bool = True
     rating: float = 1.0
     max_faults: int = 3
+    standby: bool = False  # kept running, paused, while no task needs it: a warm spare
 
     @property
     def kind(self) -> Kind:

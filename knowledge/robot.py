@@ -102,6 +102,7 @@ def _functionality(
         shareable=s.flag("shareable", True),
         rating=s.number("rating", 1.0, minimum=0.0),
         max_faults=s.integer("max_faults", 3, minimum=1),
+        standby=s.flag("standby", False),
         **_common(s, report, Kind.FUNCTIONALITY),
     )
     s.close()

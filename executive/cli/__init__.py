@@ -34,6 +34,7 @@ COMMANDS: dict[str, str] = {
     "task": "task",
     "schedule": "task",
     "component": "component",
+    "param": "param",
     "observe": "observe",
     "observer": "observer",
     "dashboard": "dashboard",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import time
 from typing import Any
 
@@ -18,7 +19,8 @@ from knowledge.errors import DuraError
 
 def register(sub: Any) -> None:
     p = sub.add_parser(
-        "component", help="list, start, stop, restart, fault and reset components; show logs"
+        "component",
+        help="list, start, stop, restart, fault and reset components; inject faults; show logs",
     )
     exits_at_once(p)
     csub = p.add_subparsers(dest="component_command", metavar="COMPONENT_COMMAND")
@@ -48,6 +50,29 @@ def register(sub: Any) -> None:
         add_client_options(cmd)
         add_json_flag(cmd)
         cmd.set_defaults(run=run_lifecycle, verb=verb)
+
+    inject = csub.add_parser(
+        "inject",
+        help="make a running component misbehave on purpose (fault injection)",
+        description="Inject a fault into a running component: crash, hang, stop_publishing, "
+        "wrong_rate, stale_timestamps, out_of_range, high_cpu, growing_memory, slip, or none "
+        "(clear every fault). Options are numbers: after (seconds until it strikes), factor "
+        "(wrong_rate), age (stale_timestamps), exit_code (crash), mb_per_s and limit_mb "
+        "(growing_memory).",
+    )
+    inject.add_argument("name", metavar="NAME", help="the component")
+    inject.add_argument("mode", metavar="MODE", help="the fault mode, e.g. crash or wrong_rate")
+    inject.add_argument(
+        "--option",
+        "-o",
+        action="append",
+        default=[],
+        metavar="K=V",
+        help="an option of the mode, e.g. --option factor=0.5 (repeatable)",
+    )
+    add_client_options(inject)
+    add_json_flag(inject)
+    inject.set_defaults(run=run_inject)
 
     logs = csub.add_parser("logs", help="the last lines of a component's log")
     logs.add_argument("name", metavar="NAME", help="the component")
@@ -122,6 +147,32 @@ def run_lifecycle(args: argparse.Namespace) -> int:
     if failed:
         raise DuraError(f"'{state.component}' failed to start: {state.reason}")
     print(_summary(state) + faults)
+    return 0
+
+
+def _options(pairs: list[str]) -> dict[str, float]:
+    """``K=V`` pairs as numbers (a whole number stays whole: ``exit_code=3``)."""
+    options: dict[str, float] = {}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        try:
+            number = float(value) if sep and key else math.nan
+        except ValueError:
+            number = math.nan
+        if not math.isfinite(number):
+            raise DuraError(f"--option must be KEY=NUMBER, not '{pair}'")
+        options[key] = int(number) if value.strip().lstrip("+-").isdigit() else number
+    return options
+
+
+def run_inject(args: argparse.Namespace) -> int:
+    request = components.Injection(args.name, args.mode, _options(args.option))
+    state = ask(args, components.COMPONENT_INJECT, request)
+    if args.json:
+        print_json({**state.to_payload(), "fault": {"mode": args.mode, **request.options}})
+        return 0
+    options = "".join(f", {k}={v:g}" for k, v in request.options.items())
+    print(f"{state.component}: {args.mode} injected{options} (pid {state.pid})")
     return 0
 
 

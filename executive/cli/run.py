@@ -54,6 +54,22 @@ def register(sub: Any) -> None:
         help="time a component gets to stop, before SIGTERM and again before SIGKILL (default 3)",
     )
     p.add_argument(
+        "--linger",
+        type=seconds(),
+        default=0.0,
+        metavar="SECONDS",
+        help="keep a functionality running this long after no task and no upcoming plan "
+        "step needs it (default 0: stop it then)",
+    )
+    p.add_argument(
+        "--starts",
+        choices=("parallel", "sequential"),
+        default="parallel",
+        help="how a configuration changes: parallel (default) starts the new components "
+        "all at once before the old ones stop; sequential stops first, then starts one "
+        "after another in dependency order",
+    )
+    p.add_argument(
         "--dashboard",
         type=port,
         metavar="PORT",
@@ -88,6 +104,8 @@ def run(args: argparse.Namespace) -> int:
         log_dir=args.log_dir.resolve(),
         resource_rate=args.resource_rate,
         grace=args.grace,
+        linger=args.linger,
+        sequential_starts=args.starts == "sequential",
         record=args.record.resolve() if args.record is not None else None,
         record_max_size=args.record_max_size,
     )

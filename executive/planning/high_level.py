@@ -320,9 +320,11 @@ class HighLevel(Service):
                 kb.update_facts(remove=[fact])
             else:
                 kb.set_fact(fact)
-            kb.log_event("STATE_UNSET" if unset else "STATE_SET", str(fact), {"source": "user"})
+            kind = "STATE_UNSET" if unset else "STATE_SET"
+            kb.log_event(kind, str(fact), {"source": request.source})
         self.executer.facts_changed([(fact.name, fact.args)])
-        self.goals.wake(f"{fact} {'unset' if unset else 'set'} by the user")
+        by = "the user" if request.source == "user" else request.source
+        self.goals.wake(f"{fact} {'unset' if unset else 'set'} by {by}")
         return api.FactReply(_fact(fact))
 
     def _object_add(self, request: api.ObjectAdd) -> api.ObjectAdd:

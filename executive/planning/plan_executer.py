@@ -163,6 +163,7 @@ class PlanExecuter:
         self._paused = False
         self._idle = threading.Event()  # set while paused with nothing critical running
         self._snapshot = ExecutionStatus()
+        self._upcoming: tuple[int | None, tuple[int, ...]] = (None, ())  # told the runner
 
     # --- lifecycle ----------------------------------------------------------------------
 
@@ -203,6 +204,17 @@ class PlanExecuter:
         )
         if self._paused and not (run is not None and run.critical()):
             self._idle.set()
+        self._tell_upcoming(run)
+
+    def _tell_upcoming(self, run: PlanRun | None) -> None:
+        """Tell the runner which steps are still to come, when that changed."""
+        steps = [] if run is None or run.finished else [
+            r.step for r in run.runs.values() if r.state is StepState.PENDING
+        ]  # fmt: skip
+        upcoming = (None if run is None else run.plan_id, tuple(s.index for s in steps))
+        if upcoming != self._upcoming:
+            self._upcoming = upcoming
+            self.runner.upcoming(upcoming[0], steps)
 
     def _call(self, fn: Callable[[], T], timeout: float | None = None) -> T:
         """Run ``fn`` on the executer's thread and return its result, with the snapshot

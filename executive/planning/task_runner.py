@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import enum
 from abc import ABC, abstractmethod
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from executive.planning.partial_order import Step
@@ -69,3 +69,9 @@ class TaskRunner(ABC):
     @abstractmethod
     def run(self, step: Step, plan_id: int, report: StepReport) -> StepTask:
         """Start carrying out a step and return at once; report through ``report``."""
+
+    def upcoming(self, plan_id: int | None, steps: Sequence[Step]) -> None:
+        """The steps of the current plan not dispatched yet (none: no plan, or it
+        ended), told whenever they change: a runner may keep ready what they need.
+        Returns at once; does nothing by default."""
+        return

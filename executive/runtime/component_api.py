@@ -1,23 +1,27 @@
-"""The launcher's bus API for the command line: list, start, stop and logs of components.
+"""The launcher's bus API for the command line: list, start, stop and logs of components,
+and fault injection.
 
 The verbs are declared in :mod:`executive.bus.api.components`; requests are checked
 there. Achievements (``component/achieve``) are served by the launcher itself
 (:mod:`executive.runtime.behavior_goals`): behaviors store them while the launcher runs,
-with or without this API.
+with or without this API. Starts and stops by hand go to whoever supervises the
+components (the task executor, in the executive), else straight to the launcher.
 """
 
 from __future__ import annotations
 
 import contextlib
-from typing import Any
+from typing import Any, Protocol
 
 from executive.bus.api.components import (
+    COMPONENT_INJECT,
     COMPONENT_LIST,
     COMPONENT_LOGS,
     COMPONENT_START,
     COMPONENT_STOP,
     ComponentName,
     ComponentsReply,
+    Injection,
     LogQuery,
     LogReply,
 )
@@ -25,17 +29,43 @@ from executive.bus.payloads import ComponentState
 from executive.bus.service import Context, Service
 from executive.bus.verb import Empty
 from executive.runtime.launcher import Launcher
+from executive.sdk.fault_injection import Fault
+
+
+class ByHand(Protocol):
+    """Who starts and stops components for a user, and supervises them afterwards."""
+
+    def start_by_hand(self, name: str) -> ComponentState: ...
+
+    def stop_by_hand(self, name: str) -> ComponentState: ...
+
+
+class _LauncherByHand:
+    def __init__(self, launcher: Launcher) -> None:
+        self.launcher = launcher
+
+    def start_by_hand(self, name: str) -> ComponentState:
+        return self.launcher.start(name)
+
+    def stop_by_hand(self, name: str) -> ComponentState:
+        return self.launcher.stop(name)
 
 
 class ComponentApi(Service):
-    """Serves list, start, stop and logs of the robot's components (the task executor
-    serves restart, fault and reset: they count as faults)."""
+    """Serves list, start, stop, logs and fault injection of the robot's components (the
+    task executor
+    serves restart, fault and reset: they count as faults).
+
+    Args:
+        by_hand: starts and stops for users (default: the launcher, unsupervised).
+    """
 
     name = "component-api"
 
-    def __init__(self, context: Context, launcher: Launcher) -> None:
+    def __init__(self, context: Context, launcher: Launcher, by_hand: ByHand | None = None) -> None:
         super().__init__(context)
         self.launcher = launcher
+        self.by_hand = by_hand or _LauncherByHand(launcher)
         self._declared: list[Any] = []
 
     def start(self) -> None:
@@ -45,6 +75,7 @@ class ComponentApi(Service):
             COMPONENT_LOGS.serve(bus, self._logs),
             COMPONENT_START.serve(bus, self._start),
             COMPONENT_STOP.serve(bus, self._stop),
+            COMPONENT_INJECT.serve(bus, self._inject),
         ]
 
     def stop(self) -> None:
@@ -57,23 +88,34 @@ class ComponentApi(Service):
         launcher = self.launcher
         return ComponentsReply(
             [
-                {
-                    "kind": launcher.kind(state.component).value,
-                    "log": str(launcher.log_path(state.component)),
-                    **state.to_payload(),
-                }
+                {**listed(launcher, state), "log": str(launcher.log_path(state.component))}
                 for state in launcher.states()
             ]
         )
 
     def _start(self, request: ComponentName) -> ComponentState:
-        return self.launcher.start(request.name)
+        return self.by_hand.start_by_hand(request.name)
 
     def _stop(self, request: ComponentName) -> ComponentState:
-        return self.launcher.stop(request.name)
+        return self.by_hand.stop_by_hand(request.name)
+
+    def _inject(self, request: Injection) -> ComponentState:
+        """Check the fault here (its mode and options), then send it to the component."""
+        fault = Fault.parse({"mode": request.mode, **request.options})
+        self.launcher.inject_fault(request.name, fault.to_spec())
+        return self.launcher.state(request.name)
 
     def _logs(self, request: LogQuery) -> LogReply:
         name = request.name
         return LogReply(
             name, str(self.launcher.log_path(name)), self.launcher.logs(name, request.lines)
         )
+
+
+def listed(launcher: Launcher, state: ComponentState) -> dict[str, Any]:
+    """A component as lists show it: its kind and state, and a pid only while it runs
+    (a stopped component's last pid may belong to another process by now)."""
+    payload = {"kind": launcher.kind(state.component).value, **state.to_payload()}
+    if not state.state.is_alive:
+        payload["pid"] = None
+    return payload

@@ -43,6 +43,10 @@ class Launcher:
         grace: seconds a component gets to answer a command, and to exit after a stop
             command and again after SIGTERM.
         log_max_bytes, log_backups: log rotation.
+        credentials: the robot's bus credentials (each component gets its own login).
+        run_id: marks every process started, so that the next executive on the same
+            knowledge base can end what this one leaves if it is killed
+            (:mod:`executive.runtime.run_lock`).
     """
 
     def __init__(
@@ -56,6 +60,7 @@ class Launcher:
         log_max_bytes: int = 1 << 20,
         log_backups: int = 3,
         credentials: Credentials | None = None,
+        run_id: str | None = None,
     ) -> None:
         self.robot = robot
         self.bus = bus
@@ -73,6 +78,7 @@ class Launcher:
             log_backups=log_backups,
             on_process_end=self._goals.process_ended,
             credentials=credentials,
+            run_id=run_id,
         )
         self._running = False
 
@@ -146,6 +152,11 @@ class Launcher:
         process group), each after the grace period.
         """
         return self._control.stop(name, reason)
+
+    def stop_soon(self, name: str, reason: str = "stopped") -> None:
+        """Begin to stop a component and return at once; the stop goes on meanwhile, and
+        a start of the component waits for it."""
+        self._control.stop_soon(name, reason)
 
     def restart(self, name: str) -> ComponentState:
         """Stop (if running) and start again with the component's configuration."""

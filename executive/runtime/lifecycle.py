@@ -33,7 +33,8 @@ from executive.bus.security import Credentials
 from executive.bus.session import Bus
 from executive.runtime.processes import ComponentProcess, ProcessThread
 from executive.runtime.ros2_launch import launch_program
-from executive.runtime.spawn import command, describe_exit, signal_group
+from executive.runtime.run_lock import ENV_RUN
+from executive.runtime.spawn import command, describe_exit
 from executive.runtime.states import StateRecords
 from knowledge.description import ComponentSpec, RobotDescription
 from knowledge.errors import BusError, ComponentError
@@ -100,8 +101,10 @@ class LifecycleControl:
         log_backups: int,
         on_process_end: ProcessEnded,
         credentials: Credentials | None = None,
+        run_id: str | None = None,
     ) -> None:
         self.robot = robot
+        self.run_id = run_id
         self.bus = bus
         self.kb = kb
         self.grace = grace
@@ -117,7 +120,11 @@ class LifecycleControl:
         self._watch: Any = None
         self.records = StateRecords(bus, kb)
         self.processes = ProcessThread(
-            log_dir, log_max_bytes=log_max_bytes, log_backups=log_backups, on_exit=self._exited
+            log_dir,
+            log_max_bytes=log_max_bytes,
+            log_backups=log_backups,
+            on_exit=self._exited,
+            grace=grace,
         )
 
     def open(self) -> None:
@@ -188,15 +195,31 @@ class LifecycleControl:
                 with self._lock:
                     return self._set(slot, Lifecycle.FAILED, reason=reason)
             failure = self._bring_up(slot, run, deadline)
+            pid = run.process.program()  # found now, not under the lock
             with self._lock:
-                if not run.exited.is_set() and not failure:
+                ready = not run.exited.is_set() and not failure
+                if ready:
                     run.ready = True
-                    return self._set(slot, Lifecycle.READY, pid=run.process.pid)
+                    state = self._set(slot, Lifecycle.READY, pid=pid)
+            if ready:
+                self._note(run.process, f"{name} ready (pid {pid})")
+                return state
             if failure:
                 run.failure = failure
                 self._terminate(run)
             run.exited.wait()
             return slot.state
+
+    def _note(self, process: ComponentProcess, text: str) -> None:
+        """A line of dura's own in the process's log (on the launcher thread, which
+        writes the log)."""
+
+        def note() -> None:
+            if not process.reaped:
+                process.note(text)
+
+        with contextlib.suppress(ComponentError):  # the launcher closes
+            self.processes.call(note)
 
     def _spawn(self, slot: _Slot) -> _Run:
         """Fork the process and record it STARTING (on the launcher thread, so that its
@@ -211,6 +234,8 @@ class LifecycleControl:
             keys.ENV_KIND: spec.kind.value,
             keys.ENV_INSTANCE: instance,
         }
+        if self.run_id is not None:  # marks the tree as this executive's (see run_lock)
+            env[ENV_RUN] = self.run_id
         if self.credentials is not None:  # its own user: it may do only a component's part
             login = self.credentials.login(security.component_user(spec.name))
             env[security.ENV_USER], env[security.ENV_PASSWORD] = login.user, login.password
@@ -269,16 +294,24 @@ class LifecycleControl:
 
     # --- stopping ---------------------------------------------------------------------
 
-    def stop(self, name: str, reason: str = "stopped") -> ComponentState:
-        """Stop a component and wait until its process is gone; returns its final state."""
+    def stop(
+        self, name: str, reason: str = "stopped", *, begun: threading.Event | None = None
+    ) -> ComponentState:
+        """Stop a component and wait until its process is gone; returns its final state.
+
+        ``begun`` is set once the stop holds the component (a start waits for it)."""
         slot = self._slot(name)
         with slot.lock:
-            with self._lock:
-                run = slot.run
-                if run is None or run.exited.is_set():
-                    return slot.state
-                run.stopping = True
-                self._set(slot, Lifecycle.STOPPING, pid=run.process.pid, reason=reason)
+            try:
+                with self._lock:
+                    run = slot.run
+                    if run is None or run.exited.is_set():
+                        return slot.state
+                    run.stopping = True
+                    self._set(slot, Lifecycle.STOPPING, pid=run.process.program(), reason=reason)
+            finally:
+                if begun is not None:
+                    begun.set()
             if run.announced:
                 with contextlib.suppress(BusError):
                     self._request(name, Stop(), self.grace)
@@ -287,13 +320,29 @@ class LifecycleControl:
             run.exited.wait()
             return slot.state
 
+    def stop_soon(self, name: str, reason: str = "stopped") -> None:
+        """Begin to stop a component and return: the stop goes on on a thread of its own,
+        and a start of the component waits for it."""
+        self._slot(name)  # refuses an unknown name here
+        begun = threading.Event()
+        threading.Thread(
+            target=self.stop, args=(name, reason), kwargs={"begun": begun},
+            name=f"stop-{name}", daemon=True,
+        ).start()  # fmt: skip
+        begun.wait()
+
     def _terminate(self, run: _Run) -> None:
-        """SIGTERM to the process group, SIGKILL after the grace period (returns at once
-        once it is gone)."""
-        signal_group(run.process.pid, signal.SIGTERM)
+        """SIGTERM to the process group; after the grace period its supervisor kills
+        the whole tree, and after another the group is killed (returns at once once it
+        is gone)."""
+        processes, process = self.processes, run.process
+        processes.signal(process, signal.SIGTERM)
+        if run.exited.wait(self.grace):
+            return
+        log.warning("'%s' ignored SIGTERM: SIGKILL to its process tree", process.name)
+        processes.signal(process, signal.SIGUSR1, group=False)
         if not run.exited.wait(self.grace):
-            log.warning("'%s' ignored SIGTERM: SIGKILL", run.process.name)
-            signal_group(run.process.pid, signal.SIGKILL)
+            processes.signal(process, signal.SIGKILL)
 
     def _exited(self, process: ComponentProcess, exit_code: int | None, signum: int | None) -> None:
         """A process was reaped: record what its end means (on the launcher thread)."""
@@ -313,7 +362,12 @@ class LifecycleControl:
                 state, reason = Lifecycle.EXITED, how
             process.finish(f"{state.value}: {how}")
             self._set(
-                slot, state, pid=process.pid, exit_code=exit_code, signum=signum, reason=reason
+                slot,
+                state,
+                pid=process.program_pid or process.pid,
+                exit_code=exit_code,
+                signum=signum,
+                reason=reason,
             )
             slot.run = None
             run.exited.set()
@@ -363,7 +417,7 @@ class LifecycleControl:
                 run = slot.run
                 if run is None or run.exited.is_set():
                     return slot.state
-                return self._set(slot, after, pid=run.process.pid)
+                return self._set(slot, after, pid=run.process.program())
 
     def reconfigure(self, name: str, params: Mapping[str, Any]) -> None:
         """Hand changed parameters to a running component."""

@@ -1,12 +1,15 @@
 """Component processes as the operating system sees them: forked, pumped, reaped.
 
 This module owns the launcher thread. It lives as long as the launcher and forks every
-component process, because a child gets ``PR_SET_PDEATHSIG`` and so dies with the
-*thread* that forked it (see :mod:`executive.runtime.spawn`). The thread waits on a
-pidfd per child, so an exit is known at once: it kills whatever is left of the child's
-process group, reaps the child, drains its output and hands the exit to the owner of
-the process (:mod:`executive.runtime.lifecycle`). Each child's stdout and stderr go
-through a pipe into ``<name>.log``, rotated by size.
+component process, because a child gets ``PR_SET_PDEATHSIG`` and so learns of the end
+of the *thread* that forked it (see :mod:`executive.runtime.spawn`). Each component
+runs under a supervisor (:mod:`executive.runtime.supervisor`) at the head of its
+process group, which ends the component's whole tree, grandchildren included, when the
+component ends or the executive dies. The thread waits on a pidfd per child, so an exit
+is known at once: it kills whatever is left of the child's process group, reaps the
+child, drains its output and hands the exit to the owner of the process
+(:mod:`executive.runtime.lifecycle`). Each child's stdout and stderr go through a pipe
+into ``<name>.log``, rotated by size.
 
 What a process means (ready, stopping, failed) is not decided here: this module knows
 pids, file descriptors and log files.
@@ -15,12 +18,15 @@ pids, file descriptors and log files.
 from __future__ import annotations
 
 import contextlib
+import errno
 import logging
 import os
 import queue
 import selectors
+import shutil
 import signal
 import subprocess
+import sys
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -30,17 +36,20 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from executive.runtime.logfile import LogFile
-from executive.runtime.spawn import exit_status, signal_group, spawn
+from executive.runtime.spawn import command, exit_status, signal_group, spawn
 from knowledge.errors import ComponentError
 
 log = logging.getLogger("dura.launcher")
 
 T = TypeVar("T")
 
+SUPERVISOR = Path(__file__).with_name("supervisor.py")
+
 
 @dataclass(eq=False)
 class ComponentProcess:
-    """One forked component process: its pid, pidfd, output pipe and log file."""
+    """One forked component: the supervisor's pid (the head of its process group, the
+    launcher's child), its pidfd, output pipe and log file, and the program's pid."""
 
     name: str
     pid: int
@@ -48,6 +57,15 @@ class ComponentProcess:
     pidfd: int
     pipe: int
     log: LogFile
+    program_pid: int | None = None
+    reaped: bool = False
+
+    def program(self) -> int:
+        """The component's own process, below its supervisor (the supervisor's pid
+        while the program has not been forked yet)."""
+        if self.program_pid is None and not self.reaped:
+            self.program_pid = first_child(self.pid)
+        return self.program_pid or self.pid
 
     def note(self, text: str) -> None:
         """Write a line of dura's own into the process's log (``--- dura: ...``)."""
@@ -71,12 +89,21 @@ class ProcessThread:
         log_max_bytes, log_backups: log rotation.
         on_exit: told of every reaped process, its output drained; it ends the log
             with :meth:`ComponentProcess.finish` (closed anyway if ``on_exit`` fails).
+        grace: seconds a component's tree gets to stop (SIGTERM) once the executive
+            died, before its supervisor kills it.
     """
 
     def __init__(
-        self, log_dir: Path, *, log_max_bytes: int, log_backups: int, on_exit: ExitHandler
+        self,
+        log_dir: Path,
+        *,
+        log_max_bytes: int,
+        log_backups: int,
+        on_exit: ExitHandler,
+        grace: float = 1.0,
     ) -> None:
         self.log_dir = log_dir
+        self.grace = grace
         self.log_max_bytes = log_max_bytes
         self.log_backups = log_backups
         self._on_exit = on_exit
@@ -113,27 +140,32 @@ class ProcessThread:
     def fork(
         self, name: str, argv: Sequence[str], *, cwd: Path, env: Mapping[str, str]
     ) -> ComponentProcess:
-        """Start a process in a group of its own, its output into its log file.
+        """Start a program under its supervisor in a group of its own, its output into
+        its log file.
 
-        Only on the launcher thread (inside :meth:`call`): the child dies with the
-        thread that forked it.
+        Only on the launcher thread (inside :meth:`call`): the supervisor learns of the
+        end of the thread that forked it.
 
         Raises:
             OSError: the program cannot be run.
         """
         if threading.current_thread() is not self._thread:
             raise RuntimeError("fork() runs on the launcher thread only (use call())")
+        program = command(argv)
+        runnable(program[0], cwd, env)
         logfile = LogFile(
             self.log_path(name), max_bytes=self.log_max_bytes, backups=self.log_backups
         )
+        head = [sys.executable, "-I", "-S", str(SUPERVISOR), str(os.getpid()), f"{self.grace:g}"]
         read_end, write_end = os.pipe()
         try:
             popen = spawn(
-                argv,
+                [*head, "--", *program],
                 cwd=cwd,
                 env={**env, "PYTHONUNBUFFERED": "1"},  # output reaches the log as it comes
                 stdout=write_end,
                 own_group=True,
+                parent_death=signal.SIGHUP,  # the supervisor ends the tree, then itself
             )
         except OSError:
             os.close(read_end)
@@ -145,10 +177,25 @@ class ProcessThread:
         process = ComponentProcess(
             name, popen.pid, popen, os.pidfd_open(popen.pid), read_end, logfile
         )
-        process.note(f"started {name} (pid {popen.pid})")
+        process.note(f"started {name} (supervisor pid {popen.pid})")
         self._selector.register(process.pidfd, selectors.EVENT_READ, lambda: self._reap(process))
         self._selector.register(read_end, selectors.EVENT_READ, lambda: self._pump(process))
         return process
+
+    def signal(self, process: ComponentProcess, signum: int, *, group: bool = True) -> None:
+        """Signal a process's group (or only its supervisor) unless it has been reaped
+        (on the launcher thread, which reaps: a reaped pid may belong to someone else)."""
+
+        def send() -> None:
+            if process.reaped:
+                return
+            if group:
+                signal_group(process.pid, signum)
+            else:
+                with contextlib.suppress(OSError):
+                    signal.pidfd_send_signal(process.pidfd, signum)
+
+        self.call(send)
 
     def _run_calls(self) -> None:
         with contextlib.suppress(BlockingIOError):
@@ -201,6 +248,7 @@ class ProcessThread:
         """The process has exited: kill its group, reap it, tell the owner."""
         signal_group(process.pid, signal.SIGKILL)  # pgid == pid; reserved until reaped
         returncode = process.popen.wait()
+        process.reaped = True
         self._selector.unregister(process.pidfd)
         os.close(process.pidfd)
         if process.pipe >= 0:
@@ -210,3 +258,36 @@ class ProcessThread:
             self._on_exit(process, *exit_status(returncode))
         finally:
             process.log.close()  # a no-op once on_exit has finished it
+
+
+def runnable(program: str, cwd: Path, env: Mapping[str, str]) -> None:
+    """Check that ``program`` can be run from ``cwd`` (the supervisor runs it later).
+
+    Raises:
+        OSError: it is missing or not executable, as running it would say.
+    """
+    if os.sep in program:
+        path = cwd / program
+        if not path.exists():
+            raise FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), program)
+        if path.is_dir() or not os.access(path, os.X_OK):
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), program)
+    elif shutil.which(program, path=env.get("PATH", os.defpath)) is None:
+        raise FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT), program)
+
+
+def first_child(pid: int) -> int | None:
+    """The oldest living child of ``pid``, from ``/proc`` (``None``: it has none)."""
+    found: list[tuple[int, int]] = []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", "rb") as f:
+                text = f.read()
+        except OSError:
+            continue
+        fields = text[text.rindex(b")") + 2 :].split()
+        if int(fields[1]) == pid and fields[0] != b"Z":
+            found.append((int(fields[19]), int(entry)))
+    return min(found)[1] if found else None

@@ -23,9 +23,9 @@ _PR_SET_PDEATHSIG = 1
 _SIGKILL = int(signal.SIGKILL)
 
 
-def _die_with_parent(parent: int) -> None:
+def _die_with_parent(parent: int, signum: int) -> None:
     """Runs in the child between fork and exec: no imports, no locks, no allocations."""
-    _libc.prctl(_PR_SET_PDEATHSIG, _SIGKILL, 0, 0, 0)
+    _libc.prctl(_PR_SET_PDEATHSIG, signum, 0, 0, 0)
     if os.getppid() != parent:  # the parent died before prctl took effect
         os._exit(1)
 
@@ -45,6 +45,7 @@ def spawn(
     env: Mapping[str, str] | None = None,
     stdout: int | None = None,
     own_group: bool = False,
+    parent_death: int = _SIGKILL,
 ) -> subprocess.Popen[bytes]:
     """Start ``argv`` (never through a shell); stderr goes where stdout goes.
 
@@ -52,6 +53,8 @@ def spawn(
         stdout: a file descriptor for the child's stdout and stderr (default: ours).
         own_group: make the child the leader of a new process group, so that the
             group can be signalled as a whole (see :func:`signal_group`).
+        parent_death: the signal the child gets when this thread ends (SIGKILL; a
+            child that cleans up after itself, as the supervisor does, takes SIGHUP).
 
     Raises:
         OSError: the program cannot be run (missing, not executable, bad cwd).
@@ -64,7 +67,7 @@ def spawn(
         stdout=stdout,
         stderr=subprocess.STDOUT if stdout is not None else None,
         process_group=0 if own_group else None,
-        preexec_fn=functools.partial(_die_with_parent, os.getpid()),  # noqa: PLW1509
+        preexec_fn=functools.partial(_die_with_parent, os.getpid(), parent_death),  # noqa: PLW1509
     )
 
 

@@ -14,8 +14,16 @@ from __future__ import annotations
 
 from executive.bus.session import Message
 from executive.sdk.behavior import Behavior
-from executive.sdk.component import Functionality
+from executive.sdk.component import Functionality, Rate
 from executive.sdk.fault_injection import FaultMode
 from executive.sdk.goal import GoalCancelled, GoalFailed
 
-__all__ = ["Behavior", "FaultMode", "Functionality", "GoalCancelled", "GoalFailed", "Message"]
+__all__ = [
+    "Behavior",
+    "FaultMode",
+    "Functionality",
+    "GoalCancelled",
+    "GoalFailed",
+    "Message",
+    "Rate",
+]

@@ -206,24 +206,24 @@ class Component:
         Raises:
             BusError: the executive refused it (unknown predicate or object) or is gone.
         """
-        STATE_SET.call(self.bus, FactChange(fact), timeout=5.0)
+        STATE_SET.call(self.bus, FactChange(fact, source=self.name), timeout=5.0)
 
     @final
     def unset_fact(self, fact: str) -> None:
         """Make a fact false in the robot's world (see :meth:`set_fact`)."""
-        STATE_UNSET.call(self.bus, FactChange(fact), timeout=5.0)
+        STATE_UNSET.call(self.bus, FactChange(fact, source=self.name), timeout=5.0)
 
     @final
-    def at_rate(self, hz: float, step: Callable[[], None]) -> None:
+    def at_rate(self, hz: float, step: Callable[[], None]) -> Rate:
         """Call ``step`` ``hz`` times a second of robot time while running (held while
-        paused): with ``DURA_TIME_SCALE=N``, N times as often on the wall clock.
+        paused): with ``DURA_TIME_SCALE=N``, N times as often on the wall clock. Returns
+        the loop's :class:`Rate`, whose ``hz`` may change while it runs (in
+        :meth:`on_reconfigure`).
 
         Deadlines are absolute, so the rate does not drift; a loop that falls more
         than a period behind skips ahead instead of bursting.
         """
-        if hz <= 0:
-            raise ComponentError(f"a rate must be positive, not {hz}")
-        period = self.clock.wall(1.0 / hz)
+        rate = Rate(hz)
         framework = self._framework
 
         def loop() -> None:
@@ -234,6 +234,7 @@ class Component:
                 except Exception:
                     framework.fail(f"the rate loop {getattr(step, '__name__', step)!r}")
                     return
+                period = self.clock.wall(1.0 / rate.hz)
                 due += period / self.faults.rate_factor()
                 now = time.monotonic()
                 if due < now - period:
@@ -241,6 +242,7 @@ class Component:
                 framework.wait(lambda: framework.ended, timeout=max(0.0, due - now))
 
         threading.Thread(target=loop, daemon=True, name=f"rate-{self.name}").start()
+        return rate
 
     # --- the process ------------------------------------------------------------------
 
@@ -288,6 +290,28 @@ class Component:
         except DuraError as e:
             logging.getLogger(f"dura.component.{name}").error("%s", e)
             return 1
+
+
+class Rate:
+    """The rate of a loop :meth:`Component.at_rate` runs, in Hz; set ``hz`` to change it
+    (from the next period on).
+
+    Raises:
+        ComponentError: a rate that is not a positive number.
+    """
+
+    def __init__(self, hz: float) -> None:
+        self.hz = hz
+
+    @property
+    def hz(self) -> float:
+        return self._hz
+
+    @hz.setter
+    def hz(self, value: float) -> None:
+        if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
+            raise ComponentError(f"a rate must be a positive number, not {value!r}")
+        self._hz = float(value)
 
 
 class Functionality(Component, ABC):

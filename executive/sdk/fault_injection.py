@@ -81,6 +81,14 @@ class Fault:
             values[key] = kind(value)
         return cls(mode, **values)
 
+    def to_spec(self) -> dict[str, Any]:
+        """The fault as :meth:`parse` reads it: its mode and the options it changes."""
+        spec: dict[str, Any] = {"mode": self.mode.value}
+        for f in fields(self):
+            if f.name != "mode" and getattr(self, f.name) != f.default:
+                spec[f.name] = getattr(self, f.name)
+        return spec
+
 
 class FaultInjector:
     """The faults a component currently suffers, and the effects the SDK applies.

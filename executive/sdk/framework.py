@@ -129,11 +129,21 @@ class Framework:
         self._set_phase(ComponentPhase.RUNNING)
 
     def reconfigure(self, params: dict[str, Any]) -> None:
+        """Hand changed parameters to the component's ``on_reconfigure``; refused by a
+        component without one (the executive then restarts it with them)."""
         self._expect(
             "reconfigure", ComponentPhase.CONFIGURED, ComponentPhase.RUNNING, ComponentPhase.PAUSED
         )
-        self.component.params.update(params)
-        self.component.on_reconfigure(params)
+        from executive.sdk.component import Component  # here: it imports this module
+
+        component = self.component
+        if type(component).on_reconfigure is Component.on_reconfigure:
+            raise ComponentError(
+                f"'{component.name}' cannot change its parameters while it runs "
+                "(it has no on_reconfigure)"
+            )
+        component.params.update(params)
+        component.on_reconfigure(params)
 
     def stop(self) -> None:
         """Stop for good: loops end, a running goal is cancelled, the process exits (0)."""

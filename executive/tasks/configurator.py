@@ -1,22 +1,36 @@
 """Configuration changes carried out on the launcher: the system configuration that runs,
 and the components the task executor started and keeps running.
 
-A change stops what no task holds any more (dependents first) and starts what is
-missing (dependencies first), as :meth:`SystemConfiguration.transition` orders it. A
-component the executor starts and that becomes ready joins the diagnosis model; one
-it stops leaves it. A start that fails is reported back: it is a fault of that
-component, which the fault handling counts.
+A change makes before it breaks: the warm spares a task needs now resume and what is
+missing starts, all at once (a configuration change costs one component start, not the
+sum), and only then does what no task holds any more stop. (Sequentially, as
+:meth:`SystemConfiguration.transition` orders it, for robots that need it: stops first,
+dependents first, then starts, dependencies first.) Spares no task needs run paused. A
+component the executor starts and that becomes ready joins the diagnosis model; one it
+stops leaves it. A start that fails is reported back: it is a fault of that component,
+which the fault handling counts.
+
+A component started by hand (``dura component start``) is kept running like the
+others, and no configuration change stops it: only a stop by hand (when no task holds
+it) or a permanent fault does.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping
+import logging
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 
 from executive.bus.payloads import ComponentState, Lifecycle
 from executive.runtime.launcher import Launcher
 from executive.tasks.configuration import SystemConfiguration, Transition
 from executive.tasks.diagnosis_model import DiagnosisModelSync
+from knowledge.errors import ComponentError
 from knowledge.knowledge_base import KnowledgeBase
+
+log = logging.getLogger("dura.task_executor")
+
+RUNNING = (Lifecycle.READY, Lifecycle.PAUSED)  # a started component is in one of these
 
 
 class Configurator:
@@ -28,6 +42,9 @@ class Configurator:
         model: the diagnosis model to keep in line.
         before_start: called before each component start (which may take seconds), so
             that the executor's status shows what is being started.
+        sequential: change configurations as dura first did: stop what goes first, then
+            start what comes one after another, in dependency order (for robots whose
+            components need their providers up when they start).
     """
 
     def __init__(
@@ -37,13 +54,16 @@ class Configurator:
         model: DiagnosisModelSync,
         *,
         before_start: Callable[[], None] = lambda: None,
+        sequential: bool = False,
     ) -> None:
         self.kb = kb
         self.launcher = launcher
         self.model = model
+        self.sequential = sequential
         self._before_start = before_start
         self._configuration = SystemConfiguration()
         self._expected: set[str] = set()  # components we started and keep running
+        self._by_hand: set[str] = set()  # started by hand: only a stop by hand ends them
 
     @property
     def configuration(self) -> SystemConfiguration:
@@ -54,35 +74,117 @@ class Configurator:
         self, target: SystemConfiguration, transition: Transition, why: str
     ) -> Mapping[str, str]:
         """Change to ``target`` by ``transition``; the functionalities that did not start,
-        each with the launcher's reason."""
+        each with the launcher's reason.
+
+        Make before break: spares needed now resume and what is missing starts, all at
+        once, before what is no longer needed stops (``sequential``: stop first, then
+        start one after another in dependency order).
+        """
         self._configuration = target
-        if transition.empty:
+        resume = [n for n in transition.resume if self.launcher.state(n).state is Lifecycle.PAUSED]
+        pause = [n for n in transition.pause if self.launcher.state(n).state is Lifecycle.READY]
+        if transition.empty and not resume and not pause:
             return {}
-        self.kb.log_event(
-            "CONFIGURATION",
-            ", ".join(sorted(target.functionalities)) or "nothing",
-            {"stop": list(transition.stop), "start": list(transition.start), "why": why},
-        )
-        for name in transition.stop:
-            self.stop(name, "no task needs it")
-        failed = [n for n in transition.start if self.start(n).state is not Lifecycle.READY]
+        if not transition.empty:
+            self.kb.log_event(
+                "CONFIGURATION",
+                ", ".join(sorted(target.functionalities)) or "nothing",
+                {"stop": list(transition.stop), "start": list(transition.start), "why": why,
+                 "resume": resume},
+            )  # fmt: skip
+        if self.sequential:
+            for name in transition.stop:
+                self.release(name, "no task needs it")
+        for name in resume:
+            self._switch(name, pause=False)
+        failed = self._start_all(transition.start)
+        for name in pause:
+            self._switch(name, pause=True)
+        if not self.sequential:
+            self._stop_all(transition.stop)
         return {name: self.launcher.state(name).reason for name in failed}
 
     def start(self, name: str) -> ComponentState:
-        """Start a component (a functionality or a behavior) and wait until it is ready."""
+        """Start a component (a functionality or a behavior) and wait until it is ready
+        (paused, for a spare no task needs)."""
         self._expected.add(name)
         self._before_start()
-        state = self.launcher.start(name)
-        if state.state is Lifecycle.READY:
-            self.model.add(name)
-        else:
+        return self._started(name, self.launcher.start(name))
+
+    def _started(self, name: str, state: ComponentState) -> ComponentState:
+        if state.state is not Lifecycle.READY:
             self._expected.discard(name)
+            return state
+        self.model.add(name)
+        if name in self._configuration.idle:
+            return self._switch(name, pause=True)
         return state
 
-    def stop(self, name: str, reason: str) -> None:
+    def _start_all(self, names: Sequence[str]) -> list[str]:
+        """Start components, all at once unless sequential; those that did not start."""
+        if self.sequential or len(names) < 2:
+            return [n for n in names if self.start(n).state not in RUNNING]
+        self._expected.update(names)
+        self._before_start()
+        with ThreadPoolExecutor(len(names), thread_name_prefix="start") as pool:
+            states = list(pool.map(self.launcher.start, names))
+        return [n for n, s in zip(names, states, strict=True)
+                if self._started(n, s).state not in RUNNING]  # fmt: skip
+
+    def _stop_all(self, names: Sequence[str]) -> None:
+        """Stop what no task needs (unless started by hand), all at once."""
+        stopping = [n for n in names if n not in self._by_hand]
+        for name in stopping:
+            self._expected.discard(name)
+            self.model.remove(name)
+        with ThreadPoolExecutor(max(1, len(stopping)), thread_name_prefix="stop") as pool:
+            list(pool.map(lambda n: self.launcher.stop(n, "no task needs it"), stopping))
+
+    def _switch(self, name: str, *, pause: bool) -> ComponentState:
+        """Pause a spare no task needs, or resume one a task needs now."""
+        try:
+            return self.launcher.pause(name) if pause else self.launcher.resume(name)
+        except ComponentError as e:  # it ended meanwhile: its exit is handled as such
+            log.warning("cannot %s '%s': %s", "pause" if pause else "resume", name, e)
+            return self.launcher.state(name)
+
+    def stop(self, name: str, reason: str, *, wait: bool = True) -> None:
+        """Stop a component; ``wait=False``: return at once, the stop goes on meanwhile
+        (a start of the same component waits for it)."""
         self._expected.discard(name)
         self.model.remove(name)
-        self.launcher.stop(name, reason)
+        if wait:
+            self.launcher.stop(name, reason)
+        else:
+            self.launcher.stop_soon(name, reason)
+
+    def release(self, name: str, reason: str, *, wait: bool = True) -> None:
+        """No task needs it any more: stop it, unless it was started by hand."""
+        if name not in self._by_hand:
+            self.stop(name, reason, wait=wait)
+
+    def start_by_hand(self, name: str) -> ComponentState:
+        """Start a component for a user, kept running until the user stops it."""
+        self._by_hand.add(name)
+        state = self.start(name)
+        if state.state is not Lifecycle.READY:
+            self._by_hand.discard(name)
+        return state
+
+    def stop_by_hand(self, name: str, *, held: bool) -> ComponentState:
+        """A user stops a component: it stops unless a task holds it (``held``)."""
+        self._by_hand.discard(name)
+        if not held:
+            self.stop(name, "stopped by hand")
+        return self.launcher.state(name)
+
+    def by_hand(self, name: str) -> bool:
+        """It was started by hand and not stopped by hand since."""
+        return name in self._by_hand
+
+    def forget_by_hand(self, name: str) -> None:
+        """It is no longer kept running for a user (it is permanently faulty)."""
+        self._by_hand.discard(name)
 
     def restart(self, name: str, reason: str) -> ComponentState:
         self.stop(name, reason)

@@ -10,12 +10,18 @@ later (and when to decide again), which wait for a running task to end, which th
 scheduler cancelled (and why), which running tasks change providers, and the
 configuration to run with the steps from the running one. The executor
 (:mod:`executive.tasks.dispatch`) carries the decision out.
+
+:func:`keep_running` then keeps functionalities running that no task holds any more but
+that are still wanted: those the plan's upcoming steps need (consecutive steps on the
+same functionalities do not stop and start them in between), and those that linger
+for a while after their last task. It keeps only what runs already and is usable; it
+never starts anything.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from executive.tasks.configuration import SystemConfiguration, Transition
@@ -170,3 +176,116 @@ def _changes(
     return dataclasses.replace(
         decision, configuration=target, transition=running.transition(target, functionalities)
     )
+
+
+def keep_running(
+    decision: Decision,
+    running: SystemConfiguration,
+    *,
+    robot: RobotDescription,
+    faulty: Collection[str],
+    upcoming: Sequence[str] = (),
+    lingering: Iterable[str] = (),
+    standby: bool = True,
+) -> Decision:
+    """The decision with functionalities kept running that no task holds now.
+
+    Args:
+        decision: what the scheduling decided (its configuration holds the tasks).
+        running: the configuration that runs now.
+        faulty: the permanently faulty components (never kept).
+        upcoming: the behaviors of the plan's steps still to come, in order.
+        lingering: functionalities that linger after their last task.
+        standby: keep the warm spares (functionalities with ``standby: true``) and
+            what they run on, started if need be.
+    """
+    target = decision.configuration
+    offered: dict[str, str] = {}  # capability -> a running functionality providing it
+    for _, providers in (*target.holders(), *running.holders()):
+        for capability, f in providers.items():
+            offered.setdefault(capability, f)
+    reserved: dict[str, Mapping[str, str]] = {}
+    for i, behavior in enumerate(upcoming):
+        needs = robot.behaviors[behavior].requires if behavior in robot.behaviors else ()
+        wanted = _closure(needs, offered, robot, faulty)
+        if wanted:
+            reserved[f"upcoming step {i + 1}: {behavior}"] = wanted
+    for f in sorted(lingering):
+        spec = robot.functionalities.get(f)
+        if spec is None or f not in running.functionalities:
+            continue
+        below = _closure(spec.requires, offered, robot, faulty)
+        if below is not None and f not in faulty:
+            reserved[f"lingering: {f}"] = {**below, (spec.provides or (f,))[0]: f}
+    spares: dict[str, Mapping[str, str]] = {}
+    for spec in robot.functionalities.values() if standby else ():
+        if spec.standby:
+            wanted = _spare(spec, offered, robot, faulty)
+            if wanted is not None:
+                spares[f"standby: {spec.name}"] = wanted
+    configuration = SystemConfiguration(target.tasks, reserved, spares)
+    functionalities = list(robot.functionalities.values())
+    return _changes(decision, running, configuration, functionalities)
+
+
+def _spare(
+    spec: FunctionalitySpec,
+    offered: Mapping[str, str],
+    robot: RobotDescription,
+    faulty: Collection[str],
+) -> dict[str, str] | None:
+    """A spare and the providers it runs on: what runs where it can, else the best-rated
+    usable provider; ``None`` if it cannot run."""
+    if spec.name in faulty:
+        return None
+    providers = {(spec.provides or (spec.name,))[0]: spec.name}
+    chosen = _choose(spec.requires, offered, robot, faulty, frozenset({spec.name}))
+    return None if chosen is None else {**providers, **chosen}
+
+
+def _choose(
+    needs: Iterable[str],
+    offered: Mapping[str, str],
+    robot: RobotDescription,
+    faulty: Collection[str],
+    visiting: frozenset[str],
+) -> dict[str, str] | None:
+    """Usable providers for ``needs`` and what they require, preferring what runs."""
+    out: dict[str, str] = {}
+    for capability in needs:
+        candidates = sorted(
+            (f for f in robot.functionalities.values() if capability in f.provides),
+            key=lambda f: (f.name != offered.get(capability), -f.rating, f.name),
+        )
+        for f in candidates:
+            if f.name in faulty or f.name in visiting:
+                continue
+            below = _choose(f.requires, offered, robot, faulty, visiting | {f.name})
+            if below is not None:
+                out.update({capability: f.name, **below})
+                break
+        else:
+            return None
+    return out
+
+
+def _closure(
+    needs: Iterable[str],
+    offered: Mapping[str, str],
+    robot: RobotDescription,
+    faulty: Collection[str],
+) -> dict[str, str] | None:
+    """Providers of ``needs`` and of what they require in turn, all from ``offered`` and
+    none faulty; ``None`` if ``offered`` does not cover them."""
+    providers: dict[str, str] = {}
+    todo = list(needs)
+    while todo:
+        capability = todo.pop()
+        if capability in providers:
+            continue
+        f = offered.get(capability)
+        if f is None or f in faulty or f not in robot.functionalities:
+            return None
+        providers[capability] = f
+        todo.extend(robot.functionalities[f].requires)
+    return providers

@@ -1,8 +1,10 @@
 """The task executor's decisions carried out, on its worker thread.
 
 After every change that may move tasks (a request, a task's end, a permanent fault, a
-reset, a due start) the :class:`Dispatcher` asks :func:`~executive.tasks.decisions.decide`
-and carries the decision out in this order: it ends the tasks the scheduler cancelled,
+reset, a due start) the :class:`Dispatcher` asks :func:`~executive.tasks.decisions.decide`,
+keeps running what the plan's upcoming steps need and what lingers
+(:func:`~executive.tasks.decisions.keep_running`), and carries the decision out in this
+order: it ends the tasks the scheduler cancelled,
 gives running tasks their new providers, changes the system configuration (a start
 that fails is a fault of that component), starts the behaviors of the tasks due now,
 lets repaired tasks go on, and sets a timer for the next due start. Ending a task
@@ -25,11 +27,12 @@ from executive.bus.service import Context
 from executive.runtime.launcher import Launcher
 from executive.tasks.configuration import SystemConfiguration, Transition
 from executive.tasks.configurator import Configurator
-from executive.tasks.decisions import Decision, decide
+from executive.tasks.decisions import Decision, decide, keep_running
 from executive.tasks.diagnosis_model import DiagnosisModelSync
 from executive.tasks.fault_handling import FaultHandler
 from executive.tasks.faults import Faults
 from executive.tasks.ledger import TaskLedger
+from executive.tasks.parameters import RuntimeParameters
 from executive.tasks.supervision import Post, Supervisor
 from executive.tasks.task import Task, TaskControl, TaskEnd, TaskPhase
 
@@ -46,6 +49,10 @@ class Dispatcher:
         post: runs a job on the executor's worker.
         publish: refreshes the executor's snapshot (before each component start).
         time_limit: seconds one schedule may take.
+        linger: seconds a functionality no task (and no upcoming step) needs keeps
+            running before it stops.
+        sequential: change configurations one component after another, stopping first
+            (:class:`~executive.tasks.configurator.Configurator`).
     """
 
     def __init__(
@@ -57,11 +64,17 @@ class Dispatcher:
         post: Post,
         publish: Callable[[], None],
         time_limit: float = 1.0,
+        linger: float = 0.0,
+        sequential: bool = False,
     ) -> None:
         self.robot = context.robot
         self.time_limit = time_limit
+        self.linger = linger
+        self.standby = True  # keep the warm spares (until the executive stops)
         self._post = post
         self._timer: threading.Timer | None = None
+        self.upcoming: tuple[str, ...] = ()  # behaviors of the plan's steps to come
+        self._lingering: dict[str, float] = {}  # functionality -> until (epoch seconds)
         self.faults = Faults(context.robot, context.kb)
         self.ledger = TaskLedger(context.kb, control)
         self.configurator = Configurator(
@@ -69,16 +82,20 @@ class Dispatcher:
             launcher,
             DiagnosisModelSync(context.bus, context.robot),
             before_start=publish,
+            sequential=sequential,
         )
         self.supervisor = Supervisor(
             context.robot, ledger=self.ledger, launcher=launcher,
             configurator=self.configurator, faults=self.faults, end=self.end, post=post,
         )  # fmt: skip
-        self.repairs = FaultHandler(
+        self.repairs = repairs = FaultHandler(
             context.robot, context.kb, ledger=self.ledger, launcher=launcher,
             configurator=self.configurator, supervisor=self.supervisor, faults=self.faults,
             end=self.end, reschedule=self.reschedule, post=post,
         )  # fmt: skip
+        self.parameters = RuntimeParameters(
+            context.robot, context.kb, launcher, restart=repairs.warm_restart
+        )
 
     def request(self, task: Task) -> None:
         """A new task asks for its configuration."""
@@ -90,16 +107,53 @@ class Dispatcher:
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
+        now, running, faulty = time.time(), self.configurator.configuration, self.faults.faulty()
         decision = decide(
             self.ledger.views(),
-            self.configurator.configuration,
+            running,
             robot=self.robot,
-            faulty=self.faults.faulty(),
+            faulty=faulty,
             ratings=self.faults.ratings(),
-            now=time.time(),
+            now=now,
             time_limit=self.time_limit,
         )
-        self._carry_out(decision, why)
+        self._carry_out(self._keep(decision, running, faulty, now), why)
+
+    def expect(self, behaviors: tuple[str, ...]) -> None:
+        """The plan's upcoming steps changed (their behaviors, in order): keep running
+        what they need, and no longer what they needed."""
+        if behaviors == self.upcoming:
+            return
+        self.upcoming = behaviors
+        running = self.configurator.configuration
+        if not running.reserved:
+            return  # nothing reserved: the next schedule takes them into account
+        now, faulty = time.time(), self.faults.faulty()
+        kept = self._keep(Decision(configuration=SystemConfiguration(running.tasks)), running,
+                          faulty, now)  # fmt: skip
+        self._apply(kept.configuration, kept.transition, "the plan's upcoming steps changed")
+
+    def _keep(
+        self, decision: Decision, running: SystemConfiguration, faulty: frozenset[str], now: float
+    ) -> Decision:
+        """The decision with what upcoming steps need and what lingers kept running;
+        functionalities it would stop start to linger (if they linger at all)."""
+
+        def keep(lingering: set[str]) -> Decision:
+            return keep_running(decision, running, robot=self.robot, faulty=faulty,
+                                upcoming=self.upcoming, lingering=lingering,
+                                standby=self.standby)  # fmt: skip
+
+        needed = keep(set())
+        if self.linger <= 0:
+            return needed
+        for f in list(self._lingering):
+            if f in needed.configuration.functionalities or f not in running.functionalities:
+                del self._lingering[f]  # needed again, or it stopped
+        released = running.functionalities - needed.configuration.functionalities
+        for f in released - self._lingering.keys():  # needed until now: it starts to linger
+            self._lingering[f] = now + self.linger
+        return keep({f for f, until in self._lingering.items() if until > now})
 
     def end(self, task: Task, end: TaskEnd, reason: str, *, reschedule: bool = True) -> None:
         """End a task; then (unless the caller goes on scheduling) schedule the others."""
@@ -126,6 +180,8 @@ class Dispatcher:
         """Cancel every task and stop what they held."""
         for task in self.ledger:
             self.end(task, TaskEnd.SHUTDOWN, "the executive stops", reschedule=False)
+        self.upcoming, self.linger, self.standby = (), 0.0, False  # keep nothing running
+        self._lingering.clear()
         self.reschedule("the executive stops")  # no task left: everything stops, no timer
 
     def _carry_out(self, decision: Decision, why: str) -> None:
@@ -154,11 +210,13 @@ class Dispatcher:
             self.supervisor.launch(task)
         for task in self.ledger.in_phase(TaskPhase.REPAIRING):
             self.supervisor.go_on(task)
-        wake = decision.wake
+        lingers = [until for f, until in self._lingering.items()
+                   if f in decision.configuration.functionalities]  # fmt: skip
+        wake = min([*lingers, *([] if decision.wake is None else [decision.wake])], default=None)
         if wake is not None:
             self._timer = threading.Timer(
                 max(0.0, wake - time.time()),
-                lambda: self._post(lambda: self.reschedule("a task is due")),
+                lambda: self._post(lambda: self.reschedule("a task is due, or a linger ended")),
             )
             self._timer.daemon = True
             self._timer.start()

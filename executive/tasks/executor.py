@@ -13,7 +13,7 @@ components (:mod:`executive.tasks.diagnosis_model`).
 
 This module is the service: one worker thread owns the tasks and runs every step
 (:mod:`executive.tasks.dispatch`); the public methods post to it, and the bus API
-(:mod:`executive.bus.api.tasks`) calls them. Status queries (:meth:`TaskExecutor.tasks`,
+(:mod:`executive.bus.api.tasks`, :mod:`executive.bus.api.parameters`) calls them. Status queries (:meth:`TaskExecutor.tasks`,
 :meth:`TaskExecutor.schedule`) answer from a :class:`~executive.tasks.snapshot.Snapshot`
 the worker replaces after each job and before each component start, never from the
 worker itself. Every step is an
@@ -25,9 +25,15 @@ from __future__ import annotations
 import contextlib
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, TypeVar
 
+from executive.bus.api.parameters import (
+    PARAMETER_GET,
+    PARAMETER_LIST,
+    PARAMETER_SET,
+    ParameterReply,
+)
 from executive.bus.api.tasks import (
     COMPONENT_FAULT,
     COMPONENT_RESET,
@@ -49,18 +55,22 @@ from executive.bus.api.tasks import (
     TaskStart,
     TaskStarted,
 )
+from executive.bus.payloads import ComponentState
 from executive.bus.service import Context, Service
 from executive.bus.worker import Worker
 from executive.runtime.launcher import Launcher
+from executive.tasks.arguments import check_objects
 from executive.tasks.dispatch import Dispatcher
 from executive.tasks.snapshot import Snapshot
 from executive.tasks.task import Listener, Task, TaskEnd, TaskHandle, TaskPhase
+from knowledge.domain import DomainInfo, read_domain
 from knowledge.errors import DuraError, KnowledgeError
 from knowledge.records import TaskState
 
 T = TypeVar("T")
 CALL_TIMEOUT = 30.0  # seconds a command waits for the worker (it may be starting components)
 STOP_TIMEOUT = 60.0  # seconds the worker gets to cancel every task and stop their components
+HAND_TIMEOUT = 60.0  # seconds a start or stop by hand waits (the worker may be starting others)
 
 __all__ = ["Listener", "TaskEnd", "TaskExecutor", "TaskHandle", "TaskPhase"]
 
@@ -72,14 +82,28 @@ class TaskExecutor(Service):
         context: robot, bus and knowledge base.
         launcher: starts and stops the component processes.
         time_limit: seconds one schedule may take.
+        linger: seconds a functionality that no task and no upcoming plan step needs
+            keeps running before it stops.
+        sequential: change configurations one component after another, stopping first
+            (by default the new components start all at once, before the old stop).
     """
 
     name = "task-executor"
 
-    def __init__(self, context: Context, launcher: Launcher, *, time_limit: float = 1.0) -> None:
+    def __init__(
+        self,
+        context: Context,
+        launcher: Launcher,
+        *,
+        time_limit: float = 1.0,
+        linger: float = 0.0,
+        sequential: bool = False,
+    ) -> None:
         super().__init__(context)
         self.launcher = launcher
         self.time_limit = time_limit
+        self.linger = linger
+        self.sequential = sequential
         self.robot = context.robot
         self.kb = context.kb
         self._worker = Worker("task executor", after_each=self._publish)
@@ -90,6 +114,7 @@ class TaskExecutor(Service):
         self._lock = threading.Lock()
         self._arrivals: dict[str, Task] = {}
         self._snapshot = Snapshot()
+        self._domain_info: DomainInfo | None = None
 
     # --- lifecycle -----------------------------------------------------------------------
 
@@ -101,6 +126,8 @@ class TaskExecutor(Service):
             post=self._worker.post,
             publish=self._publish,
             time_limit=self.time_limit,
+            linger=self.linger,
+            sequential=self.sequential,
         )
         with self.kb.transaction():  # tasks of an executive that died
             for task in self.kb.tasks():
@@ -110,6 +137,8 @@ class TaskExecutor(Service):
         self._snapshot = Snapshot(faulty=dispatcher.faults.faulty())
         self.launcher.add_listener(dispatcher.repairs.on_component_state)
         self._worker.start()
+        if any(f.standby for f in self.robot.functionalities.values()):
+            self._worker.post(lambda: dispatcher.reschedule("warm spares start"))
         self._declared = self._serve()
 
     def stop(self) -> None:
@@ -174,6 +203,13 @@ class TaskExecutor(Service):
         self._worker.post(take)
         return TaskHandle(self, task)
 
+    def expect(self, behaviors: Sequence[str]) -> None:
+        """The behaviors of the plan's steps still to come, in order (none: no plan):
+        what they need keeps running between the steps. Returns at once."""
+        dispatcher = self._running
+        upcoming = tuple(behaviors)
+        self._worker.post(lambda: dispatcher.expect(upcoming))
+
     def pause(self, task_id: str) -> None:
         dispatcher = self._running
         self._call(lambda: dispatcher.supervisor.pause(dispatcher.ledger.get(task_id)))
@@ -200,6 +236,54 @@ class TaskExecutor(Service):
         self._check_component(name)
         dispatcher = self._running
         return self._call(lambda: dispatcher.repairs.reset(name))
+
+    def start_by_hand(self, name: str) -> ComponentState:
+        """Start a component for a user (``dura component start``) and wait until it is
+        ready: supervised like the others (its exit is a fault), kept running until a
+        stop by hand."""
+        self.launcher.kind(name)  # refuses an unknown name, as the launcher words it
+        dispatcher = self._running
+
+        def start() -> ComponentState:
+            dispatcher.repairs.started_by_hand(name)
+            return dispatcher.configurator.start_by_hand(name)
+
+        return self._call(start, timeout=HAND_TIMEOUT)
+
+    def stop_by_hand(self, name: str) -> ComponentState:
+        """Stop a component for a user and wait until it is gone.
+
+        Raises:
+            DuraError: a task holds it (it stops when no task needs it).
+        """
+        self.launcher.kind(name)
+        dispatcher = self._running
+
+        def stop() -> ComponentState:
+            users = sorted(
+                t.id
+                for t in dispatcher.ledger.holding()
+                if t.behavior == name or name in t.providers.values()
+            )
+            if users:
+                ids = ", ".join(users)
+                raise DuraError(
+                    f"'{name}' serves task {ids}: it stops when no task needs it "
+                    f"(or stop the task: dura task stop {users[0]})"
+                )
+            return dispatcher.configurator.stop_by_hand(name, held=False)
+
+        return self._call(stop, timeout=HAND_TIMEOUT)
+
+    def set_parameter(self, name: str, key: str, value: Any) -> ParameterReply:
+        """Change a component's parameter: checked against the description, stored, and
+        handed to the component if it runs (by its hook, or by a warm restart).
+
+        Raises:
+            DuraError: no such component, or a value of the wrong type (the reason).
+        """
+        dispatcher = self._running
+        return self._call(lambda: dispatcher.parameters.set(name, key, value), timeout=HAND_TIMEOUT)
 
     def tasks(self) -> list[dict[str, Any]]:
         """Every task with its phase and configuration (newest last), from the snapshot."""
@@ -256,17 +340,30 @@ class TaskExecutor(Service):
             COMPONENT_RESTART.serve(bus, self._restart_request),
             COMPONENT_FAULT.serve(bus, self._fault_request),
             COMPONENT_RESET.serve(bus, self._reset_request),
+            PARAMETER_SET.serve(bus, lambda r: self.set_parameter(r.component, r.key, r.value)),
+            PARAMETER_GET.serve(bus, lambda r: dispatcher.parameters.get(r.component, r.key)),
+            PARAMETER_LIST.serve(bus, lambda r: dispatcher.parameters.list(r.component)),
         ]
 
     def _start_request(self, request: TaskStart) -> TaskStarted:
         spec = self.robot.tasks.get(request.task)
         behavior = spec.behavior if spec is not None else request.task
+        if spec is not None:  # the objects it names must be in the world, of their types
+            check_objects(spec, request.goal, self._domain(), self.kb.objects())
         handle = self.start_task(
             behavior, request.goal, name=request.label, duration=request.duration,
             earliest=request.earliest or 0.0, deadline=request.deadline,
             together=tuple(request.together),
         )  # fmt: skip
         return TaskStarted(handle.id, behavior)
+
+    def _domain(self) -> DomainInfo:
+        """The domain's signatures, read at the first task asked for by hand (reading
+        imports unified-planning, which the executive need not wait for at start)."""
+        with self._lock:
+            if self._domain_info is None:
+                self._domain_info = read_domain(self.robot.domain)
+            return self._domain_info
 
     def _on_task(self, request: TaskId, act: Callable[[Task], None]) -> TaskReply:
         """Act on a task on the worker; the task as it is afterwards."""

@@ -6,6 +6,9 @@ start that failed, a repair command or a user's restart or mark. Below its
 (reconfigurable) or stop, and they go on once it is ready again; at ``max_faults`` it
 is permanently faulty, stopped, and the tasks are scheduled again on what is left. A
 behavior's fault is its task's: restarted up to ``max_restarts``, then the task fails.
+A component started by hand is supervised the same way: its exit is a fault, and it is
+restarted (a behavior without a task up to its ``max_restarts``) until it is
+permanently faulty.
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ from executive.bus.api.tasks import FaultReply
 from executive.bus.payloads import ComponentState, Lifecycle
 from executive.runtime.launcher import Launcher
 from executive.tasks.configurator import Configurator
-from executive.tasks.faults import Faults
+from executive.tasks.faults import Faults, TaskAction
 from executive.tasks.ledger import TaskLedger
 from executive.tasks.supervision import End, Post, Supervisor
 from executive.tasks.task import TaskEnd
@@ -57,6 +60,7 @@ class FaultHandler:
         self._end = end
         self._reschedule = reschedule
         self._post = post
+        self._hand_restarts: dict[str, int] = {}  # restarts of behaviors started by hand
 
     def on_component_state(self, state: ComponentState) -> None:
         """The launcher's listener (its threads): an exit goes to the worker."""
@@ -87,17 +91,37 @@ class FaultHandler:
             self.supervisor.interrupt(self.ledger.get(task_id), action, name)
         if decision.restart:
             alive = self.configurator.alive(name)
-            if name in self.configurator.configuration.functionalities or (restart and alive):
+            kept = name in self.configurator.configuration.functionalities
+            if kept or self.configurator.by_hand(name) or (restart and alive):
                 state = self.configurator.restart(name, "restarting after a fault")
                 if state.state is not Lifecycle.READY:
                     return self.fault(name, f"could not restart: {state.reason}")
             for task_id in decision.tasks:
                 self.supervisor.go_on(self.ledger.get(task_id))
         else:
+            self.configurator.forget_by_hand(name)
             if self.configurator.alive(name):
                 self.configurator.stop(name, "permanently faulty")
             self._reschedule(f"{name} is permanently faulty")
         return self.reply(name)
+
+    def warm_restart(self, name: str, reason: str) -> ComponentState:
+        """Restart a running component that is not faulty (new parameters): the tasks on
+        it are held while it restarts, as during a repair, and go on afterwards; a
+        restart that fails is a fault."""
+        hit = [t for t in self.ledger.holding() if name in (t.behavior, *t.providers.values())]
+        behavior = self.robot.components[name].kind is Kind.BEHAVIOR
+        for task in hit:
+            reconfigurable = self.robot.behaviors[task.behavior].reconfigurable
+            action = TaskAction.PAUSE if reconfigurable and not behavior else TaskAction.RESTART
+            self.supervisor.interrupt(task, action, name)
+        state = self.configurator.restart(name, reason)
+        if state.state is not Lifecycle.READY:
+            self.fault(name, f"could not restart: {state.reason}")
+            return self.launcher.state(name)
+        for task in hit:
+            self.supervisor.go_on(task)
+        return state
 
     def reply(self, name: str) -> FaultReply:
         """The component's state with its fault count."""
@@ -115,10 +139,15 @@ class FaultHandler:
         self._reschedule(f"{name} was reset")
         return usable
 
+    def started_by_hand(self, name: str) -> None:
+        """A user started the component: its restarts count afresh."""
+        self._hand_restarts.pop(name, None)
+
     def _behavior_fault(self, name: str, reason: str, *, permanent: bool) -> None:
         hit = [t for t in self.ledger.holding() if t.behavior == name]
         if permanent:
             self.faults.fault(name, reason, permanent=True)
+            self.configurator.forget_by_hand(name)
             for task in hit:
                 self._end(task, TaskEnd.BEHAVIOR_FAULTY, f"{name} is permanently faulty: {reason}")
         elif hit:
@@ -128,12 +157,32 @@ class FaultHandler:
 
     def _exited(self, state: ComponentState) -> None:
         name = state.component
-        if not self.configurator.expects(name) or self.robot.components[name].kind is Kind.BEHAVIOR:
-            return  # not ours to keep running; a behavior's goal result tells its task
-        self.configurator.lost(name)
+        if not self.configurator.expects(name):
+            return  # not ours to keep running
         why = state.reason or (
             f"exited with code {state.exit_code}"
             if state.signal is None
             else f"killed by signal {state.signal}"
         )
+        if self.robot.components[name].kind is Kind.BEHAVIOR:
+            if self.configurator.by_hand(name) and not any(
+                t.behavior == name for t in self.ledger.holding()
+            ):
+                self._hand_behavior_exited(name, why)
+            return  # a task's behavior: its goal result tells its task
+        self.configurator.lost(name)
         self.fault(name, why)
+
+    def _hand_behavior_exited(self, name: str, why: str) -> None:
+        """A behavior started by hand, with no task, exited: a fault; restart it up to
+        its ``max_restarts``."""
+        self.configurator.lost(name)
+        decision = self.faults.fault(name, why)
+        restarts = self._hand_restarts.get(name, 0)
+        again = not decision.permanent and restarts < self.robot.behaviors[name].max_restarts
+        self.kb.log_event("REPAIR", name, {"restart": again, "attempt": restarts + 1})
+        if not again:
+            self.configurator.forget_by_hand(name)
+            return
+        self._hand_restarts[name] = restarts + 1
+        self.configurator.start(name)

@@ -11,6 +11,7 @@ nothing more.
 from __future__ import annotations
 
 import contextlib
+from collections.abc import Sequence
 from typing import Any
 
 from executive.planning.partial_order import Step
@@ -65,11 +66,16 @@ class _Unrun(StepTask):
 
 
 class PlanTasks(TaskRunner):
-    """Runs plan steps on the task executor."""
+    """Runs plan steps on the task executor, and tells it which steps are to come (so
+    that what they need keeps running between the steps)."""
 
     def __init__(self, tasks: TaskExecutor, robot: RobotDescription) -> None:
         self.tasks = tasks
         self.robot = robot
+
+    def upcoming(self, plan_id: int | None, steps: Sequence[Step]) -> None:
+        specs = [self.robot.tasks.get(s.action) for s in steps]
+        self.tasks.expect([spec.behavior for spec in specs if spec is not None])
 
     def run(self, step: Step, plan_id: int, report: StepReport) -> StepTask:
         spec = self.robot.tasks[step.action]

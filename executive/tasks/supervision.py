@@ -82,7 +82,8 @@ class Supervisor:
         if task.paused_by_user:
             with contextlib.suppress(ComponentError):
                 self.launcher.pause(task.behavior)
-        self.ledger.event("TASK_STARTED", task, providers=task.providers, attempt=attempt)
+        task.starts += 1
+        self.ledger.event("TASK_STARTED", task, providers=task.providers, attempt=task.starts)
 
     def failed(self, task: Task, reason: str) -> None:
         """The task's behavior failed: restart it, or, beyond its restarts, fail the task."""
@@ -92,19 +93,23 @@ class Supervisor:
         if action is TaskAction.RESTART:
             self.stop(task, "restarting after a failure")
             self.ledger.set_phase(task, TaskPhase.STARTING)
-            self.ledger.event("TASK_RESTARTED", task, reason=reason)
+            task.restarts += 1
+            self.ledger.event("TASK_RESTARTED", task, reason=reason, attempt=task.restarts)
             self.launch(task)
         else:
             self._end(task, TaskEnd.BEHAVIOR_FAILED, reason)
 
-    def stop(self, task: Task, reason: str) -> None:
-        """Stop the task's behavior; whatever its current goal reports is stale then."""
+    def stop(self, task: Task, reason: str, *, wait: bool = True) -> None:
+        """Stop the task's behavior; whatever its current goal reports is stale then.
+
+        ``wait=False``: return once the goal is cancelled, the process stops meanwhile
+        (its next start waits for that)."""
         task.attempt += 1
         if task.handle is not None and not task.handle.done():
             with contextlib.suppress(ComponentError, BusError):
                 task.handle.cancel()
         task.handle = None
-        self.configurator.stop(task.behavior, reason)
+        self.configurator.release(task.behavior, reason, wait=wait)
 
     def pause(self, task: Task) -> None:
         """A user pauses the task (now, or as soon as its behavior runs).
@@ -142,8 +147,8 @@ class Supervisor:
             with contextlib.suppress(ComponentError):
                 self.launcher.pause(task.behavior)
             self.ledger.event("TASK_PAUSED", task, reason=f"{component} is being repaired")
-        elif action is TaskAction.RESTART:
-            self.stop(task, f"{component} is being repaired")
+        elif action is TaskAction.RESTART:  # the repair need not wait for the stop
+            self.stop(task, f"{component} is being repaired", wait=False)
         task.repair = action
         self.ledger.set_phase(task, TaskPhase.REPAIRING)
 
@@ -162,7 +167,10 @@ class Supervisor:
             self.ledger.event("TASK_RESUMED", task, reason="configuration repaired")
             return
         self.ledger.set_phase(task, TaskPhase.STARTING)
-        self.ledger.event("TASK_RESTARTED", task, reason="configuration repaired")
+        task.restarts += 1
+        self.ledger.event(
+            "TASK_RESTARTED", task, reason="configuration repaired", attempt=task.restarts
+        )
         self.launch(task)
 
     def _on_result(self, task: Task, attempt: int, result: GoalResult) -> None:

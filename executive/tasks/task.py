@@ -150,6 +150,8 @@ class Task:
     providers: dict[str, str] = field(default_factory=dict)
     handle: GoalHandle | None = None
     attempt: int = 0  # goals sent; a result of an older one is ignored
+    starts: int = 0  # times its behavior was started (TASK_STARTED attempt 1, 2, 3)
+    restarts: int = 0  # times it was started again (TASK_RESTARTED attempt 1, 2, 3)
     began: float | None = None  # when the behavior first ran
     paused_by_user: bool = False
     reason: str = ""

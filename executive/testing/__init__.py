@@ -41,10 +41,11 @@ __all__ = ["GoalEnded", "RobotProcess", "WaitTimedOut", "dura_replay", "dura_rob
 @pytest.fixture
 def dura_robot(tmp_path: Path) -> Iterator[Callable[..., RobotProcess]]:
     """Start robots: ``dura_robot(description, name="robot", changes=None,
-    time_scale=None)`` → a running RobotProcess. ``changes`` modify a copy of the
-    description, nested like its YAML (``{"behaviors": {"move_to": {"max_restarts":
+    time_scale=None, endpoint=None)`` → a running RobotProcess. ``changes`` modify a copy
+    of the description, nested like its YAML (``{"behaviors": {"move_to": {"max_restarts":
     0}}}``); ``time_scale=10`` runs robot time ten times faster than the wall clock
-    (default: ``DURA_TIME_SCALE`` of the test's environment, else 1)."""
+    (default: ``DURA_TIME_SCALE`` of the test's environment, else 1); ``endpoint`` is
+    where the executive listens (default: a free loopback port)."""
     started: list[RobotProcess] = []
 
     def start(
@@ -52,11 +53,12 @@ def dura_robot(tmp_path: Path) -> Iterator[Callable[..., RobotProcess]]:
         name: str = "robot",
         changes: Mapping[str, Any] | None = None,
         time_scale: float | None = None,
+        endpoint: str | None = None,
     ) -> RobotProcess:
         folder = tmp_path / name
         if changes:
             description = robot_variant(Path(description), folder / "description", changes)
-        robot = RobotProcess(Path(description), folder, time_scale=time_scale)
+        robot = RobotProcess(Path(description), folder, endpoint, time_scale=time_scale)
         started.append(robot)
         robot.start()
         return robot

@@ -27,10 +27,10 @@ import yaml
 
 from executive.bus import security
 from executive.bus.api import planning
-from executive.bus.api.components import COMPONENT_LIST
+from executive.bus.api.components import COMPONENT_INJECT, COMPONENT_LIST, Injection
 from executive.bus.clock import SCALE_VARIABLE, Clock
-from executive.bus.keys import api, component
-from executive.bus.payloads import Command
+from executive.bus.keys import api
+from executive.bus.payloads import Lifecycle
 from executive.bus.security import Login
 from executive.bus.session import Bus
 from knowledge.errors import BusError, DuraError
@@ -38,6 +38,7 @@ from knowledge.records import GoalState
 from knowledge.robot import load_robot
 
 START_TIMEOUT = 60.0  # seconds for the executive to answer after it was started
+INJECT_TIMEOUT = 30.0  # seconds a fault injection waits for its component to run
 
 
 def free_endpoint() -> str:
@@ -340,12 +341,39 @@ class RobotProcess:
     def cancel_goal(self, goal_id: int) -> None:
         planning.GOAL_CANCEL.call(self.bus, planning.GoalId(goal_id))
 
-    def inject_fault(self, name: str, mode: str, **options: Any) -> None:
-        """Make a running component misbehave (see :mod:`executive.sdk.fault_injection`)."""
-        fault = {"mode": mode, **options}
-        self.bus.request(
-            component(name, "cmd"), {"cmd": Command.INJECT_FAULT.value, "fault": fault}
-        )
+    def inject_fault(
+        self, name: str, mode: str, *, timeout: float = INJECT_TIMEOUT, **options: Any
+    ) -> None:
+        """Make a component misbehave (see :mod:`executive.sdk.fault_injection`) as soon
+        as it runs: waits at most ``timeout`` seconds for it to be ready.
+
+        Raises:
+            DuraError: it did not run in time, or the executive refused the fault (an
+                unknown mode or option: the reason).
+        """
+        deadline = time.monotonic() + timeout
+        while (state := self.component_state(name)) != Lifecycle.READY.value:
+            if time.monotonic() > deadline:
+                raise DuraError(
+                    f"cannot inject {mode!r} into '{name}': it is {state}, not running "
+                    f"(waited {timeout:g} s)"
+                )
+            time.sleep(0.05)
+        try:
+            COMPONENT_INJECT.call(self.bus, Injection(name, mode, dict(options)))
+        except BusError as e:
+            raise DuraError(f"cannot inject {mode!r} into '{name}': {e}") from None
+
+    def component_state(self, name: str) -> str:
+        """A component's state (``ready``, ``stopped``, ...).
+
+        Raises:
+            DuraError: the robot has no such component.
+        """
+        for listed in self.components():
+            if listed["component"] == name:
+                return str(listed["state"])
+        raise DuraError(f"robot '{self.robot.name}' has no component '{name}'")
 
     def events(self, kind: str | None = None, limit: int = 10_000) -> list[dict[str, Any]]:
         """The event log, oldest first (only events of ``kind`` if given)."""

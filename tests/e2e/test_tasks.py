@@ -36,9 +36,12 @@ def cli(robot: RobotProcess) -> Dura:
     return dura
 
 
+def tasks_of(dura: Dura) -> list[dict[str, Any]]:
+    return list(json.loads(dura("task", "list", "--json").stdout)["tasks"])
+
+
 def task(dura: Dura, task_id: str) -> dict[str, Any]:
-    tasks = json.loads(dura("task", "list", "--json").stdout)["tasks"]
-    return dict(next(t for t in tasks if t["id"] == task_id))
+    return dict(next(t for t in tasks_of(dura) if t["id"] == task_id))
 
 
 def start(dura: Dura, *args: str) -> str:
@@ -99,6 +102,9 @@ def test_a_behavior_that_keeps_failing_fails_its_task_after_max_restarts(
     kinds = [e["kind"] for e in trace(robot, move)]
     assert kinds.count("TASK_RESTARTED") == 2 and kinds[-1] == "TASK_FAILED"
     assert kinds.count("TASK_STARTED") == 3
+    attempts = {kind: [e["data"]["attempt"] for e in trace(robot, move) if e["kind"] == kind]
+                for kind in ("TASK_STARTED", "TASK_RESTARTED")}  # fmt: skip
+    assert attempts == {"TASK_STARTED": [1, 2, 3], "TASK_RESTARTED": [1, 2]}
 
 
 def test_constraints_earliest_start_deadline_and_start_together(dura_robot: Start) -> None:
@@ -148,6 +154,13 @@ def test_tasks_pause_resume_and_stop_by_hand(dura_robot: Start) -> None:
     assert refused.stderr == f"dura: task {picture} (take_picture) is not interruptible\n"
     unknown = dura("task", "stop", "99")
     assert (unknown.returncode, unknown.stderr) == (1, "dura: no task 99\n")
+    narnia = dura("task", "start", "move_to", "--arg", "start=narnia", "--arg", "target=lab")
+    assert (narnia.returncode, narnia.stderr) == (
+        1,
+        "dura: task 'move_to': start=narnia: no object 'narnia' of type 'place' (objects of "
+        "that type: dock, lab, office)\n",
+    )
+    assert all(t["goal"].get("start") != "narnia" for t in tasks_of(dura))
 
     assert dura("task", "stop", move).returncode == 0
     assert wait_for(lambda: task(dura, move)["state"] == "cancelled", 30)

@@ -115,6 +115,27 @@ def test_a_killed_executive_restarts_and_continues_its_open_goals(dura_robot: St
     assert "(picture_taken office)" in robot.facts("picture_taken")
 
 
+def test_functionalities_needed_by_later_steps_keep_running_between_the_steps(
+    dura_robot: Start,
+) -> None:
+    robot = dura_robot(USECASE)
+    goal = robot.submit_goal("(and (picture_taken lab) (picture_taken office) (robot_at dock))")
+    robot.wait_for(goal, "achieved", timeout=120)
+    moves = [e for e in robot.events("DISPATCH") if e["subject"].startswith("move_to")]
+    assert len(moves) >= 2, moves  # move_to, take_picture, move_to, ...: lidar in between
+    starts = [e["subject"] for e in robot.events("COMPONENT_STARTING")]
+    for name in ("lidar", "lidar_filter", "robot_base", "cam"):
+        assert starts.count(name) == 1, (name, starts)
+    assert wait_for(
+        lambda: all(
+            c["state"] == "stopped"
+            for c in robot.request("component/list")["components"]
+            if c["component"] in ("lidar", "lidar_filter", "robot_base", "cam")
+        ),
+        10,
+    )  # the plan has ended: nothing keeps them
+
+
 def test_the_readme_example_waits_for_lidar_before_crashing_it(dura_robot: Start) -> None:
     # the README's planner-in-the-loop test, as written there (with the use case robot)
     robot: RobotProcess = dura_robot(USECASE, time_scale=10)

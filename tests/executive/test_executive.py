@@ -192,3 +192,26 @@ def test_sigkill_of_the_executive_takes_all_its_components_with_it(
         process.wait()
         assert wait_for(lambda: all(gone(c) for c in children), 10)
         assert wait_for(lambda: not scratch.exists(), 10)
+
+
+@pytest.mark.slow
+def test_faults_are_injected_through_the_cli_and_a_bad_one_is_refused_in_one_line(
+    tmp_path: Path, endpoint: str
+) -> None:
+    dura = dura_in(tmp_path)
+    with executive(tmp_path, endpoint):
+        assert dura("component", "start", "lidar").returncode == 0
+        slow = dura("component", "inject", "lidar", "wrong_rate", "--option", "factor=0.5")
+        assert slow.returncode == 0, slow.stderr
+        assert slow.stdout.startswith("lidar: wrong_rate injected, factor=0.5 (pid ")
+        for bad, reason in (
+            (("lidar", "melt"), "unknown fault mode 'melt'"),
+            (("lidar", "crash", "--option", "exit_code=x"), "--option must be KEY=NUMBER"),
+            (("cam", "crash"), "'cam' is stopped, not running"),
+        ):
+            refused = dura("component", "inject", *bad)
+            assert refused.returncode == 1 and reason in refused.stderr, refused.stderr
+            assert len(refused.stderr.splitlines()) == 1
+        crashed = dura("component", "inject", "lidar", "crash", "--option", "exit_code=3")
+        assert crashed.returncode == 0, crashed.stderr
+        assert wait_for(lambda: "exited with code 3" in dura("component", "logs", "lidar").stdout)

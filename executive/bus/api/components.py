@@ -1,5 +1,6 @@
-"""The launcher's API: component processes (list, start, stop, logs, achievements), and
-the lifecycle commands every component process serves on ``component/<name>/cmd``."""
+"""The launcher's API: component processes (list, start, stop, logs, achievements, fault
+injection), and the lifecycle commands every component process serves on
+``component/<name>/cmd``."""
 
 from __future__ import annotations
 
@@ -55,11 +56,22 @@ class Achievement(Payload):
     value: Any = None
 
 
+@dataclass(frozen=True)
+class Injection(Payload):
+    """A fault to inject into a running component: a mode of the SDK's fault injection
+    (:mod:`executive.sdk.fault_injection`) and its options (numbers)."""
+
+    name: Text
+    mode: Text
+    options: dict[str, Any] = field(default_factory=dict)
+
+
 COMPONENT_LIST = Verb(api("component/list"), Empty, ComponentsReply, threaded=False)
 COMPONENT_START = Verb(api("component/start"), ComponentName, ComponentState, timeout=60.0)
 COMPONENT_STOP = Verb(api("component/stop"), ComponentName, ComponentState, timeout=60.0)
 COMPONENT_LOGS = Verb(api("component/logs"), LogQuery, LogReply, threaded=False)
 COMPONENT_ACHIEVE = Verb(api("component/achieve"), Achievement, Empty, timeout=5.0)
+COMPONENT_INJECT = Verb(api("component/inject"), Injection, ComponentState, timeout=10.0)
 
 
 # --- what a component process serves on component/<name>/cmd -----------------------------

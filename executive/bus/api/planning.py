@@ -114,9 +114,11 @@ class StateReply(Payload):
 
 @dataclass(frozen=True)
 class FactChange(Payload):
-    """A fact to set or unset: ``(robot_at lab)``, ``(= (battery) 80)``."""
+    """A fact to set or unset: ``(robot_at lab)``, ``(= (battery) 80)``; ``source`` names
+    who changes it (a component's name, or ``user``), as the event log records it."""
 
     fact: Text
+    source: Text = "user"
 
 
 @dataclass(frozen=True)

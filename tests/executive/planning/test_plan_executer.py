@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import itertools
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 
 import pytest
 
@@ -290,3 +291,28 @@ def test_an_executer_with_an_owner_reports_goal_and_plan_changes_instead_of_writ
     ]
     assert r.kb.goal(goal).state is GoalState.PLANNED  # the owner had not applied them
     assert r.kb.plan(plan_id).state is PlanState.PENDING
+
+
+class TellingRunner(ScriptedRunner):
+    """A scripted runner that keeps what it was told of the steps to come."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.told: list[tuple[int | None, list[str]]] = []
+
+    def upcoming(self, plan_id: int | None, steps: Sequence[Step]) -> None:
+        self.told.append((plan_id, [s.label for s in steps]))
+
+
+def test_the_runner_is_told_the_steps_still_to_come_until_the_plan_ends(
+    run: Callable[..., Run], kairos: Planner
+) -> None:
+    runner = TellingRunner()
+    r = run(runner)
+    plan, plan_id, _goals = r.execute(kairos, "(picture_taken lab)", "(robot_at office)")
+    eventually(lambda: r.kb.plan(plan_id).state is PlanState.SUCCEEDED)
+    eventually(lambda: runner.told[-1] == (plan_id, []))
+    first = min(plan.steps, key=lambda s: s.start).label
+    told = [set(steps) for told_plan, steps in runner.told if told_plan == plan_id]
+    assert told[0] == {s.label for s in plan.steps} - {first}  # the first one is under way
+    assert all(later < earlier for earlier, later in itertools.pairwise(told))

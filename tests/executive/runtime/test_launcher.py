@@ -180,7 +180,11 @@ def test_components_run_in_their_own_process_group_with_the_robots_environment(
         pid = r.launcher.start("probe").pid
         assert hooks.wait(lambda p: p["hook"] == "start")
         started = next(p for p in hooks.payloads if p["hook"] == "start")
-        assert started["pid"] == started["pgid"] == pid
+        # the component is its supervisor's child; the supervisor heads the group
+        supervisor = psutil.Process(pid).parent()
+        assert supervisor is not None and supervisor.ppid() == os.getpid()
+        assert started["pid"] == pid and started["pgid"] == supervisor.pid != os.getpgid(0)
+        assert "executive/runtime/supervisor.py" in " ".join(supervisor.cmdline())
         env = started["env"]
         assert env["DURA_ROBOT"] == "testbot" and env["DURA_COMPONENT"] == "probe"
         assert env["DURA_ENDPOINT"] == endpoint and env["DURA_KIND"] == "functionality"
@@ -195,7 +199,8 @@ def test_component_output_goes_to_its_log_file(endpoint: str, tmp_path: Path) ->
         pid = r.launcher.start("probe").pid
         r.launcher.stop("probe")
         lines = r.launcher.logs("probe")
-        assert lines[0].startswith(f"--- dura: started probe (pid {pid})")
+        assert lines[0].startswith("--- dura: started probe (supervisor pid ")
+        assert any(line.startswith(f"--- dura: probe ready (pid {pid})") for line in lines)
         assert "hello from the probe" in lines
         assert lines[-1].startswith("--- dura: stopped: exited with code 0")
         assert r.launcher.log_path("probe") == tmp_path / "logs" / "probe.log"

@@ -53,6 +53,28 @@ def test_the_hooks_run_in_lifecycle_order_with_their_arguments(
         assert hooks.payloads[4]["params"] == {"rate": 2.0}
 
 
+def test_a_component_without_on_reconfigure_refuses_new_parameters_while_it_runs(
+    endpoint: str, tmp_path: Path
+) -> None:
+    with rig(robot(usecase("cam")), endpoint, tmp_path) as r:
+        r.launcher.start("cam")
+        with pytest.raises(ComponentError, match=r"'cam' cannot change its parameters while it"):
+            r.launcher.reconfigure("cam", {"rate": 5.0})
+        assert r.launcher.state("cam").state is Lifecycle.READY
+
+
+def test_a_rate_loop_changes_its_rate_while_it_runs(endpoint: str, tmp_path: Path) -> None:
+    with rig(robot(usecase("lidar")), endpoint, tmp_path) as r:
+        scans = Recorder(r.bus, topic("scan"))
+        r.launcher.start("lidar")
+        assert wait_for(lambda: scans.count() >= 5, 10)
+        r.launcher.reconfigure("lidar", {"rate": 40.0})
+        scans.clear()
+        assert wait_for(lambda: scans.count() >= 41, 10)
+        stamps = [m.payload["stamp"] for m in scans.messages][-40:]
+        assert (len(stamps) - 1) / (stamps[-1] - stamps[0]) > 20.0  # well above 10 Hz
+
+
 def test_an_exception_in_a_rate_loop_ends_the_component_with_exit_code_1(
     endpoint: str, tmp_path: Path
 ) -> None:

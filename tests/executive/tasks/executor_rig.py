@@ -31,11 +31,11 @@ def slow_camera_robot(delay: float, picture: float = 1.0) -> RobotDescription:
 
 @contextlib.contextmanager
 def executor(
-    description: RobotDescription, endpoint: str, folder: Path
+    description: RobotDescription, endpoint: str, folder: Path, *, linger: float = 0.0
 ) -> Iterator[tuple[TaskExecutor, Rig]]:
     """A started task executor (stopped on leaving, with every component)."""
     with rig(description, endpoint, folder) as r:
-        tasks = TaskExecutor(Context(description, r.bus, r.kb), r.launcher)
+        tasks = TaskExecutor(Context(description, r.bus, r.kb), r.launcher, linger=linger)
         tasks.start()
         try:
             yield tasks, r

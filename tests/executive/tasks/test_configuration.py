@@ -65,3 +65,16 @@ def test_stopping_and_starting_happen_in_one_transition() -> None:
     transition = current.transition(target, functionalities())
     assert transition.empty
     assert target.users["robot_base"] == {"2"}
+
+
+def test_idle_spares_a_task_takes_resume_consumers_first_and_pause_when_it_lets_go() -> None:
+    spare = {"obstacle_scan": "cam_to_lidar", "camera": "cam"}
+    waiting = SystemConfiguration({"1": LIDAR}, standby={"standby: cam_to_lidar": spare})
+    assert waiting.idle == {"cam", "cam_to_lidar"}
+    taken = SystemConfiguration({"1": CAM}, standby={"standby: cam_to_lidar": spare})
+    assert taken.idle == frozenset()
+    failover = waiting.transition(taken, functionalities())
+    assert failover.start == () and failover.stop == ("lidar_filter", "lidar")
+    assert failover.resume == ("cam_to_lidar", "cam")  # listening before the images come
+    back = taken.transition(waiting, functionalities())
+    assert back.pause == ("cam", "cam_to_lidar") and back.start == ("lidar", "lidar_filter")

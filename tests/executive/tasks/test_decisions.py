@@ -9,7 +9,7 @@ from typing import Any
 import pytest
 
 from executive.tasks.configuration import SystemConfiguration, Transition
-from executive.tasks.decisions import Decision, decide
+from executive.tasks.decisions import Decision, decide, keep_running
 from executive.tasks.task import TaskPhase, TaskView
 from knowledge.description import RobotDescription
 from tests.executive.tasks.scheduling_cases import usecase_robot
@@ -159,3 +159,73 @@ def test_the_same_situation_gives_the_same_decision() -> None:
     tasks = (running("1", LIDAR, began=NOW - 3.0), task("2"), task("3", "take_picture"))
     first, second = decision(*tasks), decision(*tasks)
     assert dataclasses.replace(first, schedule=None) == dataclasses.replace(second, schedule=None)
+
+
+def kept(
+    decided: Decision,
+    running: SystemConfiguration,
+    *,
+    upcoming: tuple[str, ...] = (),
+    lingering: frozenset[str] = frozenset(),
+    faulty: frozenset[str] = frozenset(),
+) -> Decision:
+    return keep_running(
+        decided, running, robot=usecase_robot(), faulty=faulty, upcoming=upcoming,
+        lingering=lingering,
+    )  # fmt: skip
+
+
+def test_what_an_upcoming_step_needs_keeps_running_when_the_step_before_ends() -> None:
+    ended = dataclasses.replace(running("1", LIDAR), phase=TaskPhase.SUCCEEDED)
+    was = on(running("1", LIDAR))
+    assert decision(ended, running=was).transition.stop  # without a word of what comes
+    after = kept(decision(ended, running=was), was, upcoming=("take_picture", "move_to"))
+    assert after.transition.empty
+    assert after.configuration.functionalities == set(LIDAR.values())
+    assert not after.configuration.held  # no task holds them: a reservation does
+
+
+def test_upcoming_steps_keep_only_what_runs_and_is_usable() -> None:
+    was = on(running("1", LIDAR))
+    after = kept(decision(running=was), was, upcoming=("take_picture",))  # cam does not run
+    assert after.configuration.functionalities == frozenset()
+    faulty = kept(decision(running=was), was, upcoming=("move_to",), faulty=frozenset({"lidar"}))
+    assert faulty.configuration.functionalities == frozenset()  # lidar_filter sits on lidar
+    assert set(faulty.transition.stop) == set(LIDAR.values())
+
+
+def test_once_no_step_to_come_needs_them_they_stop() -> None:
+    was = kept(decision(running=on(running("1", LIDAR))), on(running("1", LIDAR)),
+               upcoming=("move_to",)).configuration  # fmt: skip
+    after = kept(Decision(configuration=SystemConfiguration(was.tasks)), was, upcoming=())
+    assert set(after.transition.stop) == set(LIDAR.values())
+
+
+def test_a_lingering_functionality_keeps_what_it_requires_running() -> None:
+    was = on(running("1", LIDAR))
+    after = kept(decision(running=was), was, lingering=frozenset({"lidar_filter"}))
+    assert after.configuration.functionalities == {"lidar_filter", "lidar"}
+    assert after.transition.stop == ("robot_base",)
+
+
+def spare(*names: str) -> RobotDescription:
+    """The use case with these functionalities as warm spares."""
+    robot = usecase_robot()
+    functionalities = {
+        n: dataclasses.replace(f, standby=n in names) for n, f in robot.functionalities.items()
+    }
+    return dataclasses.replace(robot, functionalities=functionalities)
+
+
+def test_a_warm_spare_and_what_it_runs_on_are_kept_idle_while_no_task_needs_them() -> None:
+    robot = spare("cam_to_lidar")
+    was = on(running("1", LIDAR))
+    after = keep_running(decision(running=was), was, robot=robot, faulty=frozenset())
+    assert after.configuration.functionalities == {"cam", "cam_to_lidar"}
+    assert after.configuration.idle == {"cam", "cam_to_lidar"}
+    assert set(after.transition.start) == {"cam", "cam_to_lidar"}
+    held = keep_running(decision(running("1", CAM)), on(running("1", CAM)), robot=robot,
+                        faulty=frozenset())  # fmt: skip
+    assert held.configuration.idle == frozenset()  # a task holds it: it runs
+    gone = keep_running(decision(running=was), was, robot=robot, faulty=frozenset({"cam"}))
+    assert gone.configuration.functionalities == frozenset()  # no usable camera: no spare

@@ -3,6 +3,7 @@ queries from its snapshot, and why a task ended as code reads it."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pytest
@@ -10,7 +11,9 @@ import pytest
 from executive.bus.api.tasks import SCHEDULE_SHOW, TASK_LIST, TASK_STOP, TaskId
 from executive.bus.payloads import Lifecycle
 from executive.tasks.task import TaskEnd, TaskPhase
+from knowledge.description import RobotDescription
 from tests.conftest import wait_for
+from tests.executive.runtime.rig import USECASE_ROBOT, Rig, robot, usecase
 from tests.executive.tasks.executor_rig import executor, slow_camera_robot
 
 pytestmark = pytest.mark.slow
@@ -64,3 +67,74 @@ def test_a_task_ended_by_its_requester_or_by_a_user_says_who_ended_it(
             TaskEnd.USER,
             "stopped by the user",
         )
+
+
+def test_a_functionality_lingers_after_its_last_task_then_stops(
+    endpoint: str, tmp_path: Path
+) -> None:
+    robot = slow_camera_robot(delay=0.1, picture=0.5)
+    with executor(robot, endpoint, tmp_path, linger=3.0) as (tasks, r):
+        first = tasks.start_task("take_picture", {"place": "lab"})
+        assert first.wait(30) and first.phase is TaskPhase.SUCCEEDED, first.reason
+        assert r.launcher.state("slow_cam").state is Lifecycle.READY  # it lingers
+        second = tasks.start_task("take_picture", {"place": "office"})
+        assert second.wait(30) and second.phase is TaskPhase.SUCCEEDED, second.reason
+        assert wait_for(lambda: r.launcher.state("slow_cam").state is Lifecycle.STOPPED, 30)
+        starts = [e for e in r.kb.events(kind="COMPONENT_STARTING") if e.subject == "slow_cam"]
+        assert len(starts) == 1  # the second picture found it running
+        last = r.kb.events(kind="CONFIGURATION")[-1]
+        assert last.data["stop"] == ["slow_cam"] and "linger" in last.data["why"]
+
+
+def failover_robot(*spares: str) -> RobotDescription:
+    """move_to (30 s) on lidar or the camera; ``spares`` have ``standby: true``."""
+    functionalities = [
+        usecase(n, standby=n in spares)
+        for n in ("lidar", "lidar_filter", "robot_base", "cam", "cam_to_lidar")
+    ]
+    move_to = usecase("move_to", params={"duration": 30.0, "input_timeout": 5.0})
+    tasks = {"move_to": USECASE_ROBOT.tasks["move_to"]}
+    return dataclasses.replace(robot(*functionalities, move_to), tasks=tasks)
+
+
+def states_of(r: Rig) -> list[tuple[str, str]]:
+    return [(e.kind, e.subject) for e in r.kb.events() if e.kind.startswith("COMPONENT_")]
+
+
+def test_a_failover_starts_the_new_providers_at_once_before_the_old_ones_stop(
+    endpoint: str, tmp_path: Path
+) -> None:
+    with executor(failover_robot(), endpoint, tmp_path) as (tasks, r):
+        move = tasks.start_task("move_to", {"target": "lab"})
+        assert wait_for(lambda: move.phase is TaskPhase.RUNNING, 30)
+        tasks.fault("lidar", "test", permanent=True)
+        assert wait_for(lambda: move.providers.get("obstacle_scan") == "cam_to_lidar", 30)
+        assert wait_for(lambda: move.phase is TaskPhase.RUNNING, 30)
+        seen = states_of(r)
+        at = seen.index
+        both_started = max(
+            at(("COMPONENT_STARTING", "cam")), at(("COMPONENT_STARTING", "cam_to_lidar"))
+        )
+        first_ready = min(at(("COMPONENT_READY", "cam")), at(("COMPONENT_READY", "cam_to_lidar")))
+        assert both_started < first_ready  # at once, not one after the other
+        ready = max(at(("COMPONENT_READY", "cam")), at(("COMPONENT_READY", "cam_to_lidar")))
+        assert ready < at(("COMPONENT_STOPPING", "lidar_filter"))  # make before break
+
+
+def test_a_warm_spare_waits_paused_and_a_failover_resumes_it_without_a_start(
+    endpoint: str, tmp_path: Path
+) -> None:
+    with executor(failover_robot("cam_to_lidar"), endpoint, tmp_path) as (tasks, r):
+        assert wait_for(lambda: r.launcher.state("cam_to_lidar").state is Lifecycle.PAUSED, 30)
+        assert wait_for(lambda: r.launcher.state("cam").state is Lifecycle.PAUSED, 30)
+        move = tasks.start_task("move_to", {"target": "lab"})
+        assert wait_for(lambda: move.phase is TaskPhase.RUNNING, 30)
+        assert r.launcher.state("cam_to_lidar").state is Lifecycle.PAUSED  # still a spare
+        tasks.fault("lidar", "test", permanent=True)
+        assert wait_for(lambda: move.providers.get("obstacle_scan") == "cam_to_lidar", 30)
+        assert wait_for(lambda: r.launcher.state("cam_to_lidar").state is Lifecycle.READY, 30)
+        starts = [s for k, s in states_of(r) if k == "COMPONENT_STARTING"]
+        assert starts.count("cam_to_lidar") == 1 and starts.count("cam") == 1  # resumed
+        seen = states_of(r)
+        resumed = len(seen) - 1 - seen[::-1].index(("COMPONENT_READY", "cam_to_lidar"))
+        assert resumed < seen.index(("COMPONENT_STOPPING", "lidar_filter"))
