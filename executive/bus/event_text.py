@@ -194,19 +194,24 @@ def _task(subject: str, data: Data, kind: str) -> str:
         after = set(dict(data.get("after") or {}).values())
         gone, new = sorted(before - after), sorted(after - before)
         return f"{subject}: {listed(gone) or 'nothing'} → {listed(new) or 'nothing'}"
+    if kind == "TASK_RESTARTED" and data.get("attempt"):
+        subject += f", restart {data['attempt']}"
     return _why(subject, data.get("reason"))
 
 
 def _configuration(subject: str, data: Data, kind: str) -> str:
     stop, start = list(data.get("stop") or []), list(data.get("start") or [])
+    resume = list(data.get("resume") or [])
     changes = []
     if stop:
         changes.append(f"stop {listed(stop)}")
+    if resume:
+        changes.append(f"resume {listed(resume)}")
     if start:
         changes.append(f"start {listed(start)}")
     if subject in ("", "nothing"):
         changes.append("nothing runs")
-    elif set(subject.split(", ")) != set(start):
+    elif set(subject.split(", ")) != set(start) | set(resume):
         changes.append(f"running {subject}")
     text = "; ".join(changes) or f"running {subject}"
     why = data.get("why")
@@ -216,7 +221,8 @@ def _configuration(subject: str, data: Data, kind: str) -> str:
 def _repair(subject: str, data: Data, kind: str) -> str:
     if "action" in data:  # the task executor's repair of a task's behavior
         return f"{subject}: {data['action']} {data.get('component', '')}".rstrip()
-    parts = [f"{subject}: {'restart' if data.get('restart') else 'no restart'}"]
+    attempt = f", attempt {data['attempt']}" if data.get("attempt") else ""
+    parts = [f"{subject}: {'restart' if data.get('restart') else 'no restart'}{attempt}"]
     unusable = dict(data.get("unusable") or {})
     if unusable:
         parts.append("unusable: " + ", ".join(f"{n} ({why})" for n, why in unusable.items()))

@@ -74,6 +74,18 @@ def calls(
         yield from calls(child, inner)
 
 
+def assigned(scope: ast.AST, name: str) -> list[ast.expr]:
+    """The values assigned to a local name in a scope (``kind = "A" if x else "B"``); the
+    name itself if nothing is (it cannot be read then)."""
+    values = [
+        node.value
+        for node in ast.walk(scope)
+        if isinstance(node, ast.Assign)
+        and any(isinstance(t, ast.Name) and t.id == name for t in node.targets)
+    ]
+    return values or [ast.Name(name)]
+
+
 def logged_kinds() -> Iterator[tuple[str, ast.expr, bool]]:
     """Every kind expression handed to a logger, where it is (``file:line``), and whether
     it is the enclosing logger's own parameter, handed on."""
@@ -88,8 +100,12 @@ def logged_kinds() -> Iterator[tuple[str, ast.expr, bool]]:
                     if function is not None and function.name in known_loggers
                     else []
                 )
-                if kind is not None:
-                    yield where, kind, isinstance(kind, ast.Name) and kind.id in own
+                if isinstance(kind, ast.Name) and kind.id not in own:
+                    # a local name: the values assigned to it in the function
+                    for value in assigned(function or tree, kind.id):
+                        yield where, value, False
+                elif kind is not None:
+                    yield where, kind, isinstance(kind, ast.Name)
             # a logger handed over to be called later: callback(kb.log_event, "KIND")
             for i, arg in enumerate(node.args[:-1]):
                 if isinstance(arg, ast.Attribute) and arg.attr == "log_event":
