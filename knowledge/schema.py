@@ -108,6 +108,8 @@ MIGRATIONS: tuple[tuple[str, ...], ...] = (
     );
     CREATE INDEX events_kind ON events(kind);
     """),
+    # 2: what happened to each step of a plan (written by the plan executer)
+    ("ALTER TABLE plan_steps ADD COLUMN state TEXT NOT NULL DEFAULT 'pending'",),
 )
 
 VERSION = len(MIGRATIONS)

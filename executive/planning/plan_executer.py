@@ -243,12 +243,18 @@ class PlanExecuter:
     # --- work on the executer's thread --------------------------------------------------
 
     def _execute(self, plan: PartialOrderPlan, plan_id: int, goals: Sequence[GoalSpec]) -> None:
-        old = [] if self._run is None else [r for r in self._run.runs.values() if r.state.active]
+        old = self._run
         for g in self._goals:
             cancel_timer(g.timer)
-        run = self._run = PlanRun(plan, plan_id, self._context)
-        for left in run.adopt(old):
-            run.cancel(left, "not in the new plan", undo=True)
+        run = PlanRun(plan, plan_id, self._context)
+        pairs: list[tuple[StepRun, StepRun]] = []
+        if old is not None:
+            # the old plan's steps end as its own (their events name the old plan),
+            # before the new plan takes over the ones it continues
+            pairs, left = run.continuing([r for r in old.runs.values() if r.state.active])
+            for step in left:
+                old.cancel(step, "not in the new plan", undo=True)
+        self._run = run
         self._tell(PlanChange(plan_id, PlanState.EXECUTING))
         self._goals = []
         for spec in goals:
@@ -260,6 +266,7 @@ class PlanExecuter:
             self._goals.append(goal)
             self._tell(GoalChange(spec.id, GoalState.EXECUTING))
         run.event("PLAN_START", steps=len(plan.steps), goals=[g.id for g in goals])
+        run.adopt(pairs, None if old is None else old.plan_id)
         self._paused = False
         self._resume_steps()
         self._react()
