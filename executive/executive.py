@@ -1,8 +1,12 @@
 """The executive process: its bus (listening), knowledge base, launcher and services
 (monitoring, diagnosis, repair rules, task executor, high level).
 
-Services start in order and stop in reverse; the launcher stops every component when
-the executive closes. While it runs, the executive holds the liveliness token
+The bus API answers first: as soon as the bus listens and the knowledge base is open,
+the high level recovers from a crash, serves its verbs (``status`` among them) and
+warms its planner up in the background; only then are the other services' modules
+imported and the services started, in order (and stopped in reverse). The high level
+begins planning once all of them run. The launcher stops every component when the
+executive closes. While it runs, the executive holds the liveliness token
 ``alive/executive``: components end themselves when it vanishes.
 """
 
@@ -10,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -18,19 +23,15 @@ from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus
 from executive.planning.high_level import HighLevel
-from executive.runtime.component_api import ComponentApi
-from executive.runtime.launcher import Launcher
-from executive.tasks.executor import TaskExecutor
-from executive.tasks.plan_tasks import PlanTasks
 from knowledge.description import RobotDescription
+from knowledge.errors import DuraError
 from knowledge.knowledge_base import KnowledgeBase
-from monitoring.diagnosis.service import DiagnosisService
-from monitoring.observer_manager import ObserverManager
-from monitoring.repair.service import RuleService
-from monitoring.resource_monitor import ResourceMonitor
 
 if TYPE_CHECKING:
     from executive.ros2.link import Ros2Link
+    from executive.runtime.launcher import Launcher
+    from executive.tasks.executor import TaskExecutor
+    from executive.tasks.plan_tasks import PlanTasks
 
 
 class Executive:
@@ -47,6 +48,9 @@ class Executive:
             the first run, user-only) and the logs (default: the current folder).
         record: record the bus traffic to this MCAP file (``dura run --record``).
         record_max_size: bytes at which the recording is rotated (default: the recorder's).
+        on_failure: called with the reason when the executive cannot go on (its domain
+            does not fit the robot: checked while it runs, see
+            :class:`~executive.planning.high_level.HighLevel`); ``dura run`` stops then.
     """
 
     def __init__(
@@ -61,6 +65,7 @@ class Executive:
         folder: Path | None = None,
         record: Path | None = None,
         record_max_size: int | None = None,
+        on_failure: Callable[[str], None] | None = None,
     ) -> None:
         self.robot = robot
         self.endpoint = endpoint or robot.endpoint
@@ -72,6 +77,9 @@ class Executive:
         self.grace = grace
         self.record = record
         self.record_max_size = record_max_size
+        self.on_failure = on_failure
+        self.tasks: TaskExecutor | None = None
+        self.launcher: Launcher | None = None
         self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> Executive:
@@ -97,6 +105,17 @@ class Executive:
                 {"endpoint": self.endpoint, "pid": os.getpid()},
             )
             stack.callback(self.kb.log_event, "EXECUTIVE_STOPPED", self.robot.name)
+            context = Context(self.robot, self.bus, self.kb)
+            self.high_level = HighLevel(
+                context,
+                self._plan_tasks,
+                status={"tasks": self._tasks, "components": self._components},
+                on_failure=self.on_failure,
+            )
+            self.high_level.open()  # the API answers from here on
+            stack.callback(self.high_level.stop)  # if a later start fails
+            from executive.runtime.launcher import Launcher
+
             self.launcher = stack.enter_context(
                 Launcher(
                     self.robot,
@@ -112,7 +131,7 @@ class Executive:
                 from executive.ros2.link import Ros2Link
 
                 self.ros2 = stack.enter_context(Ros2Link(self.robot.ros2))
-            for service in self.services(Context(self.robot, self.bus, self.kb)):
+            for service in self.services(context):
                 service.start()
                 stack.callback(service.stop)
             self.bus.declare_alive(EXECUTIVE_ALIVE)
@@ -121,13 +140,19 @@ class Executive:
 
     def services(self, context: Context) -> list[Service]:
         """The services of the executive, in the order they start (and stop reversed):
-        monitoring first, so that it watches every component the executive starts."""
-        self.tasks = TaskExecutor(context, self.launcher)
-        self.high_level = HighLevel(
-            context,
-            PlanTasks(self.tasks, self.robot),
-            status={"tasks": self.tasks.tasks, "components": self._components},
-        )
+        monitoring first, so that it watches every component the executive starts; the
+        high level last (its API answers already: it begins planning)."""
+        from executive.runtime.component_api import ComponentApi
+        from executive.tasks.executor import TaskExecutor
+        from monitoring.diagnosis.service import DiagnosisService
+        from monitoring.observer_manager import ObserverManager
+        from monitoring.repair.service import RuleService
+        from monitoring.resource_monitor import ResourceMonitor
+
+        launcher = self.launcher
+        if launcher is None:
+            raise DuraError("the launcher must run before the services")
+        self.tasks = TaskExecutor(context, launcher)
         ros2 = self.ros2
         extra: list[Service] = []
         if ros2 is not None:
@@ -142,7 +167,7 @@ class Executive:
             recording.append(Recording(context, self.record, max_size=size))
         return [
             *recording,
-            ComponentApi(context, self.launcher),
+            ComponentApi(context, launcher),
             ResourceMonitor(context, rate=self.resource_rate),
             ObserverManager(context, sources=[ros2.topics] if ros2 is not None else []),
             DiagnosisService(context, learn=True),
@@ -152,7 +177,22 @@ class Executive:
             self.high_level,
         ]
 
+    def _plan_tasks(self) -> PlanTasks:
+        """The task executor as the high level's runner of plan steps (once it runs)."""
+        from executive.tasks.plan_tasks import PlanTasks
+
+        if self.tasks is None:
+            raise DuraError("the task executor has not started")
+        return PlanTasks(self.tasks, self.robot)
+
+    def _tasks(self) -> list[dict[str, Any]]:
+        if self.tasks is None:
+            raise DuraError("the task executor is starting")
+        return self.tasks.tasks()
+
     def _components(self) -> list[dict[str, Any]]:
+        if self.launcher is None:
+            raise DuraError("the launcher is starting")
         return [
             {"kind": self.launcher.kind(s.component).value, **s.to_payload()}
             for s in self.launcher.states()

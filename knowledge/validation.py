@@ -12,8 +12,6 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
-import networkx as nx
-
 from knowledge.description import (
     PYTHONS,
     SAFE_NAME,
@@ -84,6 +82,30 @@ def check_names(robot: RobotDescription, report: Report) -> None:
                     )
 
 
+def _cyclic(edges: dict[str, set[str]]) -> bool:
+    """Whether a directed graph (node -> successors) has a cycle."""
+    done: set[str] = set()
+    for root in edges:
+        path: set[str] = set()
+        stack = [(root, iter(sorted(edges.get(root, ()))))]
+        if root in done:
+            continue
+        path.add(root)
+        while stack:
+            node, successors = stack[-1]
+            following = next(successors, None)
+            if following is None:
+                stack.pop()
+                path.discard(node)
+                done.add(node)
+            elif following in path:
+                return True
+            elif following not in done:
+                path.add(following)
+                stack.append((following, iter(sorted(edges.get(following, ())))))
+    return False
+
+
 def check_capabilities(robot: RobotDescription, report: Report) -> None:
     """Every required capability has a provider; `requires` has no cycle."""
     capabilities = robot.capabilities
@@ -95,12 +117,19 @@ def check_capabilities(robot: RobotDescription, report: Report) -> None:
                     f"{c.kind.value} '{c.name}' requires unknown capability '{capability}'"
                     f"{did_you_mean(capability, capabilities)}",
                 )
+    needs = {
+        f.name: {p.name for c in f.requires for p in robot.providers(c)}
+        for f in robot.functionalities.values()
+    }
+    if not _cyclic(needs):
+        return
+    import networkx as nx  # only to name each cycle: every `dura run` checks, few find one
+
     graph: nx.DiGraph = nx.DiGraph()
-    for f in robot.functionalities.values():
-        graph.add_node(f.name)
-        for capability in f.requires:
-            for provider in robot.providers(capability):
-                graph.add_edge(f.name, provider.name)
+    for name, providers in needs.items():
+        graph.add_node(name)
+        for provider in providers:
+            graph.add_edge(name, provider)
     reported: set[frozenset[str]] = set()
     for cycle in nx.simple_cycles(graph):
         key = frozenset(cycle)
@@ -234,22 +263,22 @@ def _module_below(folder: Path, parts: list[str]) -> bool:
     return base.with_suffix(".py").is_file() or (base / "__init__.py").is_file()
 
 
-def validate(path: Path, text: str | None = None) -> Validation:
-    """Read a robot description and run every check, the PDDL domain included."""
+def validate(path: Path, text: str | None = None, *, domain: bool = True) -> Validation:
+    """Read a robot description and run every check, the PDDL domain included unless
+    ``domain`` is false (``dura run`` checks the domain in its planner worker, so that
+    it starts without unified-planning: :func:`check_domain` on what the worker read)."""
     robot, findings = read_robot(Path(path), text)
     report = Report(str(path))
-    domain: DomainInfo | None = None
+    info: DomainInfo | None = None
     if robot is not None:
         _components_checks(robot, report)
-        if robot.domain.is_file():
+        if domain and robot.domain.is_file():
             try:
-                domain = read_domain(robot.domain)
+                info = read_domain(robot.domain)
             except DomainError as e:
                 findings.append(finding_of(e, str(path)))
-        if domain is not None:
-            domain_report = Report(str(robot.domain))
-            check_tasks(robot, domain, report, domain_report)
-            findings.extend(domain_report.findings)
+        if info is not None:
+            findings.extend(check_domain(robot, info, report))
             if robot.problem is not None and robot.problem.is_file():
                 try:
                     text_of_problem = robot.problem.read_text(encoding="utf-8")
@@ -259,7 +288,18 @@ def validate(path: Path, text: str | None = None) -> Validation:
                 except DomainError as e:
                     findings.append(finding_of(e, str(path)))
     all_findings = tuple(sorted(findings + report.findings, key=_order))
-    return Validation(robot, domain, all_findings)
+    return Validation(robot, info, all_findings)
+
+
+def check_domain(
+    robot: RobotDescription, domain: DomainInfo, report: Report | None = None
+) -> list[Finding]:
+    """Check the robot's tasks against its parsed domain: the findings in the domain
+    file; those in the description go to ``report`` (or are returned too)."""
+    own = report if report is not None else Report(str(robot.path))
+    domain_report = Report(str(robot.domain))
+    check_tasks(robot, domain, own, domain_report)
+    return [*(own.findings if report is None else ()), *domain_report.findings]
 
 
 def _order(f: Finding) -> tuple[str, int, int]:

@@ -123,6 +123,9 @@ def session_config(
     config.insert_json5("mode", json.dumps("router" if listen else "client"))
     if listen:
         config.insert_json5("listen/endpoints", json.dumps(list(listen)))
+        # a router waits this long for scouting answers before it opens (500 ms by
+        # default); without scouting nothing answers, and the executive starts later
+        config.insert_json5("scouting/delay", "0")
     if connect:
         config.insert_json5("connect/endpoints", json.dumps(list(connect)))
     config.insert_json5("scouting/multicast/enabled", "false")

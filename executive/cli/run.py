@@ -77,8 +77,14 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    robot = load_robot(args.robot)
+    robot = load_robot(args.robot, domain=False)  # the planner worker checks the domain
     stop = threading.Event()
+    failure: list[str] = []
+
+    def failed(reason: str) -> None:
+        failure.append(reason)
+        stop.set()
+
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())
     executive = Executive(
@@ -90,6 +96,7 @@ def run(args: argparse.Namespace) -> int:
         grace=args.grace,
         record=args.record.resolve() if args.record is not None else None,
         record_max_size=args.record_max_size,
+        on_failure=failed,
     )
     with executive, contextlib.ExitStack() as dashboard:
         endpoint = local_endpoint(executive.endpoint)
@@ -116,6 +123,9 @@ def run(args: argparse.Namespace) -> int:
             stop.wait()
         finally:
             remove_run_file()
+    if failure:
+        print(f"dura: {failure[0]}", file=sys.stderr)
+        return 1
     if not args.json:
         print(f"dura: executive of robot '{robot.name}' stopped")
     return 0

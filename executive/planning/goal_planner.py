@@ -70,6 +70,7 @@ class PlannerStatus:
     goals: tuple[int, ...] = ()  # the goals open when it began
     since: float | None = None  # when it began (seconds since the epoch)
     planned: tuple[int, ...] = ()  # the goals of the plan handed to the executer
+    starting: bool = False  # the planner is still loading the domain (at the start)
 
 
 @dataclass

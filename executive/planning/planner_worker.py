@@ -21,7 +21,7 @@ import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from executive.planning.planner import (
     TMP_PREFIX,
@@ -33,6 +33,10 @@ from executive.planning.planner import (
     send_frame,
 )
 from knowledge.errors import DuraError, PlanningError
+
+if TYPE_CHECKING:
+    from executive.planning.problem import World
+    from knowledge.domain import DomainInfo
 
 _LOG_TAIL = 40  # lines of engine output kept in a result
 
@@ -117,6 +121,20 @@ class _Worker:
         self.domain(domain)
         self.engine(engine)
         return True
+
+    def describe(self, engine: str, domain: Path) -> DomainInfo:
+        """Parse a domain (and load the engine): the signatures the executive checks
+        goals, facts and tasks against, so that it needs no unified-planning itself."""
+        from knowledge.domain import describe
+
+        self.prepare(engine, domain)
+        return describe(self.domain(domain), domain)
+
+    def world(self, engine: str, domain: Path, problem: Path) -> World:
+        """The objects and facts of a problem file of the domain."""
+        from executive.planning.problem import read_world
+
+        return read_world(domain, problem, self.domain(domain))[0]
 
     @_capturing_output
     def solve(self, engine_name: str, task: PlanningTask, timeout: float) -> PlanResult:
@@ -224,8 +242,10 @@ def serve() -> None:
             kind, engine, *args = message
             try:
                 answer = getattr(worker, kind)(engine, *args)
-            except DuraError as e:
-                answer = PlanResult(PlanStatus.ERROR, None, engine, (str(e),))
+            except DuraError as e:  # a planning job's failure is a result; others raise it
+                answer = (
+                    PlanResult(PlanStatus.ERROR, None, engine, (str(e),)) if kind == "solve" else e
+                )
             send_frame(protocol_out, answer)
     # the input closed: dura is done with this worker, or died without cleaning up
     # (SIGKILL); either way the engines' temporary files go with it

@@ -55,6 +55,7 @@ def robot(tmp_path: Path, endpoint: str) -> Iterator[Robot]:
     ):
         high = HighLevel(Context(description, bus, kb), runner)
         high.start()
+        assert high.wait_ready(60)
         try:
 
             def dura(*args: str) -> subprocess.CompletedProcess[str]:
@@ -217,6 +218,7 @@ def slow_robot(tmp_path: Path, endpoint: str, monkeypatch: pytest.MonkeyPatch) -
     ):
         high = HighLevel(Context(description, bus, kb), runner)
         high.start()
+        assert high.wait_ready(60)
         try:
 
             def dura(*args: str) -> subprocess.CompletedProcess[str]:
