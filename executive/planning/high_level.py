@@ -15,9 +15,9 @@ planner worker loads unified-planning and parses the domain (the executive proce
 itself never imports unified-planning): the robot's tasks are checked against the
 domain, the robot's initial world is loaded into an empty knowledge base, and the goal
 planner begins with the goals still open there: an executive restarted after a crash
-carries on with them. Until then ``status``, ``goal/list``, ``state/get`` and the other
-readers answer at once; a request that needs the domain (a goal, a fact, an object)
-waits for it. A domain that does not fit the robot ends the executive
+carries on with them. Until then ``status``, ``goal/list``, ``events`` and the other
+readers answer at once (``state/get`` of a new robot waits for its world); a request
+that needs the domain (a goal, a fact, an object) waits for it. A domain that does not fit the robot ends the executive
 (``on_failure``) with the one-line reason.
 """
 
@@ -108,6 +108,7 @@ class HighLevel(Service):
         self._failure: str | None = None  # why the high level could not start
         self._warm_up: threading.Thread | None = None
         self._begin = threading.Event()  # start() was called: the other services run
+        self._seeded = threading.Event()  # the knowledge base holds the robot's world
         self._lock = threading.Lock()  # the diagnoses and the integrity goals' start
         self._running: list[Callable[[], None]] = []  # how to stop what started, in order
 
@@ -125,6 +126,8 @@ class HighLevel(Service):
             return
         robot, kb, bus = self.context.robot, self.context.kb, self.context.bus
         recover(kb)  # before anything executes: the knowledge base only, fast
+        if robot.problem is None or kb.objects() or kb.facts():
+            self._seeded.set()
         self.planner = Planner(robot.planner.engine, robot.planner.timeout)
         self._relaying = True
         kb.add_listener(self._on_event)
@@ -150,6 +153,7 @@ class HighLevel(Service):
                 world = self.planner.read_world(robot.domain, robot.problem)
                 if not (kb.objects() or kb.facts()):
                     seed(kb, world, robot.problem)
+                self._seeded.set()
             rules: list[IntegrityRule] = []
             for path in robot.integrity:
                 rules.extend(read_rules(path, robot, domain, kb.objects()))
@@ -188,6 +192,7 @@ class HighLevel(Service):
     def _fail(self, reason: str) -> None:
         self._failure = reason
         self._ready.set()
+        self._seeded.set()
         if self.on_failure is not None:
             self.on_failure(reason)
         else:
@@ -348,6 +353,7 @@ class HighLevel(Service):
         return api.PlanReply(None if plan is None else to_plain(plan), self._execution())
 
     def _state_get(self, request: api.StateQuery) -> api.StateReply:
+        self._seeded.wait(WARM_UP_WAIT)  # a new robot's world comes with its domain
         kb = self.context.kb
         words = request.pattern.strip("() ").split()
         facts = [f for f in kb.facts() if _matches(words, f.name, f.args)]

@@ -69,14 +69,14 @@ def test_a_goal_sent_as_soon_as_the_executive_answers_waits_for_the_planner(
             with contextlib.suppress(BusError):
                 first = planning.STATUS.call(bus, timeout=1.0)
         assert first.robot == "usecase"
+        facts = planning.STATE_GET.call(bus, planning.StateQuery("robot_at")).facts
+        assert [f["text"] for f in facts] == ["(robot_at dock)"]  # a new robot waits for it
         goal = planning.GOAL_ADD.call(bus, planning.GoalAdd("(robot_at dock)")).goal
         assert goal["state"] == "pending"  # accepted: the planner had parsed the domain
         deadline = time.monotonic() + 60
         while planning.GOAL_SHOW.call(bus, planning.GoalId(goal["id"])).goal["state"] != "achieved":
             assert time.monotonic() < deadline, "the goal was not achieved"
             time.sleep(0.05)
-        facts = planning.STATE_GET.call(bus, planning.StateQuery("robot_at")).facts
-        assert [f["text"] for f in facts] == ["(robot_at dock)"]  # the seeded world
         assert planning.STATUS.call(bus).planning["starting"] is False
 
 
