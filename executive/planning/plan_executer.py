@@ -221,10 +221,10 @@ class PlanExecuter:
         """Continue the current plan after a pause that brought no new plan."""
         self._call(self._resume)
 
-    def abandon(self) -> None:
-        """Drop the current plan (no plan for any goal): cancel its tasks, undo the
-        at-start effects of those under way, and end the pause."""
-        self._call(self._abandon)
+    def abandon(self, reason: str = "no plan") -> None:
+        """Drop the current plan (no plan for any goal, or no goal for the plan): cancel
+        its tasks, undo the at-start effects of those under way, and end the pause."""
+        self._call(lambda: self._abandon(reason))
 
     def facts_changed(self) -> None:
         """Facts changed outside the executer (``dura state set``): check conditions."""
@@ -298,9 +298,9 @@ class PlanExecuter:
             self._run.undone(values)
         return [Fact(name, args, v) for (name, args), v in sorted(values.items())]
 
-    def _abandon(self) -> None:
+    def _abandon(self, reason: str) -> None:
         if self._run is not None:
-            self._run.cancel_active("no plan")
+            self._run.cancel_active(reason)
         for g in self._goals:
             cancel_timer(g.timer)
         self._run, self._goals = None, []
