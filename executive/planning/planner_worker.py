@@ -18,7 +18,7 @@ import os
 import shutil
 import sys
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
@@ -75,6 +75,7 @@ class _Worker:
 
     output: Path
     engines: dict[str, Any] = field(default_factory=dict)
+    validators: dict[str, Any] = field(default_factory=dict)
     domains: dict[Path, tuple[float, Any]] = field(default_factory=dict)
     env: Any = None
 
@@ -117,6 +118,14 @@ class _Worker:
             self.engines[name] = OneshotPlanner(name=name)
         return self.engines[name]
 
+    def validator(self, name: str) -> Any:
+        """A plan validator by name, kept (UP's factory looks up credits on every call)."""
+        if name not in self.validators:
+            from unified_planning.shortcuts import PlanValidator
+
+            self.validators[name] = PlanValidator(name=name)
+        return self.validators[name]
+
     def prepare(self, engine: str, domain: Path) -> bool:
         self.domain(domain)
         self.engine(engine)
@@ -138,14 +147,14 @@ class _Worker:
 
     @_capturing_output
     def solve(self, engine_name: str, task: PlanningTask, timeout: float) -> PlanResult:
-        from executive.planning.problem import build
+        from executive.planning.problem import build, frozen
 
         def result(status: PlanStatus, *lines: str, **more: Any) -> PlanResult:
             return PlanResult(status, more.get("plan"), engine_name, tuple(lines), 0.0,
                               more.get("validator", ""))  # fmt: skip
 
         try:
-            problem = build(self.domain(task.domain), task.world, task.goals, task.blocked)
+            problem = frozen(build(self.domain(task.domain), task.world, task.goals, task.blocked))
             engine = self.engine(engine_name)
         except DuraError as e:
             return result(PlanStatus.ERROR, str(e))
@@ -160,7 +169,7 @@ class _Worker:
         status = _status(answer.status.name)
         if answer.plan is None or status is not PlanStatus.SOLVED:
             return result(PlanStatus.ERROR if status is PlanStatus.SOLVED else status, *lines)
-        valid, validator, reason = _validate(problem, answer.plan)
+        valid, validator, reason = _validate(problem, answer.plan, self.validator)
         if not valid:
             return result(PlanStatus.INVALID_PLAN, *lines, reason, validator=validator)
         from executive.planning.stn import partial_order
@@ -197,21 +206,19 @@ _VALIDATORS = {
 }
 
 
-def _validate(problem: Any, plan: Any) -> tuple[bool, str, str]:
+def _validate(problem: Any, plan: Any, validator: Callable[[str], Any]) -> tuple[bool, str, str]:
     """Check a plan with the first UP validator that supports the problem (UP's own
     before Kairos', so that a Kairos plan gets an independent check).
 
     Returns (valid, validator name, reason if invalid).
     """
     from unified_planning.engines import ValidationResultStatus
-    from unified_planning.shortcuts import PlanValidator
 
     names = _VALIDATORS.get(type(plan).__name__, ())
     if not names:
         return False, "", f"no validator for a {type(plan).__name__}"
-    chosen = next((n for n in names if PlanValidator(name=n).supports(problem.kind)), names[0])
-    with PlanValidator(name=chosen) as validator:
-        answer = validator.validate(problem, plan)
+    chosen = next((n for n in names if validator(n).supports(problem.kind)), names[0])
+    answer = validator(chosen).validate(problem, plan)
     if answer.status == ValidationResultStatus.VALID:
         return True, chosen, ""
     messages = [str(m.message).splitlines()[0] for m in answer.log_messages or ()]

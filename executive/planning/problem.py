@@ -15,6 +15,7 @@ The goal must also hold at the end, like every goal.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -233,6 +234,41 @@ def build(
         problem.add_action(reach)
         problem.add_goal(reached())
     return problem
+
+
+def frozen(problem: Problem) -> Problem:
+    """The same problem, computing its kind only once.
+
+    unified-planning recomputes ``Problem.kind`` at every look (walking every action and
+    expression), and one solve, validation and conversion looks 17 times: a third of the
+    worker's time. A frozen problem keeps the kind it computed first (its clones do not:
+    they are new problems); change nothing in it afterwards. The problem stays a UP
+    ``Problem`` (engines dispatch on its type): ``Problem.kind`` learns to look for the
+    kept kind, once per process.
+    """
+    _keep_kinds()
+    problem.__dict__[_KIND] = None  # computed at the first look
+    return problem
+
+
+_KIND = "_dura_kind"
+
+
+@functools.cache
+def _keep_kinds() -> None:
+    from unified_planning.model import Problem
+
+    computed = Problem.kind
+
+    def kind(self: Problem) -> Any:
+        kept = self.__dict__
+        if _KIND not in kept:
+            return computed.fget(self)
+        if kept[_KIND] is None:
+            kept[_KIND] = computed.fget(self)
+        return kept[_KIND]
+
+    Problem.kind = property(kind, doc=computed.__doc__)
 
 
 def world_of(problem: Problem, domain: Problem | None = None) -> World:
