@@ -161,6 +161,11 @@ class HighLevel(Service):
             if not self._stopping.is_set():
                 self._fail(str(e))
             return
+        except Exception as e:  # a bug: say so, rather than leave goals waiting
+            if not self._stopping.is_set():
+                log.exception("the high level's warm-up failed")
+                self._fail(f"the planner's start failed: {type(e).__name__}: {e}")
+            return
         while not self._begin.wait(0.1):  # the task executor starts meanwhile
             if self._stopping.is_set():
                 return
