@@ -19,8 +19,12 @@ others finish first (thesis Figures 5.7, 5.8). A new plan adopts a paused or run
 step that is one of its first steps (same action and objects); the others are cancelled
 and their at-start effects undone, as the planner assumed when it planned.
 
-Every step is an event in the KB log: PLAN_START, DISPATCH, START, END, FAIL, CANCEL,
-REPLAN. Goal and plan states are not the executer's to write: it reports each change
+Every step is an event in the KB log: PLAN_START, DISPATCH, START, ADOPT (a new plan
+continues it), END, FAIL, CANCEL, REPLAN. A step's events name its plan and index and
+its run (the id of its DISPATCH event, kept by the plan that adopts it); each change a
+step makes to the facts is one transaction with its event, and the old plan's steps
+end as its own before the new plan takes over: crash recovery relies on both
+(:mod:`executive.planning.recovery`). Each stored plan step keeps what happened to it. Goal and plan states are not the executer's to write: it reports each change
 (a plan executing, succeeded or failed; a goal executing, achieved, or past its
 deadline) to their owner, the goal planner, which applies them on its own thread
 (:meth:`PlanExecuter.report_to`, :mod:`executive.planning.state_change`); an executer
