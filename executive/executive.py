@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from executive.bus import security
+from executive.bus.clock import system_clock
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus
@@ -83,6 +84,7 @@ class Executive:
         self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> Executive:
+        clock = system_clock()  # a bad DURA_TIME_SCALE stops the executive here, with why
         with contextlib.ExitStack() as stack:
             robot, components = self.robot, list(self.robot.components)
             credentials = security.ensure_credentials(self.credentials_path, robot.name, components)
@@ -102,7 +104,7 @@ class Executive:
             self.kb.log_event(
                 "EXECUTIVE_STARTED",
                 self.robot.name,
-                {"endpoint": self.endpoint, "pid": os.getpid()},
+                {"endpoint": self.endpoint, "pid": os.getpid(), "time_scale": clock.scale},
             )
             stack.callback(self.kb.log_event, "EXECUTIVE_STOPPED", self.robot.name)
             context = Context(self.robot, self.bus, self.kb)
@@ -130,7 +132,10 @@ class Executive:
             if self.robot.ros2 is not None:  # Cyclone DDS loads only for a ROS 2 robot
                 from executive.ros2.link import Ros2Link
 
-                self.ros2 = stack.enter_context(Ros2Link(self.robot.ros2))
+                nodes = {c.ros2.node: name for name, c in self.robot.components.items()
+                         if c.ros2 is not None and c.ros2.node is not None}  # fmt: skip
+                self.ros2 = stack.enter_context(Ros2Link(self.robot.ros2, nodes=nodes))
+                self.high_level.sources = (self.ros2.topics,)  # before it starts sensing
             for service in self.services(context):
                 service.start()
                 stack.callback(service.stop)
@@ -155,10 +160,15 @@ class Executive:
         self.tasks = TaskExecutor(context, launcher)
         ros2 = self.ros2
         extra: list[Service] = []
+        last: list[Service] = []
         if ros2 is not None:
+            from executive.ros2.goals import Ros2Goals
+            from executive.ros2.graph_model import Ros2GraphModel
             from executive.ros2.state import Ros2StatePublisher
 
             extra.append(Ros2StatePublisher(context, ros2.spec, link=ros2))
+            extra.append(Ros2GraphModel(context, ros2.discovery))
+            last.append(Ros2Goals(context, ros2))  # once the high level takes goals
         recording: list[Service] = []
         if self.record is not None:  # first: it sees every other service's traffic
             from executive.bags.recording import DEFAULT_MAX_SIZE, Recording
@@ -175,6 +185,7 @@ class Executive:
             *extra,
             self.tasks,
             self.high_level,
+            *last,
         ]
 
     def _plan_tasks(self) -> PlanTasks:

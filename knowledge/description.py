@@ -15,8 +15,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from knowledge.errors import ConfigError
+
 if TYPE_CHECKING:  # read only for a ROS 2 robot: the command line stays quick to start
+    from knowledge.ros2_components import Ros2ComponentSpec
     from knowledge.ros2_spec import Ros2Spec
+    from knowledge.sensing_spec import SensingRuleSpec
 
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
@@ -72,6 +76,7 @@ class ComponentSpec:
     startup_timeout: float = 10.0
     line: int = 0
     lines: Mapping[str, int] = field(default_factory=dict, compare=False, repr=False)
+    ros2: Ros2ComponentSpec | None = None  # a ROS 2 program, or a ROS 2 action or service
 
     @property
     def kind(self) -> Kind:
@@ -111,13 +116,35 @@ class BehaviorSpec(ComponentSpec):
 
 @dataclass(frozen=True)
 class GoalArg:
-    """A behavior goal field: an action parameter (``?to``) or a constant."""
+    """A behavior goal field: an action parameter (``?to``), a property of the object a
+    parameter names (``?to.pose``: ``property`` is ``pose``) or a constant."""
 
     parameter: str | None = None
     constant: Any = None
+    property: str | None = None  # a dotted path into the object's properties
 
-    def resolve(self, bindings: Mapping[str, str]) -> Any:
-        return bindings[self.parameter] if self.parameter is not None else self.constant
+    def resolve(
+        self, bindings: Mapping[str, str], objects: Mapping[str, Mapping[str, Any]] | None = None
+    ) -> Any:
+        """Fill in the field for one step's objects.
+
+        Raises:
+            ConfigError: the object has no such property.
+        """
+        if self.parameter is None:
+            return self.constant
+        name = bindings[self.parameter]
+        if self.property is None:
+            return name
+        value: Any = (objects or {}).get(name, {})
+        for part in self.property.split("."):
+            if not isinstance(value, Mapping) or part not in value:
+                raise ConfigError(
+                    f"object '{name}' has no property '{self.property}' (for ?{self.parameter}"
+                    f".{self.property}; declare it under 'objects:' in the robot description)"
+                )
+            value = value[part]
+        return value
 
 
 @dataclass(frozen=True)
@@ -154,6 +181,8 @@ class RobotDescription:
     endpoint: str = DEFAULT_ENDPOINT
     knowledge_base: Path | None = None
     ros2: Ros2Spec | None = None  # the robot's ROS 2 graph, if it has one
+    objects: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)  # their properties
+    sensing: tuple[SensingRuleSpec, ...] = ()  # facts and values read from topics
 
     @property
     def components(self) -> dict[str, ComponentSpec]:

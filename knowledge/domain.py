@@ -3,6 +3,12 @@
 The UP reader is the one parser of PDDL in dura; this module turns its errors into
 :class:`DomainError` messages with ``file:line`` and extracts what the robot
 description is checked against (actions, their parameters, predicates, types).
+
+Names of different kinds may be equal, as PDDL allows and the planning executives users
+come from accept: a ROSPlan problem declares ``driver - driver``, an object named like
+its type. unified-planning refuses that by default; dura turns its environment's
+``error_used_name`` switch off, which still refuses a name declared twice as the same
+kind (two objects ``depot``), reported at the second declaration's line.
 """
 
 from __future__ import annotations
@@ -11,7 +17,7 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from knowledge.errors import DomainError, located
 
@@ -19,8 +25,11 @@ if TYPE_CHECKING:
     from unified_planning.model import Problem
 
 _EMPTY_FUNCTIONS = re.compile(r"\(\s*:functions\s*\)", re.IGNORECASE)
+_USED_NAME = re.compile(r"Name (?:of \w+ )?(\S+) already defined")
 _UP_LINE = re.compile(r"line:? (\d+)")
 _ACTION_HEAD = re.compile(r"\(\s*:(durative-action|action)\s+([^\s()]+)", re.IGNORECASE)
+_COMMENT = re.compile(r";[^\n]*")
+_DURATION = re.compile(r":duration\s*\(", re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -31,6 +40,7 @@ class ActionInfo:
     parameters: tuple[tuple[str, str], ...]
     durative: bool
     line: int | None = None
+    duration: str | None = None  # a durative action's constraint as written: (= ?duration 2)
 
     @property
     def parameter_names(self) -> tuple[str, ...]:
@@ -65,18 +75,48 @@ def _prepare(text: str) -> str:
     return _EMPTY_FUNCTIONS.sub(lambda m: " " * len(m.group(0)), text)
 
 
-def _error_line(error: BaseException) -> int | None:
+def _error_line(error: BaseException, text: str = "") -> int | None:
     lineno = getattr(error, "lineno", None)
     if isinstance(lineno, int) and lineno > 0:
         return lineno
     found = _UP_LINE.search(str(error))
-    return int(found.group(1)) if found else None
+    if found:
+        return int(found.group(1))
+    used = _USED_NAME.search(str(error))
+    return _second_declaration(text, used.group(1)) if used else None
+
+
+def _second_declaration(text: str, name: str) -> int | None:
+    """The line where a name declared twice is written the second time."""
+    word = re.compile(rf"(?<![\w?-]){re.escape(name)}(?![\w-])", re.IGNORECASE)
+    seen = 0
+    for number, line in enumerate(text.splitlines(), start=1):
+        seen += len(word.findall(line.split(";", 1)[0]))
+        if seen >= 2:
+            return number
+    return None
 
 
 def _error_text(error: BaseException) -> str:
     text = str(getattr(error, "msg", "") or error) or type(error).__name__
+    used = _USED_NAME.search(text)
+    if used:
+        return f"name '{used.group(1)}' is declared twice"
     text = re.sub(r"\s*\(at char \d+\),?\s*\(line:\d+, col:\d+\)", "", text)
     return " ".join(text.split())
+
+
+def _reader() -> Any:
+    """UP's PDDL reader, in an environment where names of different kinds may be equal."""
+    import warnings
+
+    from unified_planning.environment import get_environment
+    from unified_planning.io import PDDLReader
+
+    environment = get_environment()
+    environment.error_used_name = False  # still refuses a name declared twice as one kind
+    warnings.filterwarnings("ignore", message=r"Name .* already defined")
+    return PDDLReader(environment)
 
 
 def parse(domain: Path) -> Problem:
@@ -85,12 +125,11 @@ def parse(domain: Path) -> Problem:
     Raises:
         DomainError: naming the file and line of the first syntax or semantic error.
     """
-    from unified_planning.io import PDDLReader
-
+    text = _read(domain)
     try:
-        return PDDLReader().parse_problem_string(_prepare(_read(domain)), None)
+        return _reader().parse_problem_string(_prepare(text), None)
     except Exception as e:  # the reader raises pyparsing, SyntaxError and UP exceptions
-        raise DomainError(located(domain, _error_line(e), f"PDDL: {_error_text(e)}")) from e
+        raise DomainError(located(domain, _error_line(e, text), f"PDDL: {_error_text(e)}")) from e
 
 
 def parse_problem(
@@ -99,14 +138,36 @@ def parse_problem(
     """Parse a domain with a problem given as text (the problem's errors name ``source``;
     unless ``domain_checked``, the domain is parsed alone first, so that its own errors
     name the domain file)."""
-    from unified_planning.io import PDDLReader
-
     if not domain_checked:
         parse(domain)
     try:
-        return PDDLReader().parse_problem_string(_prepare(_read(domain)), problem_text)
+        return _reader().parse_problem_string(_prepare(_read(domain)), problem_text)
     except Exception as e:
-        raise DomainError(located(source, _error_line(e), f"PDDL: {_error_text(e)}")) from e
+        line = _error_line(e, problem_text)
+        raise DomainError(located(source, line, f"PDDL: {_error_text(e)}")) from e
+
+
+def _balanced(text: str, start: int) -> str:
+    """The parenthesised expression that opens at ``text[start]`` (to the end if open)."""
+    depth = 0
+    for i in range(start, len(text)):
+        depth += {"(": 1, ")": -1}.get(text[i], 0)
+        if depth == 0:
+            return text[start : i + 1]
+    return text[start:]
+
+
+def _durations(text: str) -> dict[str, str]:
+    """Each action's ``:duration`` constraint as written, on one line, by lower-case name."""
+    code = _COMMENT.sub(lambda m: " " * len(m.group(0)), text)  # offsets stay
+    found: dict[str, str] = {}
+    for head in _ACTION_HEAD.finditer(code):
+        body = _balanced(code, head.start())
+        duration = _DURATION.search(body)
+        if duration is not None:
+            constraint = _balanced(body, duration.end() - 1)
+            found[head.group(2).lower()] = " ".join(constraint.replace("( ", "(").split())
+    return found
 
 
 def read_domain(path: Path) -> DomainInfo:
@@ -124,12 +185,14 @@ def describe(problem: Problem, path: Path) -> DomainInfo:
     lines = {
         m.group(2).lower(): text.count("\n", 0, m.start()) + 1 for m in _ACTION_HEAD.finditer(text)
     }
+    durations = _durations(text)
     actions: dict[str, ActionInfo] = {}
     for action in problem.actions:
         params = tuple((p.name, str(p.type)) for p in action.parameters)
         durative = type(action).__name__ == "DurativeAction"
+        key = action.name.lower()
         actions[action.name] = ActionInfo(
-            action.name, params, durative, lines.get(action.name.lower())
+            action.name, params, durative, lines.get(key), durations.get(key) if durative else None
         )
     predicates: dict[str, tuple[str, ...]] = {}
     functions: dict[str, tuple[str, ...]] = {}

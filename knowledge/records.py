@@ -8,83 +8,32 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-
-class GoalState(enum.Enum):
-    """A goal's lifecycle: open (pending, planned, executing) until it ends for good."""
-
-    PENDING = "pending"
-    PLANNED = "planned"
-    EXECUTING = "executing"
-    ACHIEVED = "achieved"
-    FAILED = "failed"
-    UNREACHABLE = "unreachable"
-    CANCELLED = "cancelled"
-
-    @property
-    def is_open(self) -> bool:
-        return self in (GoalState.PENDING, GoalState.PLANNED, GoalState.EXECUTING)
-
-    def can_become(self, state: GoalState) -> bool:
-        """Whether a goal in this state may change to ``state`` (see GOAL_TRANSITIONS)."""
-        return state in GOAL_TRANSITIONS[self]
-
-
-_GOAL_ENDS = frozenset(
-    {GoalState.ACHIEVED, GoalState.FAILED, GoalState.UNREACHABLE, GoalState.CANCELLED}
+from knowledge.lifecycle import (
+    GOAL_TRANSITIONS,
+    KEEP_TRANSITIONS,
+    PLAN_TRANSITIONS,
+    GoalState,
+    PlanState,
+    TaskState,
 )
 
-GOAL_TRANSITIONS: Mapping[GoalState, frozenset[GoalState]] = {
-    GoalState.PENDING: _GOAL_ENDS | {GoalState.PLANNED},
-    # planned again: a new plan replaced the one it was planned in
-    GoalState.PLANNED: _GOAL_ENDS | {GoalState.PLANNED, GoalState.EXECUTING},
-    # planned again: replanning after a failed step, a new goal or a cancel
-    GoalState.EXECUTING: _GOAL_ENDS | {GoalState.PLANNED},
-    # the ends are final: a cancelled goal is never planned again
-    **{end: frozenset() for end in _GOAL_ENDS},
-}
-"""The changes the knowledge base allows, from each goal state."""
-
-
-class PlanState(enum.Enum):
-    """A plan's lifecycle: stored (pending), executing, and how it ended."""
-
-    PENDING = "pending"
-    EXECUTING = "executing"
-    SUCCEEDED = "succeeded"
-    FAILED = "failed"
-    SUPERSEDED = "superseded"
-    CANCELLED = "cancelled"  # ended because none of its goals was open any more
-
-    def can_become(self, state: PlanState) -> bool:
-        """Whether a plan in this state may change to ``state`` (see PLAN_TRANSITIONS)."""
-        return state in PLAN_TRANSITIONS[self]
-
-
-_PLAN_ENDS = frozenset(
-    {PlanState.SUCCEEDED, PlanState.FAILED, PlanState.SUPERSEDED, PlanState.CANCELLED}
-)
-
-PLAN_TRANSITIONS: Mapping[PlanState, frozenset[PlanState]] = {
-    PlanState.PENDING: _PLAN_ENDS - {PlanState.SUCCEEDED} | {PlanState.EXECUTING},
-    PlanState.EXECUTING: _PLAN_ENDS,
-    # a plan that ended stays as it ended (a superseded plan cannot fail afterwards)
-    **{end: frozenset() for end in _PLAN_ENDS},
-}
-"""The changes the knowledge base allows, from each plan state."""
-
-
-class TaskState(enum.Enum):
-    PENDING = "pending"
-    SCHEDULED = "scheduled"
-    RUNNING = "running"
-    PAUSED = "paused"
-    SUCCEEDED = "succeeded"
-    FAILED = "failed"
-    CANCELLED = "cancelled"
-
-    @property
-    def is_final(self) -> bool:
-        return self in (TaskState.SUCCEEDED, TaskState.FAILED, TaskState.CANCELLED)
+__all__ = [  # the states live in knowledge.lifecycle; records names them too
+    "GOAL_TRANSITIONS",
+    "KEEP_TRANSITIONS",
+    "PLAN_TRANSITIONS",
+    "STEP_STATES",
+    "ComponentRecord",
+    "Event",
+    "Fact",
+    "Goal",
+    "GoalState",
+    "Plan",
+    "PlanState",
+    "PlanStep",
+    "Task",
+    "TaskState",
+    "to_plain",
+]
 
 
 @dataclass(frozen=True)
@@ -100,6 +49,7 @@ class Goal:
     reason: str = ""
     created: float = 0.0
     updated: float = 0.0
+    keep: bool = False  # a maintenance goal: re-posted whenever it stops holding
 
 
 STEP_STATES = ("pending", "dispatched", "running", "ended", "failed", "cancelled", "adopted")

@@ -20,6 +20,7 @@ from knowledge.description import (
     BehaviorSpec,
     FunctionalitySpec,
     GoalArg,
+    Kind,
     ObserverSpec,
     PlannerSpec,
     RobotDescription,
@@ -27,7 +28,9 @@ from knowledge.description import (
 )
 from knowledge.errors import ConfigError
 from knowledge.finding import Finding, Report
+from knowledge.ros2_components import read_component_ros2
 from knowledge.ros2_spec import read_ros2
+from knowledge.sensing_spec import read_sensing
 from knowledge.yamlsource import Section, compose, describe, line_of, paths, to_python
 
 ENGINES = ("kairos", "aries", "fast-downward", "tamer")
@@ -69,10 +72,13 @@ def _observers(section: Section, key: str, report: Report) -> tuple[ObserverSpec
     return tuple(out)
 
 
-def _common(s: Section, report: Report) -> dict[str, Any]:
+def _common(s: Section, report: Report, kind: Kind) -> dict[str, Any]:
     """The fields functionalities and behaviors share."""
+    ros2 = read_component_ros2(s.section("ros2"), kind, report)
+    program_optional = ros2 is not None and ros2.call is not None  # dura's own client runs it
     return {
-        "command": s.texts("command", required=True),
+        "ros2": ros2,
+        "command": s.texts("command", required=not program_optional),
         "requires": s.texts("requires"),
         "publishes": s.texts("publishes"),
         "subscribes": s.texts("subscribes"),
@@ -96,7 +102,7 @@ def _functionality(
         shareable=s.flag("shareable", True),
         rating=s.number("rating", 1.0, minimum=0.0),
         max_faults=s.integer("max_faults", 3, minimum=1),
-        **_common(s, report),
+        **_common(s, report, Kind.FUNCTIONALITY),
     )
     s.close()
     return f
@@ -111,7 +117,7 @@ def _behavior(name: str, node: yaml.Node, line: int, report: Report) -> Behavior
         interruptible=s.flag("interruptible", True),
         reconfigurable=s.flag("reconfigurable", True),
         max_restarts=s.integer("max_restarts", 2, minimum=0),
-        **_common(s, report),
+        **_common(s, report, Kind.BEHAVIOR),
     )
     s.close()
     return b
@@ -129,7 +135,8 @@ def _task(action: str, node: yaml.Node, line: int, report: Report) -> TaskSpec |
         if isinstance(value, yaml.ScalarNode) and value.tag == "tag:yaml.org,2002:str":
             text = str(value.value)
             if text.startswith("?"):
-                goal[field] = GoalArg(parameter=text[1:])
+                parameter, _, prop = text[1:].partition(".")  # ?to.pose: a property of ?to
+                goal[field] = GoalArg(parameter=parameter, property=prop or None)
                 continue
         if not isinstance(value, yaml.ScalarNode):
             report.error(
@@ -143,6 +150,20 @@ def _task(action: str, node: yaml.Node, line: int, report: Report) -> TaskSpec |
     if behavior is None:
         return None
     return TaskSpec(action, behavior, goal, s.line, lines)
+
+
+def _objects(top: Section, report: Report) -> dict[str, dict[str, Any]]:
+    """Read ``objects:``: each PDDL object's properties (a mapping), for goal fields."""
+    out: dict[str, dict[str, Any]] = {}
+    for name, node, line in top.named("objects"):
+        value = to_python(node)
+        if not isinstance(value, dict):
+            report.error(
+                line, f"the properties of object '{name}' must be a mapping, not {describe(node)}"
+            )
+            continue
+        out[name] = value
+    return out
 
 
 def _planner(s: Section | None, report: Report) -> PlannerSpec:
@@ -209,6 +230,8 @@ def read_robot(
         if t is not None:
             tasks[action] = t
     ros2 = read_ros2(top.section("ros2"), base, report)
+    objects = _objects(top, report)
+    sensing = read_sensing(top, report)
     top.close()
     robot = RobotDescription(
         name=name,
@@ -224,6 +247,8 @@ def read_robot(
         endpoint=endpoint,
         knowledge_base=kb,
         ros2=ros2,
+        objects=objects,
+        sensing=sensing,
     )
     return robot, report.findings
 

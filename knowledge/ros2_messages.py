@@ -1,6 +1,8 @@
 """ROS 2 message definitions: a distribution's standard messages and a robot's own files.
 
-The standard messages of each ROS 2 distribution come from ``rosbags``' type stores.
+The standard messages of each ROS 2 distribution come from ``rosbags``' type stores,
+with the services dura calls itself (lifecycle, action cancellation) and the standard
+``std_srvs`` added from the definitions bundled in ``knowledge/ros2_interfaces/``.
 A robot may add its own ``.msg``, ``.srv`` and ``.action`` files, laid out as in a ROS
 package (``<package>/msg/Name.msg``); they are read here with their lines, so that a
 bad definition is a ``file:line:`` error like any other input. A service becomes
@@ -14,6 +16,7 @@ custom messages serialises them too: that is what tests compare dura's bytes wit
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
@@ -26,6 +29,7 @@ from knowledge.yamlsource import did_you_mean
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
 
+BUNDLED = Path(__file__).parent / "ros2_interfaces"
 DEFAULT_DISTRIBUTION = "jazzy"
 DISTRIBUTIONS = ("foxy", "galactic", "humble", "iron", "jazzy", "kilted", "lyrical")
 PRIMITIVES = frozenset(
@@ -65,7 +69,21 @@ def standard_store(distribution: str) -> Typestore:
             f"unknown ROS 2 distribution '{distribution}' (choose from "
             f"{', '.join(DISTRIBUTIONS)}){did_you_mean(distribution, DISTRIBUTIONS)}"
         )
-    return get_typestore(Stores(f"ros2_{distribution}"))
+    store = get_typestore(Stores(f"ros2_{distribution}"))
+    register(store, bundled_definitions())
+    return store
+
+
+@functools.cache
+def bundled_definitions() -> dict[str, Definition]:
+    """Read the service definitions dura bundles (every distribution has them alike)."""
+    from rosbags.typesys import Stores, get_typestore
+
+    known = get_typestore(Stores.ROS2_JAZZY).fielddefs
+    definitions, findings = read_definitions([BUNDLED], known)
+    if findings:  # dura's own files: a broken one is a bug, not the user's input
+        raise ConfigError(f"dura's bundled ROS 2 definitions: {findings[0]}")
+    return definitions
 
 
 def message_store(distribution: str, paths: Sequence[Path] = ()) -> Typestore:

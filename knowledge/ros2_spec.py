@@ -10,6 +10,7 @@ Example::
       messages: [msgs]              # optional: folders or files of custom .msg/.srv/.action
       diagnostics: /diagnostics     # where observations and diagnoses go (null: nowhere)
       events: /dura/events          # where executive events go (null: nowhere)
+      goals: /dura/goals            # where ROS 2 tools submit goals (null: nowhere)
       topics:                       # ROS 2 topics that observers may name
         /scan: {type: sensor_msgs/msg/LaserScan, qos: sensor_data}
         /odom: {}                   # type learnt from the publisher (ROS 2 discovery)
@@ -99,6 +100,7 @@ class Ros2Spec:
     topics: Mapping[str, Ros2TopicSpec] = field(default_factory=dict)  # by observed name
     diagnostics: str | None = "/diagnostics"
     events: str | None = "/dura/events"
+    goals: str | None = "/dura/goals"
     line: int = 0
 
     def topic(self, observed_as: str) -> Ros2TopicSpec | None:
@@ -144,6 +146,7 @@ def read_ros2(section: Section | None, base: Path, report: Report) -> Ros2Spec |
     )
     diagnostics = _optional_topic(section, "diagnostics", "/diagnostics")
     events = _optional_topic(section, "events", "/dura/events")
+    goals = _optional_topic(section, "goals", "/dura/goals")
     entries = list(section.named("topics"))
     section.close()
     store = standard_store(distribution)
@@ -168,6 +171,7 @@ def read_ros2(section: Section | None, base: Path, report: Report) -> Ros2Spec |
         topics,
         diagnostics,
         events,
+        goals,
         section.line,
     )
 

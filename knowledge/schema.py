@@ -108,7 +108,11 @@ MIGRATIONS: tuple[tuple[str, ...], ...] = (
     );
     CREATE INDEX events_kind ON events(kind);
     """),
-    # 2: what happened to each step of a plan (written by the plan executer)
+    # 2: maintenance goals, re-posted whenever they stop holding
+    _statements("""
+    ALTER TABLE goals ADD COLUMN keep INTEGER NOT NULL DEFAULT 0
+    """),
+    # 3: what happened to each step of a plan (written by the plan executer)
     ("ALTER TABLE plan_steps ADD COLUMN state TEXT NOT NULL DEFAULT 'pending'",),
 )
 

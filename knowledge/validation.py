@@ -6,9 +6,11 @@ and returns every finding, so ``dura validate`` can list each problem on a line.
 
 from __future__ import annotations
 
+import graphlib
 import importlib.util
 import os
 import shutil
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,6 +26,8 @@ from knowledge.domain import DomainInfo, parse_problem, read_domain
 from knowledge.errors import DomainError
 from knowledge.finding import Finding, Report, Severity, finding_of
 from knowledge.robot import read_robot
+from knowledge.ros2_components import check_ros2_components
+from knowledge.sensing_spec import check_sensing
 from knowledge.yamlsource import did_you_mean
 
 RESERVED_PREFIXES = ("AB", "/AB")
@@ -82,30 +86,6 @@ def check_names(robot: RobotDescription, report: Report) -> None:
                     )
 
 
-def _cyclic(edges: dict[str, set[str]]) -> bool:
-    """Whether a directed graph (node -> successors) has a cycle."""
-    done: set[str] = set()
-    for root in edges:
-        path: set[str] = set()
-        stack = [(root, iter(sorted(edges.get(root, ()))))]
-        if root in done:
-            continue
-        path.add(root)
-        while stack:
-            node, successors = stack[-1]
-            following = next(successors, None)
-            if following is None:
-                stack.pop()
-                path.discard(node)
-                done.add(node)
-            elif following in path:
-                return True
-            elif following not in done:
-                path.add(following)
-                stack.append((following, iter(sorted(edges.get(following, ())))))
-    return False
-
-
 def check_capabilities(robot: RobotDescription, report: Report) -> None:
     """Every required capability has a provider; `requires` has no cycle."""
     capabilities = robot.capabilities
@@ -118,12 +98,15 @@ def check_capabilities(robot: RobotDescription, report: Report) -> None:
                     f"{did_you_mean(capability, capabilities)}",
                 )
     needs = {
-        f.name: {p.name for c in f.requires for p in robot.providers(c)}
+        f.name: list(dict.fromkeys(p.name for c in f.requires for p in robot.providers(c)))
         for f in robot.functionalities.values()
     }
-    if not _cyclic(needs):
-        return
-    import networkx as nx  # only to name each cycle: every `dura run` checks, few find one
+    try:
+        graphlib.TopologicalSorter(needs).prepare()
+        return  # no cycle: networkx (a tenth of a second to import) only names cycles
+    except graphlib.CycleError:
+        pass
+    import networkx as nx
 
     graph: nx.DiGraph = nx.DiGraph()
     for name, providers in needs.items():
@@ -200,6 +183,7 @@ def _components_checks(robot: RobotDescription, report: Report) -> None:
     check_capabilities(robot, report)
     check_topics(robot, report)
     check_commands(robot, report)
+    check_ros2_components(robot, report)
 
 
 def check_commands(robot: RobotDescription, report: Report) -> None:
@@ -207,6 +191,8 @@ def check_commands(robot: RobotDescription, report: Report) -> None:
     exists), so a typo is met here and not as a permanent fault at run time."""
     folder = robot.path.parent
     for c in robot.components.values():
+        if not c.command and c.ros2 is not None and c.ros2.call is not None:
+            continue  # dura's own client of a ROS 2 action or service: no program
         problem = command_problem(c.command, folder)
         if problem:
             report.error(c.line_of("command"), f"{c.kind.value} '{c.name}': {problem}")
@@ -278,27 +264,34 @@ def validate(path: Path, text: str | None = None, *, domain: bool = True) -> Val
             except DomainError as e:
                 findings.append(finding_of(e, str(path)))
         if info is not None:
-            findings.extend(check_domain(robot, info, report))
+            objects: dict[str, str] = {}
             if robot.problem is not None and robot.problem.is_file():
                 try:
                     text_of_problem = robot.problem.read_text(encoding="utf-8")
-                    parse_problem(robot.domain, text_of_problem, str(robot.problem))
+                    problem = parse_problem(robot.domain, text_of_problem, str(robot.problem))
+                    objects = {o.name: str(o.type) for o in problem.all_objects}
                 except (OSError, UnicodeDecodeError) as e:
                     report.error(None, f"cannot read problem {robot.problem}: {e}")
                 except DomainError as e:
                     findings.append(finding_of(e, str(path)))
+            findings.extend(check_domain(robot, info, objects, report))
     all_findings = tuple(sorted(findings + report.findings, key=_order))
     return Validation(robot, info, all_findings)
 
 
 def check_domain(
-    robot: RobotDescription, domain: DomainInfo, report: Report | None = None
+    robot: RobotDescription,
+    domain: DomainInfo,
+    objects: Mapping[str, str],
+    report: Report | None = None,
 ) -> list[Finding]:
-    """Check the robot's tasks against its parsed domain: the findings in the domain
-    file; those in the description go to ``report`` (or are returned too)."""
+    """Check the robot's tasks and sensing rules against its parsed domain and the
+    problem's ``objects``: the findings in the domain file; those in the description go
+    to ``report`` (or are returned too)."""
     own = report if report is not None else Report(str(robot.path))
     domain_report = Report(str(robot.domain))
     check_tasks(robot, domain, own, domain_report)
+    check_sensing(robot, domain, objects, own)
     return [*(own.findings if report is None else ()), *domain_report.findings]
 
 

@@ -13,7 +13,8 @@ first looked up; a plugin that fails to load is a warning naming it.
 
 Messages reach an observer through the handlers of :meth:`Observer.inputs`, called on
 the bus's threads: they only queue. Everything else (filters, checks) happens in
-:meth:`Observer.observe`, on the manager's loop thread. Times are wall clock seconds:
+:meth:`Observer.observe`, on the manager's loop thread. Times are seconds of robot time
+(the wall clock unless ``DURA_TIME_SCALE`` is set, see :mod:`monitoring.robot_time`):
 the ``now`` of a loop and the ``received`` (and ``sent``) times of messages.
 """
 

@@ -57,10 +57,12 @@ def read_observer(value: object, source: Source, owner: str = "") -> ObserverCon
 def check_observers(robot: RobotDescription) -> list[Finding]:
     """Read every observer of every component; the findings of all their problems.
 
-    A topic no component publishes or subscribes to is a warning (a typo, usually).
+    A topic no component publishes or subscribes to, and that is not one of the
+    robot's ROS 2 topics, is a warning (a typo, usually).
     """
     report = Report(str(robot.path))
-    topics = robot.topics
+    ros2 = list(robot.ros2.topics) if robot.ros2 is not None else []
+    topics = sorted({*robot.topics, *ros2})
     for component in robot.components.values():
         owner = f"{component.kind.value} '{component.name}'"
         for spec in component.observers:

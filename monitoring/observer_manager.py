@@ -27,18 +27,19 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from executive.bus.api import monitoring as api
+from executive.bus.clock import Clock, system_clock
 from executive.bus.keys import OBSERVATIONS, component
 from executive.bus.payloads import ComponentState, Lifecycle
 from executive.bus.service import Context, Service
-from executive.bus.session import Bus, Message
+from executive.bus.session import Message
 from executive.bus.topic_source import TopicSource
-from executive.bus.verb import Verb
 from knowledge.description import ObserverSpec
 from knowledge.errors import ConfigError, DuraError
 from knowledge.yamlsource import did_you_mean
 from monitoring.observer import Environment, Handler, Observer, make_observer
+from monitoring.observer_api import serve_observers
 from monitoring.observer_config import config_of
+from monitoring.robot_time import RobotTime
 
 log = logging.getLogger("dura.observers")
 
@@ -113,8 +114,11 @@ class ObserverManager(Service):
 
     name = "observer-manager"
 
-    def __init__(self, context: Context, *, sources: Sequence[TopicSource] = ()) -> None:
+    def __init__(
+        self, context: Context, *, sources: Sequence[TopicSource] = (), clock: Clock | None = None
+    ) -> None:
         super().__init__(context)
+        self._time = RobotTime(clock or system_clock())  # observers measure robot time
         self._sources = tuple(sources)  # topics not on the bus, e.g. ROS 2 topics
         self._lock = threading.Condition(threading.RLock())
         self._slots: dict[str, _Slot] = {}
@@ -144,7 +148,7 @@ class ObserverManager(Service):
                 self._register(_Slot(observer_id, owner, observer, observer.inputs()))
         bus = self.context.bus
         self._declared.append(bus.subscribe(component("*", "state"), self._on_component_state))
-        self._declared.extend(self._serve(bus))
+        self._declared.extend(serve_observers(self, bus))
         self._thread = threading.Thread(target=self._run, name="observer-manager", daemon=True)
         self._thread.start()
 
@@ -187,6 +191,15 @@ class ObserverManager(Service):
         """
         with self._lock:
             return self._add(config, component, name, source)
+
+    def active(self, observer_id: str) -> bool:
+        """Whether an observer observes now (enabled, and its component READY).
+
+        Raises:
+            ConfigError: unknown id.
+        """
+        with self._lock:
+            return self._slot(observer_id).active
 
     def change(self, observer_id: str, config: ObserverEntry, *, source: str = "observer") -> None:
         """Replace an observer's configuration; it keeps its id and starts afresh.
@@ -289,10 +302,11 @@ class ObserverManager(Service):
             if feed is None:
                 feed = self._feeds[key] = _Feed()
                 source = next((s for s in self._sources if s.serves(key)), None)
+                dispatch = self._time.handler(feed.dispatch)
                 feed.subscriber = (
-                    source.subscribe(key, feed.dispatch)
+                    source.subscribe(key, dispatch)
                     if source is not None
-                    else self.context.bus.subscribe(key, feed.dispatch, decoded=False)
+                    else self.context.bus.subscribe(key, dispatch, decoded=False)
                 )
             feed.users[id(slot)] = slot
         self._refresh(slot)
@@ -328,8 +342,8 @@ class ObserverManager(Service):
             else:
                 feed.handlers = tuple(h for h in feed.handlers if h is not handler)
         if should:
-            slot.observer.start(time.time())
-            slot.due = time.monotonic() + slot.observer.first_report
+            slot.observer.start(self._time.now())
+            slot.due = time.monotonic() + self._time.clock.wall(slot.observer.first_report)
             self._lock.notify_all()
         else:
             for old in [k for k in self._latest if k[0] == slot.id]:
@@ -365,63 +379,19 @@ class ObserverManager(Service):
                     log.warning("cannot publish an observation: %s", e)
 
     def _observe(self, due: list[_Slot], now: float) -> list[dict[str, Any]]:
-        wall = time.time()
+        wall, robot_now = time.time(), self._time.now()
         payloads: list[dict[str, Any]] = []
         for slot in due:
-            period = slot.observer.period
+            period = self._time.clock.wall(slot.observer.period)
             slot.due = slot.due + period if slot.due + period > now else now + period
             try:
-                results = slot.observer.observe(wall)
+                results = slot.observer.observe(robot_now)
             except Exception:
                 log.exception("observer %s failed", slot.id)
                 continue
             for result in results:
                 info = result.info
-                payload = result.to_payload(slot.id)
+                payload = {**result.to_payload(slot.id), "stamp": wall}
                 self._latest[(slot.id, info.type, info.resource, info.callerids)] = payload
                 payloads.append(payload)
         return payloads
-
-    # --- the bus API ----------------------------------------------------------------
-
-    def _serve(self, bus: Bus) -> list[Any]:
-        """Serve the observer verbs of :mod:`executive.bus.api.monitoring`."""
-
-        def entry(config: Any, verb: Verb[Any, Any]) -> Mapping[str, Any]:
-            if not isinstance(config, dict):
-                raise ConfigError(f"{verb.key}: 'config' must be an observer entry (a mapping)")
-            return config
-
-        def add(request: api.ObserverAdd) -> api.ObserverActive:
-            key = api.OBSERVER_ADD.key
-            with self._lock:
-                config = entry(request.config, api.OBSERVER_ADD)
-                observer_id = self._add(config, request.component, request.name, key)
-                return api.ObserverActive(observer_id, self._slots[observer_id].active)
-
-        def change(request: api.ObserverChange) -> api.ObserverActive:
-            config = entry(request.config, api.OBSERVER_CHANGE)
-            self.change(request.id, config, source=api.OBSERVER_CHANGE.key)
-            return api.ObserverActive(request.id, self._slot(request.id).active)
-
-        def remove(request: api.ObserverId) -> api.ObserverId:
-            self.remove(request.id)
-            return request
-
-        def deactivate(request: api.ObserverId) -> api.ObserverActive:
-            self.deactivate(request.id)
-            return api.ObserverActive(request.id, False)
-
-        return [
-            api.OBSERVER_LIST.serve(
-                bus, lambda _: api.ObserversReply([s.to_payload() for s in self.observers()])
-            ),
-            api.OBSERVER_ADD.serve(bus, add),
-            api.OBSERVER_CHANGE.serve(bus, change),
-            api.OBSERVER_REMOVE.serve(bus, remove),
-            api.OBSERVER_ACTIVATE.serve(
-                bus, lambda r: api.ObserverActive(r.id, self.activate(r.id))
-            ),
-            api.OBSERVER_DEACTIVATE.serve(bus, deactivate),
-            api.OBSERVER_LATEST.serve(bus, lambda _: api.LatestReply(self.latest())),
-        ]

@@ -7,7 +7,7 @@ import socket
 import subprocess
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import pytest
@@ -34,10 +34,14 @@ def usecase_path() -> Path:
 
 
 def run_dura(
-    *args: str, cwd: Path | None = None, timeout: float = 120
+    *args: str,
+    cwd: Path | None = None,
+    timeout: float = 120,
+    env: Mapping[str, str] | None = None,
 ) -> subprocess.CompletedProcess[str]:
-    """Run the dura command line in a fresh interpreter, as a user would."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    """Run the dura command line in a fresh interpreter, as a user would (``env``: the
+    environment, e.g. a robot harness's, with its bus credentials)."""
+    env = {**(env if env is not None else os.environ), "PYTHONPATH": str(ROOT)}
     return subprocess.run(
         [sys.executable, "-m", "executive.cli", *args],
         capture_output=True,

@@ -19,9 +19,16 @@ ALLOWED: dict[str, set[str]] = {
     "executive.bus": {"knowledge"},
     "monitoring": {"executive.bus", "knowledge"},
     "executive.sdk": {"executive.bus", "knowledge"},
-    "executive.runtime": {"executive.bus", "executive.sdk", "knowledge"},
+    # the host of ROS 2 programs drives their nodes through the ROS 2 layer
+    "executive.runtime": {"executive.bus", "executive.sdk", "executive.ros2", "knowledge"},
     "executive.ros2": {"executive.bus", "knowledge"},
-    "executive.bags": {"executive.bus", "knowledge"},
+    # a bag's ROS 2 messages are read as live ones are: ROS 2's message and decoder
+    "executive.bags": {
+        "executive.bus",
+        "executive.ros2.message",
+        "executive.ros2.cdr",
+        "knowledge",
+    },
     "executive.planning": {"executive.bus", "knowledge"},
     # the task executor runs plan steps through the plan executer's port
     "executive.tasks": {

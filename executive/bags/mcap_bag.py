@@ -24,8 +24,9 @@ from mcap.records import Channel, Schema
 from mcap.records import Message as McapMessage
 
 from executive.bags.bag import DURA_PROFILE, Bag, BagTopic, Route
-from executive.bags.ros_messages import Definition, RosMessage, RosTypes
+from executive.bags.ros_messages import Definition, RosTypes
 from executive.bus.session import Message
+from executive.ros2.message import RosMessage
 from knowledge.errors import BagError
 
 ROS_SCHEMAS = ("ros2msg", "ros2idl")
@@ -154,7 +155,7 @@ class McapBag(Bag):
             def ros(record: McapMessage) -> Message:
                 sent = record.publish_time / 1e9 if record.publish_time else None
                 return RosMessage(key, record.data, caller, sent, record.log_time / 1e9,
-                                  decoder=decoder)  # fmt: skip
+                                  decode=decoder)  # fmt: skip
 
             return ros
 

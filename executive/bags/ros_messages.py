@@ -10,17 +10,17 @@ dicts); its ``stamp`` is ``header.stamp`` in seconds, as on a live ROS 2 topic.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from typing import Any
 
-import numpy as np
 from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
 from rosbags.typesys.store import Typestore
 
-from executive.bus.session import Message
+from executive.ros2.cdr import CdrError
+from executive.ros2.cdr import Decoder as CdrDecoder
+from executive.ros2.message import Decode
 from knowledge.errors import BagError, BusError
 
-Decoder = Callable[[bytes], dict[str, Any]]
 IDL_SEPARATOR = "=" * 80 + "\n"
 
 
@@ -72,67 +72,15 @@ class RosTypes:
     def knows(self, msgtype: str) -> bool:
         return msgtype in self.typestore.fielddefs
 
-    def decoder(self, msgtype: str) -> Decoder:
-        """Return a function from CDR bytes to the message as a dict."""
-        deserialize = self.typestore.deserialize_cdr
+    def decoder(self, msgtype: str) -> Decode:
+        """Return a function from CDR bytes to the message as a dict (dura's own CDR
+        decoder, as for live ROS 2 topics)."""
+        decoder = CdrDecoder(self.typestore.fielddefs, msgtype)
 
-        def decode(raw: bytes) -> dict[str, Any]:
-            value = plain(deserialize(raw, msgtype))
-            if not isinstance(value, dict):
-                raise TypeError(f"{msgtype} is not a message")
-            return value
+        def decode(raw: bytes, caller: str) -> dict[str, Any]:
+            try:
+                return decoder(raw)
+            except CdrError as e:
+                raise BusError(f"malformed {msgtype} from {caller or '?'} ({e})") from e
 
         return decode
-
-
-_FIELDS: dict[type, tuple[str, ...]] = {}
-
-
-def plain(value: Any) -> Any:
-    """Turn a deserialized ROS message (or a part of one) into JSON-like data."""
-    kind = type(value)
-    names = _FIELDS.get(kind)
-    if names is None and dataclasses.is_dataclass(value):
-        names = _FIELDS[kind] = tuple(
-            f.name for f in dataclasses.fields(value) if not f.name.startswith("__")
-        )
-    if names is not None:
-        return {name: plain(getattr(value, name)) for name in names}
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, list):
-        return [plain(item) for item in value]
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
-@dataclasses.dataclass
-class RosMessage(Message):
-    """A ROS 2 message of a bag; ``payload`` is decoded from its CDR bytes when read."""
-
-    decoder: Decoder | None = dataclasses.field(default=None, repr=False)
-
-    @property
-    def payload(self) -> dict[str, Any]:
-        if self._payload is None:
-            if self.decoder is None:
-                raise BusError(f"{self.key}: a ROS 2 message without its type")
-            try:
-                self._payload = self.decoder(self.raw)
-            except Exception as e:  # a corrupt message fails in the decoder in many ways
-                raise BusError(f"{self.key}: malformed ROS 2 message ({e})") from e
-        return self._payload
-
-    @property
-    def stamp(self) -> float | None:
-        """Return ``header.stamp`` in seconds (``stamp`` of a message without a header)."""
-        payload = self.payload
-        header = payload.get("header")
-        stamp = header.get("stamp") if isinstance(header, dict) else payload.get("stamp")
-        if isinstance(stamp, dict):
-            sec, nanosec = stamp.get("sec"), stamp.get("nanosec")
-            if isinstance(sec, int) and isinstance(nanosec, int):
-                return sec + nanosec * 1e-9
-            return None
-        return float(stamp) if isinstance(stamp, (int, float)) else None

@@ -17,8 +17,9 @@ from rosbags.interfaces import Connection, MessageDefinitionFormat
 from rosbags.rosbag2 import Reader
 
 from executive.bags.bag import Bag, BagTopic, Route
-from executive.bags.ros_messages import Definition, RosMessage, RosTypes
+from executive.bags.ros_messages import Definition, RosTypes
 from executive.bus.session import Message
+from executive.ros2.message import RosMessage
 from knowledge.errors import BagError
 
 
@@ -94,7 +95,7 @@ def _maker(route: Route, types: RosTypes, msgtype: str) -> Callable[[bytes, int]
     key, caller, decoder = route.key, route.caller, types.decoder(msgtype)
 
     def make(raw: bytes, timestamp: int) -> Message:
-        return RosMessage(key, raw, caller, None, timestamp / 1e9, decoder=decoder)
+        return RosMessage(key, raw, caller, None, timestamp / 1e9, decode=decoder)
 
     return make
 

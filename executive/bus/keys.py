@@ -75,3 +75,8 @@ def observers_api(verb: str) -> str:
 # replaces the whole model; GET changes nothing. Reply: {"ok": true, "model": {...}} or
 # {"ok": false, "error": "<reason>"}; a refused update leaves the model as it was.
 DIAGNOSIS_MODEL = "diagnosis/model"
+
+# Exoneration of the diagnosis engine at run time (request/reply): {"on": true | false}
+# switches it (an OK topic observation then clears its topics), {} only asks; the reply
+# is {"on": ...}, the setting now.
+DIAGNOSIS_EXONERATION = "diagnosis/exonerate"

@@ -11,28 +11,35 @@ from __future__ import annotations
 
 import contextlib
 import json
-import logging
 import re
 import threading
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import zenoh
 
 from executive.bus.security import Login
-from knowledge.description import DEFAULT_ENDPOINT
 from knowledge.errors import BusError, DuraError
 
-log = logging.getLogger("dura.bus")
+if TYPE_CHECKING:
+    import logging
 
 _BAD_KEY = re.compile(r"[*$?#\s]|//")
 MAX_PAYLOAD = 1 << 20  # bytes: a larger message is dropped (a robot's messages are far smaller)
 
 Handler = Callable[["Message"], None]
 RequestHandler = Callable[[dict[str, Any]], Mapping[str, Any]]
+
+
+def _log() -> logging.Logger:
+    """The bus's logger. ``logging`` loads with the first message: a command-line process
+    that never logs never pays for it (see :mod:`executive.cli`)."""
+    import logging
+
+    return logging.getLogger("dura.bus")
 
 
 def check_name(name: str, what: str = "name") -> str:
@@ -102,7 +109,7 @@ class _Dropped:
         with self._lock:
             n = self._counts[key] = self._counts.get(key, 0) + 1
         if n == 1 or n % 100 == 0:
-            log.warning("dropped malformed message #%d on %s: %s", n, key, reason)
+            _log().warning("dropped malformed message #%d on %s: %s", n, key, reason)
 
 
 def session_config(
@@ -148,7 +155,8 @@ class Bus:
     Args:
         robot: the robot's name, the first level of every key.
         name: this process's component name, sent as caller id.
-        endpoint: where the executive listens, e.g. ``tcp/127.0.0.1:7447``.
+        endpoint: where the executive listens, e.g. ``tcp/127.0.0.1:7447`` (default: a
+            robot description's default).
         listen: listen on ``endpoint`` (the executive) instead of connecting to it.
         connect: further endpoints to connect to (other machines).
         login: the user and password this session authenticates with.
@@ -163,13 +171,17 @@ class Bus:
         robot: str,
         *,
         name: str = "",
-        endpoint: str = DEFAULT_ENDPOINT,
+        endpoint: str | None = None,
         listen: bool = False,
         connect: tuple[str, ...] = (),
         login: Login | None = None,
         dictionary: Path | None = None,
         access: Mapping[str, Any] | None = None,
     ) -> None:
+        if endpoint is None:  # the robot description's module: only when needed
+            from knowledge.description import DEFAULT_ENDPOINT
+
+            endpoint = DEFAULT_ENDPOINT
         self.robot = check_name(robot, "robot name")
         self.name = name
         self.endpoint = endpoint
@@ -280,7 +292,7 @@ class Bus:
             except BusError as e:
                 dropped(message.key, str(e))
             except Exception:
-                log.exception("handler for %s failed", message.key)
+                _log().exception("handler for %s failed", message.key)
 
         subscriber = self._session.declare_subscriber(self.key(key), on_sample)
         with self._lock:
@@ -307,7 +319,7 @@ class Bus:
             except DuraError as e:
                 query.reply_err(str(e).encode())
             except Exception as e:
-                log.exception("request handler for %s failed", key_expr)
+                _log().exception("request handler for %s failed", key_expr)
                 query.reply_err(f"internal error: {type(e).__name__}: {e}".encode())
             finally:
                 query.drop()  # type: ignore[no-untyped-call]
@@ -370,7 +382,7 @@ class Bus:
                     sample.kind == zenoh.SampleKind.PUT,
                 )
             except Exception:
-                log.exception("liveliness handler for %s failed", key)
+                _log().exception("liveliness handler for %s failed", key)
 
         subscriber = self._session.liveliness().declare_subscriber(
             self.key(key), on_sample, history=True

@@ -3,10 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import atexit
+import contextlib
+import gc
 import importlib
-import logging
+import os
 import sys
+import threading
 from collections.abc import Sequence
+from typing import Any, NoReturn
 
 from knowledge.errors import DuraError
 
@@ -21,6 +26,7 @@ COMMANDS: dict[str, str] = {
     "run": "run",
     "goal": "goal",
     "plan": "plan",
+    "domain": "domain",
     "state": "world",
     "object": "world",
     "events": "status",
@@ -29,6 +35,7 @@ COMMANDS: dict[str, str] = {
     "schedule": "task",
     "component": "component",
     "observe": "observe",
+    "observer": "observer",
     "dashboard": "dashboard",
     "graph": "graph",
     "diagnose": "diagnose",
@@ -40,8 +47,42 @@ COMMANDS: dict[str, str] = {
 }
 
 
+def _columns() -> int:
+    """The terminal's width as ``shutil.get_terminal_size`` finds it (``COLUMNS``, else
+    the terminal of stdout, else 80)."""
+    try:
+        columns = int(os.environ.get("COLUMNS", "0"))
+    except ValueError:
+        columns = 0
+    if columns <= 0:
+        try:
+            columns = os.get_terminal_size(sys.__stdout__.fileno()).columns  # type: ignore[union-attr]
+        except (AttributeError, ValueError, OSError):
+            columns = 0
+    return columns if columns > 0 else 80
+
+
+class _Formatter(argparse.HelpFormatter):
+    """argparse's help formatter, but without importing ``shutil`` for the width (a few
+    milliseconds of every command's start: argparse makes a formatter for each argument)."""
+
+    def __init__(
+        self,
+        prog: str,
+        indent_increment: int = 2,
+        max_help_position: int = 24,
+        width: int | None = None,
+    ) -> None:
+        width = _columns() - 2 if width is None else width
+        super().__init__(prog, indent_increment, max_help_position, width)
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with one-line usage errors and exit code 2."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
@@ -66,12 +107,31 @@ def build_parser(argv: Sequence[str] = ()) -> argparse.ArgumentParser:
     return parser
 
 
+def _configure_logging(verbose: int) -> None:
+    """Log to stderr: warnings by default, -v info, -vv debug."""
+    import logging
+
+    level = {0: logging.WARNING, 1: logging.INFO}.get(verbose, logging.DEBUG)
+    logging.basicConfig(level=level, format="%(asctime)s %(name)s %(levelname)s: %(message)s")
+
+
+def parse(argv: Sequence[str] | None = None) -> argparse.Namespace:
+    """The arguments of one ``dura`` command (its module imported)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    return build_parser(argv).parse_args(argv)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run one ``dura`` command; returns the exit code."""
-    argv = list(sys.argv[1:] if argv is None else argv)
-    args = build_parser(argv).parse_args(argv)
-    level = {0: logging.WARNING, 1: logging.INFO}.get(args.verbose, logging.DEBUG)
-    logging.basicConfig(level=level, format="%(asctime)s %(name)s %(levelname)s: %(message)s")
+    return execute(parse(argv))
+
+
+def execute(args: argparse.Namespace) -> int:
+    """Run a parsed command; returns the exit code."""
+    if args.verbose or "logging" in sys.modules:
+        # A quick command (status, goal list) never loads logging; should its bus warn
+        # (a malformed message), Python prints the warning as it is, and nothing less.
+        _configure_logging(args.verbose)
     try:
         return int(args.run(args))
     except DuraError as e:
@@ -84,5 +144,41 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def entry() -> None:
-    """The console script."""
-    sys.exit(main())
+    """The console script (and ``python -m executive.cli``)."""
+    # The imports of a command make tens of thousands of objects that live until the
+    # process ends: collecting garbage among them only costs time (milliseconds of every
+    # quick command). Collection resumes once they are made, with those objects frozen
+    # out of every later collection.
+    gc.disable()
+    try:
+        args = parse()
+    finally:
+        gc.freeze()
+        gc.enable()
+    code = execute(args)
+    if getattr(args, "exits_at_once", False):
+        _exit_at_once(code)
+    sys.exit(code)
+
+
+def exits_at_once(parser: Any) -> None:
+    """Mark a command (and its subcommands) that keeps nothing open when it returns: no
+    file being written, no process, no thread of its own (the commands that ask the
+    executive and print, and those that only read files). It ends as
+    :func:`_exit_at_once` says."""
+    parser.set_defaults(exits_at_once=True)
+
+
+def _exit_at_once(code: int) -> NoReturn:
+    """End a command that keeps nothing open: exit handlers run and output is flushed as
+    at any exit, but the memory is not freed object by object and Zenoh's runtime
+    threads are not stopped one by one, since the kernel does both at once (that
+    teardown is a tenth of a command's CPU). Only when the main thread is the last:
+    otherwise Python's own exit, which waits for the others."""
+    if threading.active_count() > 1:
+        sys.exit(code)
+    atexit._run_exitfuncs()
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):  # a reader went away (dura status | head)
+            stream.flush()
+    os._exit(code)

@@ -6,12 +6,12 @@ import argparse
 import time
 from typing import Any
 
-from executive.bus.api import components, tasks
+from executive.bus.api import components
 from executive.bus.payloads import ComponentState, Lifecycle
+from executive.cli import exits_at_once
 from executive.cli.arguments import count, seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
-from executive.runtime.spawn import describe_exit
 from knowledge.errors import DuraError
 
 
@@ -19,6 +19,7 @@ def register(sub: Any) -> None:
     p = sub.add_parser(
         "component", help="list, start, stop, restart, fault and reset components; show logs"
     )
+    exits_at_once(p)
     csub = p.add_subparsers(dest="component_command", metavar="COMPONENT_COMMAND")
     csub.required = True
 
@@ -77,6 +78,8 @@ def run_list(args: argparse.Namespace) -> int:
 
 
 def _summary(state: ComponentState) -> str:
+    from executive.runtime.spawn import describe_exit  # not for 'component list'
+
     if state.state in (Lifecycle.READY, Lifecycle.STARTING, Lifecycle.PAUSED):
         return f"{state.component}: {state.state.value} (pid {state.pid})"
     if state.exit_code is None and state.signal is None:
@@ -87,6 +90,8 @@ def _summary(state: ComponentState) -> str:
 
 
 def run_lifecycle(args: argparse.Namespace) -> int:
+    from executive.bus.api import tasks  # the task executor's verbs: not for 'component list'
+
     name, timeout = args.name, args.timeout
     if args.verb == "reset":
         reset = ask(args, tasks.COMPONENT_RESET, tasks.ComponentName(name), timeout=timeout)

@@ -60,6 +60,12 @@ def register(sub: Any) -> None:
         "summary once every goal is achieved. Exit 0 if they all are.",
     )
     p.add_argument("--keep", type=Path, metavar="DIR", help="run in DIR and keep its files")
+    p.add_argument(
+        "--ros2",
+        action="store_true",
+        help="run the ROS 2 patrol robot (examples/ros2) instead: ROS 2 nodes, a managed "
+        "node, an action and a service as tasks, a goal from ROS 2, on loopback DDS",
+    )
     p.add_argument("--all-events", action="store_true", help="show every event")
     p.add_argument(
         "--dashboard",
@@ -131,6 +137,10 @@ class Timeline:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.ros2:  # Cyclone DDS loads only for this one
+        from executive.cli import demo_ros2
+
+        return demo_ros2.run(args)
     if not EXAMPLE.is_file():
         raise DuraError(f"the example robot is missing: {EXAMPLE} (run from a dura checkout)")
     if args.keep is not None:

@@ -1,5 +1,6 @@
 """``dura plan --offline DOMAIN PROBLEM``: plan without a robot, for domain authors;
-``dura plan show``: the running robot's current plan as a timeline."""
+``dura plan show``: the running robot's current plan as a timeline; ``dura plan
+--dry-run``: what the running robot's planner would do now, without doing it."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, shown, table
 from executive.dashboard import gantt
+from executive.planning.expression import TRUE
 from executive.planning.goals import GoalSpec
 from executive.planning.partial_order import PartialOrderPlan, Step
 from executive.planning.planner import Planner, PlanningTask, PlanResult, engine_names
@@ -28,11 +30,15 @@ BAR = 40  # characters of the timeline
 def register(sub: Any) -> None:
     p = sub.add_parser(
         "plan",
-        help="show the running robot's plan (show), or plan without a robot (--offline)",
+        help="show the running robot's plan (show), plan for its open goals without executing "
+        "(--dry-run), or plan without a robot (--offline)",
         description="'dura plan show' prints the running robot's current plan as a timeline, "
-        "with the state of each step. 'dura plan --offline DOMAIN PROBLEM' plans for the goal "
-        "of a PDDL problem with one of dura's engines, validates the plan, and prints it as a "
-        "timeline: exit 0 with a plan, 1 without one.",
+        "with the state of each step. 'dura plan --dry-run' plans for the running robot's open "
+        "goals from its live state and prints the plan, without executing it or changing "
+        "anything: exit 0 with a plan (or nothing to plan), 1 without one. 'dura plan "
+        "--offline DOMAIN PROBLEM' plans for the goal of a PDDL problem with one of dura's "
+        "engines, validates the plan, and prints it as a timeline: exit 0 with a plan, 1 "
+        "without one.",
     )
     p.add_argument("show", nargs="?", choices=["show"], help="the running robot's current plan")
     p.add_argument(
@@ -43,13 +49,21 @@ def register(sub: Any) -> None:
         help="the domain and problem PDDL files",
     )
     p.add_argument(
+        "--dry-run",
+        action="store_true",
+        help="plan for the running robot's open goals on its live state, without executing",
+    )
+    p.add_argument(
         "--engine",
         default=DEFAULT_ENGINE,
         choices=engine_names(),
         help=f"the planning engine (default {DEFAULT_ENGINE})",
     )
     p.add_argument(
-        "--timeout", type=seconds(), default=30.0, metavar="S", help="seconds to search (30)"
+        "--timeout",
+        type=seconds(),
+        metavar="S",
+        help="seconds to search (offline: 30; dry run: the robot's planner timeout)",
     )
     p.add_argument(
         "--svg",
@@ -63,14 +77,19 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if (args.show is None) == (args.offline is None):
-        args.parser.error("say either 'show' or '--offline DOMAIN PROBLEM'")
+    if [args.show is not None, args.offline is not None, args.dry_run].count(True) != 1:
+        args.parser.error("say one of 'show', '--dry-run' or '--offline DOMAIN PROBLEM'")
     if args.show:
         return run_show(args)
+    if args.dry_run:
+        return run_dry_run(args)
     domain, problem = args.offline
     world, goal = read_world(domain, problem)
+    if goal == TRUE and not args.json:
+        print(f"dura: warning: {shown(problem)} has an empty goal, so any plan is empty: "
+              "write one in its (:goal ...)", file=sys.stderr)  # fmt: skip
     task = PlanningTask(domain.resolve(), world, (GoalSpec(0, goal),))
-    with Planner(args.engine, args.timeout) as planner:
+    with Planner(args.engine, args.timeout or 30.0) as planner:
         result = planner.solve(task)
     if args.svg is not None and result.plan is not None:
         title = f"{problem.name}: {len(result.plan.steps)} steps, makespan {result.plan.makespan:g} s, by {result.engine}"
@@ -119,6 +138,40 @@ def run_show(args: argparse.Namespace) -> int:
         for s in steps
     ]  # fmt: skip
     table(["#", "start", "duration", "step", "state", "timeline"], rows)
+    return 0
+
+
+def run_dry_run(args: argparse.Namespace) -> int:
+    wait = max(api.PLAN_DRY_RUN.timeout, 3 * (args.timeout or 0.0) + 30.0)
+    reply = ask(args, api.PLAN_DRY_RUN, api.DryRun(args.timeout), timeout=wait)
+    ok = reply.status in ("solved", "nothing_to_do")
+    if args.json:
+        print_json(reply.to_payload())
+        return 0 if ok else 1
+    for held in reply.achieved:
+        print(f"goal {held}: holds already")
+    for key, why in sorted(reply.unreachable.items(), key=lambda kv: int(kv[0])):
+        print(f"goal {key}: unreachable: {why}")
+    if reply.status == "nothing_to_do":
+        print(f"dry run: nothing to plan ({reply.reason})")
+        return 0
+    if not ok:
+        print(f"dura: dry run: no plan: {reply.reason}", file=sys.stderr)
+        return 1
+    goals = ", ".join(str(g) for g in reply.planned) or "-"
+    print(
+        f"dry run: {len(reply.steps)} steps, makespan {reply.makespan or 0.0:g} s, by "
+        f"{reply.engine} in {reply.time:.2f} s, for goals {goals} (nothing executed)"
+    )
+    span = reply.makespan or 0.0
+    rows = [
+        [s["index"], f"{s['start']:.3f}", _duration(s["duration"]),
+         f"{s['action']}({', '.join(s['args'])})",
+         " ".join(f"{p['step']}{'' if p['at'] == 'end' else '(start)'}" for p in s["after"]) or "-",
+         bar(s["start"], s["duration"], span)]
+        for s in reply.steps
+    ]  # fmt: skip
+    table(["#", "start", "duration", "step", "after", "timeline"], rows)
     return 0
 
 

@@ -1,21 +1,25 @@
-"""``dura events [--follow]`` and ``dura status``: what a running robot does, at a glance."""
+"""``dura events [--follow] [--db FILE]`` and ``dura status``: what a robot does, at a glance."""
 
 from __future__ import annotations
 
 import argparse
 import json
-import queue
 import sys
 import time
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from executive.bus.api import planning as api
 from executive.bus.keys import EVENTS
 from executive.bus.session import Bus, Message
+from executive.cli import exits_at_once
 from executive.cli.arguments import count
 from executive.cli.client import add_client_options, ask, connect
 from executive.cli.goal import GOAL_HEADERS, details, goal_rows
 from executive.cli.output import add_json_flag, print_json, section, table
+
+if TYPE_CHECKING:
+    import queue
 
 PAGE = 1000  # events read at a time when catching up
 
@@ -25,19 +29,27 @@ def register(sub: Any) -> None:
         "events",
         help="the execution trace: goals, plans, dispatches, faults, repairs",
         description="Print the newest events of the knowledge base's log; with --follow, "
-        "keep printing them as they happen until Ctrl-C.",
+        "keep printing them as they happen until Ctrl-C. --db reads the log from a knowledge "
+        "base file instead (a stopped robot's; a running robot's file may be read too).",
     )
     events.add_argument(
         "-n", "--lines", type=count, default=30, metavar="N", help="how many past events (30)"
     )
     events.add_argument("--kind", metavar="KIND", help="only events of this kind (e.g. FAIL)")
     events.add_argument("--follow", action="store_true", help="keep printing new events")
+    events.add_argument(
+        "--db", type=Path, metavar="FILE", help="read this knowledge base file, not a robot"
+    )
     events.set_defaults(run=run_events, parser=events)
     status = sub.add_parser(
-        "status", help="goals, plan, tasks, components and diagnoses at a glance"
+        "status",
+        help="goals, plan, tasks, components and diagnoses at a glance",
+        description="Print a running robot's goals, its plan with the state of each step, "
+        "the tasks and the components they use, faults and the newest diagnosis.",
     )
     status.set_defaults(run=run_status)
     for cmd in (events, status):
+        exits_at_once(cmd)
         add_client_options(cmd)
         add_json_flag(cmd)
 
@@ -52,6 +64,12 @@ def event_line(event: dict[str, Any]) -> str:
 
 
 def run_events(args: argparse.Namespace) -> int:
+    if args.db is not None:
+        if args.robot is not None or args.endpoint is not None:
+            args.parser.error("--db reads a file; --robot and --endpoint ask an executive")
+        return _events_from_file(args)
+    import queue  # only to follow: not for 'dura status'
+
     arrived: queue.Queue[dict[str, Any]] = queue.Queue()
     with connect(args) as bus:
         if args.follow:  # before the history: nothing falls between the two
@@ -68,12 +86,41 @@ def run_events(args: argparse.Namespace) -> int:
     return 0
 
 
+POLL = 0.25  # seconds between two reads of a followed knowledge base file
+
+
+def _events_from_file(args: argparse.Namespace) -> int:
+    """``dura events --db FILE``: the log as the knowledge base file holds it; with
+    ``--follow``, read it again every ``POLL`` seconds (readers never block a writer)."""
+    from knowledge.knowledge_base import KnowledgeBase
+    from knowledge.records import to_plain
+
+    with KnowledgeBase(args.db, readonly=True) as kb:
+        past = to_plain(kb.events(limit=args.lines, kind=args.kind))
+        if args.json and not args.follow:
+            print_json({"events": past})
+            return 0
+        for event in past:
+            _show(event, args.json)
+        if not args.follow:
+            return 0
+        newest = kb.events(limit=1)
+        last = max([int(e["id"]) for e in past] + [e.id for e in newest], default=0)
+        while True:
+            time.sleep(POLL)
+            for event in to_plain(kb.events(after=last, limit=PAGE, oldest=True)):
+                last = int(event["id"])
+                _print_followed(event, args)
+
+
 def _follow(
     bus: Bus, arrived: queue.Queue[dict[str, Any]], last: int, args: argparse.Namespace
 ) -> None:
     """Print events as they come, in order and without a gap: an event that arrives
     after a gap (the bus dropped some, or they came before the subscription) is
     preceded by the missing ones, read from the knowledge base by sequence number."""
+    import queue
+
     while True:
         try:
             event = arrived.get(timeout=0.5)

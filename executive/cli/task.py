@@ -26,7 +26,9 @@ def register(sub: Any) -> None:
         "goal (e.g. --arg start=dock --arg target=lab). It runs once its configuration "
         "is scheduled and ready.",
     )
-    start.add_argument("task", metavar="TASK")
+    start.add_argument(
+        "task", metavar="TASK", help="a task of the robot description, or a behavior"
+    )
     start.add_argument(
         "--arg", action="append", default=[], metavar="K=V", help="a goal field (repeatable)"
     )
@@ -57,7 +59,7 @@ def register(sub: Any) -> None:
         ("resume", "resume a paused task"),
     ):
         cmd = tsub.add_parser(verb, help=text)
-        cmd.add_argument("id", metavar="ID")
+        cmd.add_argument("id", metavar="ID", help="the task's id (dura task list)")
         cmd.set_defaults(run=run_verb, verb=verb)
         commands.append(cmd)
     s = sub.add_parser("schedule", help="the schedule: tasks in time and what they use")

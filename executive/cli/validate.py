@@ -7,7 +7,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from executive.cli import exits_at_once
 from executive.cli.output import add_json_flag, print_json, shown
+from executive.cli.reader_environment import use_reader_environment
 from executive.planning.integrity import read_rules as read_integrity_rules
 from executive.planning.problem import read_world
 from knowledge.description import RobotDescription
@@ -28,6 +30,7 @@ def register(sub: Any) -> None:
         "(warnings allowed), 1 if not, 2 on usage errors.",
     )
     p.add_argument("robot", metavar="ROBOT.yaml", type=Path, help="the robot description")
+    exits_at_once(p)
     add_json_flag(p)
     p.set_defaults(run=run)
 
@@ -56,6 +59,7 @@ def check_rule_files(robot: RobotDescription, domain: DomainInfo) -> list[Findin
 
 
 def run(args: argparse.Namespace) -> int:
+    use_reader_environment()
     observers = check_observer_file(args.robot)
     if observers is not None:
         specs, findings = observers

@@ -24,7 +24,12 @@ DEPENDENCIES = (
 
 
 def register(sub: Any) -> None:
-    p = sub.add_parser("version", help="print the versions of dura and its engines")
+    p = sub.add_parser(
+        "version",
+        help="print the versions of dura and its engines",
+        description="Print the versions of dura, Python, and the libraries and planning "
+        "engines it runs on (which planners are installed).",
+    )
     add_json_flag(p)
     p.set_defaults(run=run)
 

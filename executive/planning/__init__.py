@@ -7,14 +7,21 @@ it never imports the task executor (steps run through the
 - :mod:`.high_level` — the service: composes the parts below and serves
   :mod:`executive.bus.api.planning`;
 - :mod:`.goals` — goals as the planner reads them (:class:`~.goals.Refusal` for the rest);
-- :mod:`.goal_planner` — planning rounds; the one writer of goal and plan states;
-- :mod:`.oversubscription` — the best subset of goals by priority;
+- :mod:`.goal_planner` — planning rounds; the one writer of goal and plan states
+  (:mod:`.goal_keeper` and :mod:`.goal_watch`: unreachable goals looked at again,
+  maintenance goals re-posted, when the world changes);
+- :mod:`.oversubscription` — the best subset of goals by priority, and why the others
+  are unreachable (:mod:`.reachability`: what no action can make true);
 - :mod:`.planner` (client) and :mod:`.planner_worker` (process) — the engines;
 - :mod:`.problem` — unified-planning problems from the domain and the knowledge base;
 - :mod:`.expression` — ground PDDL expressions: nodes, evaluation, reading;
 - :mod:`.stn`, :mod:`.partial_order` — plans as partial orders of steps;
 - :mod:`.plan_executer` — runs a plan (:mod:`.plan_run` its steps, :mod:`.step_run` one
   step, :mod:`.task_runner` the port, :mod:`.state_change` what it reports,
-  :mod:`.recovery` after a crash);
-- :mod:`.integrity` — goals that keep the robot going.
+  :mod:`.recovery` after a crash, :mod:`.look_ahead` the rest of the plan checked when
+  facts change);
+- :mod:`.integrity` — goals that keep the robot going;
+- :mod:`.sensing` — facts and values kept in step with topics (the ``sensing:`` rules);
+- :mod:`.dry_run` — what the planner would do now; :mod:`.domain_check` — diagnostics
+  for domain authors.
 """

@@ -11,6 +11,8 @@ goal that already holds is achieved without planning; one whose deadline passed 
 A goal fails once ``max_attempts`` plans for it have failed. Actions whose task cannot
 run (its behavior or every provider of a capability it needs is permanently faulty)
 are left out of the problem, and a goal that needs them is unreachable with that reason.
+When the world changes, unreachable goals are looked at again and maintenance goals
+that stopped holding are re-posted (:mod:`executive.planning.goal_keeper`).
 
 One owner: the goal planner's thread is the only thread that changes the state of a
 goal or a plan. Its rounds mark goals; a cancel (:meth:`GoalPlanner.cancel`) and the
@@ -32,15 +34,16 @@ import enum
 import logging
 import threading
 import time
-from collections import Counter, defaultdict
+from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 from executive.bus.worker import Worker
 from executive.planning.expression import Signature, WorldState
+from executive.planning.goal_keeper import GoalKeeper, KeeperLinks
 from executive.planning.goals import GoalSpec, RefusalCause, specs
-from executive.planning.oversubscription import GoalPlan, plan_goals
+from executive.planning.oversubscription import GoalPlan, blocked_note, plan_goals
 from executive.planning.plan_executer import PlanExecuter
 from executive.planning.planner import Planner, PlanningTask, PlanResult
 from executive.planning.problem import World
@@ -123,6 +126,19 @@ class GoalPlanner:
         self._reasons: list[str] = []
         self._round: _Round | None = None
         self._snapshot = PlannerStatus()
+        self._keeper = GoalKeeper(
+            kb,
+            domain,
+            planner,
+            KeeperLinks(
+                post=self._worker.post,
+                search=self._search.post,
+                want=lambda reason: self._want(reason, False),
+                planning_facts=executer.planning_facts,
+                blocked=self.blocked,
+            ),
+            executer.clock,
+        )
         executer.report_to(self._reported)
 
     # --- lifecycle ----------------------------------------------------------------------
@@ -138,6 +154,7 @@ class GoalPlanner:
         """Stop planning: a search under way ends first (within the planner's timeout)."""
         if self._worker.running:
             self._stopping.set()
+            self._keeper.stop()
             self._search.stop()
             self._worker.stop()
 
@@ -161,6 +178,17 @@ class GoalPlanner:
     def wake(self, reason: str, *, replan: bool = False) -> None:
         """Plan again soon; ``replan`` even if the open goals did not change."""
         self._worker.post(lambda: self._want(reason, replan))
+
+    def world_changed(self, reason: str) -> None:
+        """The world changed outside the plan (a user, a component or a sensing rule set
+        a fact or an object; a component was reset or repaired): look again at
+        unreachable goals, and at maintenance goals."""
+        self._worker.post(lambda: self._keeper.changed(reason, outside=True))
+
+    def facts_changed(self, reason: str) -> None:
+        """Facts changed, the plan's own steps included: re-post the maintenance goals
+        that no longer hold."""
+        self._worker.post(lambda: self._keeper.changed(reason, outside=False))
 
     def replan(self, reason: str) -> None:
         """The executer's ``on_replan`` callback: the current plan failed."""
@@ -206,13 +234,19 @@ class GoalPlanner:
 
     def _cancel(self, goal_id: int) -> Goal:
         goal = self.kb.goal(goal_id)
-        if not goal.state.is_open:
+        if not goal.state.can_become(GoalState.CANCELLED, keep=goal.keep):
             raise KnowledgeError(f"goal {goal.id} is {goal.state.value} already")
+        was_open = goal.state.is_open
         goal = self.kb.set_goal_state(goal_id, GoalState.CANCELLED)
         plan = self.kb.latest_plan()
-        if plan is not None and not any(self.kb.goal(g).state.is_open for g in plan.goal_ids):
+        if (
+            was_open
+            and plan is not None
+            and goal_id in plan.goal_ids
+            and not any(self.kb.goal(g).state.is_open for g in plan.goal_ids)
+        ):
             self._end_plan(f"goal {goal_id} cancelled: no goal of the plan is open")
-        if self._round is None:
+        if self._round is None and was_open:
             self._want(f"goal {goal_id} cancelled", replan=True)
         # else the round under way reads the goals after its pause and looks at them
         # again after its search: it leaves the cancelled goal out, no new round needed
@@ -255,15 +289,17 @@ class GoalPlanner:
         if self._stopping.is_set():
             return
         objects = self.kb.objects()
-        usable, refused = specs(self.kb.open_goals(), Signature.of(self.domain, objects))
+        usable, refused = specs(
+            self.kb.open_goals(), Signature.of(self.domain, objects), clock=self.executer.clock
+        )
         failed: dict[int, str] = {}
         for goal_id, refusal in refused.items():
             if refusal.cause is RefusalCause.DEADLINE_PASSED:
                 failed[goal_id] = refusal.reason
             else:
                 round_.unreachable[goal_id] = refusal.reason
-        state = WorldState(facts)
-        achieved = [g.id for g in usable if state.holds(g.expression)]
+        state, now = WorldState(facts), WorldState(self.kb.facts())
+        achieved = [g.id for g in usable if self._keeper.achieved_at_once(g, state, now)]
         todo = []
         for g in usable:
             if g.id in achieved:
@@ -310,7 +346,7 @@ class GoalPlanner:
                 self._conclude(round_, None, ())
             return
         round_.unreachable.update(
-            {g: why + _without(round_.blocked) for g, why in outcome.unreachable.items()}
+            {g: why + blocked_note(round_.blocked) for g, why in outcome.unreachable.items()}
         )
         planned = outcome.planned if outcome.ok else ()
         self._conclude(round_, outcome.result, [g for g in task.goals if g.id in planned])
@@ -387,13 +423,3 @@ class GoalPlanner:
             return
         outcome = plan_goals(self.planner, task)
         self._worker.post(self._step(round_, lambda: self._solved(round_, task, outcome)))
-
-
-def _without(blocked: Mapping[str, str]) -> str:
-    """``"; cannot run now: call_lift, ride_lift (lift_link is ...)"`` or nothing."""
-    if not blocked:
-        return ""
-    actions: defaultdict[str, list[str]] = defaultdict(list)
-    for action, why in sorted(blocked.items()):
-        actions[why].append(action)
-    return "; cannot run now: " + "; ".join(f"{', '.join(a)} ({why})" for why, a in actions.items())

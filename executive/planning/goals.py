@@ -15,6 +15,7 @@ import math
 import time
 from dataclasses import dataclass
 
+from executive.bus.clock import Clock
 from executive.planning.expression import Expression, Signature, parse
 from knowledge.domain import DomainInfo
 from knowledge.errors import DomainError
@@ -63,8 +64,10 @@ def submit(
     priority: int = 0,
     deadline: float | None = None,
     source: str = "user",
+    keep: bool = False,
 ) -> Goal:
-    """Check a goal against the domain and the KB's objects, then store it as pending.
+    """Check a goal against the domain and the KB's objects, then store it as pending;
+    ``keep``: a maintenance goal, re-posted whenever it stops holding.
 
     Raises:
         DomainError: the expression, deadline or source is invalid (nothing is stored).
@@ -75,18 +78,20 @@ def submit(
     if source not in SOURCES:
         raise DomainError(f"goal '{text}': unknown source '{source}' (one of {', '.join(SOURCES)})")
     parse(text, Signature.of(domain, kb.objects()))
-    return kb.add_goal(text, priority=priority, deadline=deadline, source=source)
+    return kb.add_goal(text, priority=priority, deadline=deadline, source=source, keep=keep)
 
 
-def remaining(goal: Goal, now: float | None = None) -> float | None:
-    """Seconds left until a goal's deadline (negative once passed); ``None`` without one."""
+def remaining(goal: Goal, now: float | None = None, clock: Clock | None = None) -> float | None:
+    """Seconds of robot time left until a goal's deadline (negative once passed);
+    ``None`` without one. ``now`` is wall-clock epoch seconds."""
     if goal.deadline is None:
         return None
-    return goal.created + goal.deadline - (time.time() if now is None else now)
+    waited = (time.time() if now is None else now) - goal.created
+    return goal.deadline - (clock or Clock()).robot(waited)
 
 
 def specs(
-    goals: list[Goal], signature: Signature, now: float | None = None
+    goals: list[Goal], signature: Signature, now: float | None = None, clock: Clock | None = None
 ) -> tuple[list[GoalSpec], dict[int, Refusal]]:
     """Read stored goals for planning: the usable ones, and the refusal of each other one.
 
@@ -102,7 +107,7 @@ def specs(
         except DomainError as e:
             refused[goal.id] = Refusal(RefusalCause.INVALID, str(e))
             continue
-        left = remaining(goal, now)
+        left = remaining(goal, now, clock)
         if left is not None and left <= 0:
             refused[goal.id] = Refusal(
                 RefusalCause.DEADLINE_PASSED, f"its deadline of {goal.deadline:g} s passed"

@@ -17,28 +17,39 @@ domain, the robot's initial world is loaded into an empty knowledge base, and th
 planner begins with the goals still open there: an executive restarted after a crash
 carries on with them. Until then ``status``, ``goal/list``, ``events`` and the other
 readers answer at once (``state/get`` of a new robot waits for its world); a request
-that needs the domain (a goal, a fact, an object) waits for it. A domain that does not fit the robot ends the executive
-(``on_failure``) with the one-line reason.
+that needs the domain (a goal, a fact, an object) waits for it. A domain that does not
+fit the robot ends the executive (``on_failure``) with the one-line reason.
+
+The robot's sensing rules (:mod:`executive.planning.sensing`) read their topics through
+the topic sources it is given (ROS 2) or the bus. A change of the world from outside the
+plan (a fact or object set, a component reset or repaired) reaches the plan executer,
+which checks the plan ahead, and the goal planner, which looks again at unreachable
+goals; any change of facts reaches the maintenance goals.
 """
 
 from __future__ import annotations
 
 import contextlib
 import logging
+import re
 import threading
-import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from executive.bus.api import planning as api
+from executive.bus.clock import Clock, system_clock
 from executive.bus.keys import DIAGNOSES, EVENTS
 from executive.bus.payloads import DiagnosisInfo
 from executive.bus.service import Context, Service
+from executive.bus.session import Handler
+from executive.bus.topic_source import Subscription, TopicSource
 from executive.bus.verb import Empty
+from executive.planning.domain_description import describe
+from executive.planning.dry_run import dry_run
 from executive.planning.expression import Signature, parse_fact
 from executive.planning.goal_planner import GoalPlanner, PlannerStatus
 from executive.planning.goals import submit
-from executive.planning.integrity import IntegrityGoals, IntegrityRule, read_rules
+from executive.planning.integrity import IntegrityGoals, IntegrityRule, Trigger, read_rules
 from executive.planning.plan_executer import (
     ExecutionLimits,
     ExecutionStatus,
@@ -48,12 +59,18 @@ from executive.planning.plan_executer import (
 from executive.planning.planner import Planner
 from executive.planning.problem import seed
 from executive.planning.recovery import recover
+from executive.planning.sensing import Sensing
 from knowledge.availability import blocked_tasks
 from knowledge.errors import ConfigError, DuraError, KnowledgeError
+from knowledge.lifecycle import PlanState
 from knowledge.records import Event, Fact, to_plain
+from knowledge.yamlsource import did_you_mean
 
 log = logging.getLogger("dura.high_level")
 FAULT_CHANGES = ("PERMANENT_FAULT", "COMPONENT_RESET")  # events that may block or free tasks
+# events of the world changing outside the plan, and of the plan's own steps changing facts
+OUTSIDE_CHANGES = ("STATE_SET", "STATE_UNSET", "OBJECT_ADDED", "COMPONENT_RESET", "REPAIR")
+PLAN_CHANGES = ("START", "END", "FAIL", "CANCEL")
 SECTIONS = ("tasks", "components")  # what other services add to ``status``
 
 MAX_EVENTS = 10_000  # the most events one request returns
@@ -75,6 +92,9 @@ class HighLevel(Service):
             cannot start (the domain does not fit the robot, the planner does not start);
             without it the reason is logged. Requests that need the planner then fail
             with it.
+        clock: robot time (default: this process's, from ``DURA_TIME_SCALE``).
+        sources: topics not on the bus (ROS 2) that sensing rules may read; the
+            composition root may set ``sources`` until :meth:`start`.
     """
 
     name = "high-level"
@@ -87,8 +107,12 @@ class HighLevel(Service):
         status: dict[str, Callable[[], Any]] | None = None,
         limits: ExecutionLimits | None = None,
         on_failure: Callable[[str], None] | None = None,
+        clock: Clock | None = None,
+        sources: Sequence[TopicSource] = (),
     ) -> None:
         super().__init__(context)
+        self.clock = clock or system_clock()
+        self.sources = tuple(sources)
         self.runner = runner
         self.extra_status = dict(status or {})
         unknown = sorted(set(self.extra_status) - set(SECTIONS))
@@ -146,11 +170,14 @@ class HighLevel(Service):
         try:
             self.planner.start()
             domain = self.planner.describe(robot.domain)
-            errors = [f for f in check_domain(robot, domain) if f.is_error]
-            if errors:
-                raise ConfigError(str(errors[0]))
+            world = None
             if robot.problem is not None:
                 world = self.planner.read_world(robot.domain, robot.problem)
+            objects = world.objects if world is not None else {}
+            errors = [f for f in check_domain(robot, domain, objects) if f.is_error]
+            if errors:
+                raise ConfigError(str(errors[0]))
+            if world is not None and robot.problem is not None:
                 if not (kb.objects() or kb.facts()):
                     seed(kb, world, robot.problem)
                 self._seeded.set()
@@ -173,11 +200,13 @@ class HighLevel(Service):
             return
         self.domain = domain
         runner = self.runner if isinstance(self.runner, TaskRunner) else self.runner()
-        self.executer = PlanExecuter(kb, runner, robot.tasks, self._replan, self.limits)
+        self.executer = PlanExecuter(
+            kb, runner, robot.tasks, self._replan, self.limits, clock=self.clock
+        )
         self._blocked = self.blocked()
         self.goals = GoalPlanner(kb, self.domain, self.planner, self.executer, blocked=self.blocked)
         with self._lock:
-            self.integrity = IntegrityGoals(kb, self.domain, rules)
+            self.integrity = IntegrityGoals(kb, self.domain, rules, clock=self.clock)
             if self._diagnoses:
                 self.integrity.diagnosed(self._diagnoses)
             self._integrity_thread = threading.Thread(
@@ -186,7 +215,16 @@ class HighLevel(Service):
             self._integrity_thread.start()
             self.executer.start()
             self.goals.start()
-            self._running = [self.goals.stop, self.executer.stop]
+            self.sensing = Sensing(
+                kb,
+                self.domain,
+                robot.sensing,
+                subscribe=self._subscribe,
+                changed=self._sensed,
+                clock=self.clock,
+            )
+            self.sensing.start()
+            self._running = [self.sensing.stop, self.goals.stop, self.executer.stop]
             self._ready.set()
 
     def wait_ready(self, timeout: float | None = None) -> bool:
@@ -244,6 +282,19 @@ class HighLevel(Service):
     def _replan(self, reason: str) -> None:
         self.goals.replan(reason)
 
+    def _subscribe(self, key: str, handler: Handler) -> Subscription:
+        """Subscribe to a topic key where its messages are: a topic source, or the bus."""
+        source = next((s for s in self.sources if s.serves(key)), None)
+        if source is not None:
+            return source.subscribe(key, handler)
+        subscription: Subscription = self.context.bus.subscribe(key, handler)
+        return subscription
+
+    def _sensed(self, facts: list[Fact], reason: str) -> None:
+        """A sensing rule changed facts: as a user's ``dura state set`` does."""
+        self.executer.facts_changed([(f.name, f.args) for f in facts])
+        self.goals.wake(reason)
+
     # --- events, diagnoses and integrity goals ---------------------------------------------
 
     def _on_event(self, event: Event) -> None:
@@ -252,6 +303,11 @@ class HighLevel(Service):
         self.context.bus.publish(EVENTS, to_plain(event))
         if event.kind in FAULT_CHANGES:
             self._faults_changed.set()
+        if self._started():  # until then, the goal planner's first round sees it all
+            if event.kind in OUTSIDE_CHANGES:
+                self.goals.world_changed(f"{event.kind} {event.subject}")
+            elif event.kind in PLAN_CHANGES:
+                self.goals.facts_changed(f"{event.kind} {event.subject}")
         if not event.kind.startswith("INTEGRITY_"):
             self._check.set()
 
@@ -271,7 +327,7 @@ class HighLevel(Service):
         """Check the integrity rules when something changed, and when a rule is due."""
         while not self._stopping.is_set():
             due = self.integrity.next_check()
-            wait = None if due is None else max(0.0, due - time.time())
+            wait = None if due is None else max(0.0, self.clock.wall(due - self.clock.monotonic()))
             self._check.wait(wait)
             self._check.clear()
             if self._stopping.is_set():
@@ -316,10 +372,13 @@ class HighLevel(Service):
             api.GOAL_SHOW.serve(bus, self._goal_show),
             api.GOAL_CANCEL.serve(bus, self._goal_cancel),
             api.PLAN_SHOW.serve(bus, self._plan_show),
+            api.PLAN_DRY_RUN.serve(bus, self._plan_dry_run),
             api.STATE_GET.serve(bus, self._state_get),
             api.STATE_SET.serve(bus, lambda r: self._state_change(r, unset=False)),
             api.STATE_UNSET.serve(bus, lambda r: self._state_change(r, unset=True)),
             api.OBJECT_ADD.serve(bus, self._object_add),
+            api.OBJECT_REMOVE.serve(bus, self._object_remove),
+            api.DOMAIN_SHOW.serve(bus, self._domain_show),
             api.EVENTS.serve(bus, self._events),
             api.STATUS.serve(bus, self._status),
         ]
@@ -333,6 +392,7 @@ class HighLevel(Service):
             priority=request.priority,
             deadline=request.deadline,
             source=request.source,
+            keep=request.keep,
         )
         self.goals.wake(f"goal {goal.id} added")
         return api.GoalReply(to_plain(goal))
@@ -357,6 +417,19 @@ class HighLevel(Service):
         plan = self.context.kb.latest_plan()
         return api.PlanReply(None if plan is None else to_plain(plan), self._execution())
 
+    def _plan_dry_run(self, request: api.DryRun) -> api.DryRunReply:
+        """Plan for the open goals on the live state; nothing changes."""
+        self._planning()
+        return dry_run(
+            self.context.kb,
+            self.domain,
+            self.planner,
+            self.executer.planning_facts(),
+            self.blocked(),
+            clock=self.clock,
+            timeout=request.timeout,
+        )
+
     def _state_get(self, request: api.StateQuery) -> api.StateReply:
         self._seeded.wait(WARM_UP_WAIT)  # a new robot's world comes with its domain
         kb = self.context.kb
@@ -374,7 +447,7 @@ class HighLevel(Service):
             else:
                 kb.set_fact(fact)
             kb.log_event("STATE_UNSET" if unset else "STATE_SET", str(fact), {"source": "user"})
-        self.executer.facts_changed()
+        self.executer.facts_changed([(fact.name, fact.args)])
         self.goals.wake(f"{fact} {'unset' if unset else 'set'} by the user")
         return api.FactReply(_fact(fact))
 
@@ -394,6 +467,54 @@ class HighLevel(Service):
             kb.add_object(name, type_name)
             kb.log_event("OBJECT_ADDED", name, {"type": type_name})
         return api.ObjectAdd(name, type_name)
+
+    def _object_remove(self, request: api.ObjectName) -> api.StateReply:
+        """Remove an object and every fact that names it (as PlanSys2 removes an
+        instance); refused, with who names it, while an open goal, the current plan or an
+        integrity rule does."""
+        self._planning()
+        name, kb = request.name, self.context.kb
+        with kb.transaction():
+            objects = kb.objects()
+            if name not in objects:
+                raise KnowledgeError(f"no object '{name}'{did_you_mean(name, sorted(objects))}")
+            users = self._naming(name)
+            if users:
+                raise DuraError(f"object '{name}' is in use: {'; '.join(users)}")
+            facts = [f for f in kb.facts() if name in f.args]
+            kb.update_facts(remove=facts)
+            kb.remove_object(name)
+            kb.log_event(
+                "OBJECT_REMOVED",
+                name,
+                {"type": objects[name], "facts": [str(f) for f in facts], "source": "user"},
+            )
+        self.executer.facts_changed()
+        self.goals.wake(f"object {name} removed by the user")
+        return api.StateReply([_fact(f) for f in facts], {name: objects[name]})
+
+    def _naming(self, name: str) -> list[str]:
+        """Who names an object: open goals, the current plan's steps, integrity rules."""
+        kb = self.context.kb
+        users = [
+            f"goal {g.id} {g.expression} is {g.state.value}"
+            for g in kb.open_goals()
+            if _mentions(g.expression, name)
+        ]
+        plan = kb.latest_plan()
+        if plan is not None and plan.state in (PlanState.PENDING, PlanState.EXECUTING):
+            steps = [f"{s.action}({', '.join(s.args)})" for s in plan.steps if name in s.args]
+            if steps:
+                users.append(f"plan {plan.id} ({plan.state.value}) has {', '.join(steps)}")
+        for rule in self.integrity.rules:
+            condition = rule.subject if rule.trigger is Trigger.CONDITION else ""
+            if _mentions(rule.goal, name) or _mentions(condition, name):
+                users.append(f"integrity rule '{rule.name}' ({rule.where})")
+        return users
+
+    def _domain_show(self, request: Empty) -> api.DomainReply:
+        self._planning()
+        return describe(self.domain, self.context.robot, self.blocked())
 
     def _events(self, request: api.EventQuery) -> api.EventsReply:
         events = self.context.kb.events(
@@ -442,6 +563,16 @@ _STARTING = to_plain(PlannerStatus(starting=True))  # the planner is warming up
 def _names_goal(event: Event, goal_id: int) -> bool:
     goals = event.data.get("goals") if isinstance(event.data, dict) else None
     return isinstance(goals, list) and goal_id in goals
+
+
+_TOKEN = re.compile(r"[()]|[^\s()]+")
+
+
+def _mentions(expression: str, name: str) -> bool:
+    """Whether a PDDL expression names an object: as an argument, not as the name of a
+    predicate, function or connective (the word after an opening parenthesis)."""
+    tokens = _TOKEN.findall(expression)
+    return any(t == name and (i == 0 or tokens[i - 1] != "(") for i, t in enumerate(tokens))
 
 
 def _matches(words: list[str], name: str, args: tuple[str, ...]) -> bool:

@@ -10,24 +10,27 @@ Rules live in YAML files named under ``integrity:`` in the robot description::
         priority: 10                       # optional (default 0)
         deadline: 60                       # optional, seconds from posting
         for: 2                             # optional: the trigger must hold this long
+        keep: true                         # optional: a maintenance goal (re-posted
+                                           # whenever it stops holding)
 
 Triggers: ``permanent_fault: COMPONENT`` (the KB marks it permanently faulty),
 ``diagnosis: COMPONENT`` (it is in every current diagnosis, i.e. certainly faulty),
 ``condition: PDDL`` (a condition over the KB facts and numeric values, e.g.
 ``(< (battery_level robot) 20)``). A rule fires when its trigger becomes true (and has
 stayed true for ``for`` seconds), posts its goal unless the same goal is already
-open, and fires again only after the trigger was false once.
+open (or, for a maintenance goal, achieved and watched), and fires again only after
+the trigger was false once.
 """
 
 from __future__ import annotations
 
 import enum
-import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from executive.bus.clock import Clock
 from executive.planning.expression import Expression, Signature, WorldState, parse
 from executive.planning.goals import normalized, submit
 from knowledge.description import RobotDescription
@@ -35,7 +38,7 @@ from knowledge.domain import DomainInfo
 from knowledge.errors import ConfigError, DomainError
 from knowledge.finding import Report
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.records import Goal
+from knowledge.records import Goal, GoalState
 from knowledge.yamlsource import Section, compose, did_you_mean, line_of
 
 
@@ -62,6 +65,7 @@ class IntegrityRule:
     deadline: float | None = None
     hold: float = 0.0
     where: str = ""  # file:line, for messages
+    keep: bool = False  # post a maintenance goal
 
 
 def read_rules(
@@ -118,6 +122,7 @@ def _rule(
     deadline_node = s.has("deadline")
     deadline = s.number("deadline", 0.0, minimum=0.001) if deadline_node else None
     hold = s.number("for", 0.0, minimum=0.0)
+    keep = s.flag("keep", False)
     when = s.section("when", required=True)
     s.close()
     where = f"{report.path}:{s.line}"
@@ -157,7 +162,9 @@ def _rule(
             trigger = None
     if name is None or goal is None or trigger is None or subject is None:
         return None
-    return IntegrityRule(name, trigger, subject, normalized(goal), priority, deadline, hold, where)
+    return IntegrityRule(
+        name, trigger, subject, normalized(goal), priority, deadline, hold, where, keep
+    )
 
 
 @dataclass
@@ -172,12 +179,14 @@ class IntegrityGoals:
 
     Call :meth:`check` whenever something a rule reads may have changed (diagnoses,
     faults, facts) and again at :meth:`next_check`, for rules that wait ``for`` a while.
+    Times are the clock's robot seconds (``for`` is robot time).
     """
 
     kb: KnowledgeBase
     domain: DomainInfo
     rules: Sequence[IntegrityRule]
     diagnoses: tuple[frozenset[str], ...] = ()
+    clock: Clock = field(default_factory=Clock)
     _watch: dict[str, _Watch] = field(default_factory=dict)
 
     def diagnosed(self, payload: Mapping[str, Any]) -> None:
@@ -200,10 +209,11 @@ class IntegrityGoals:
 
     def check(self, now: float | None = None) -> list[Goal]:
         """Post the goals of the rules that fire now; returns them."""
-        now = time.time() if now is None else now
+        now = self.clock.monotonic() if now is None else now
         state = WorldState(self.kb.facts())
         faulty = {c.name for c in self.kb.components() if c.permanent_fault}
-        open_goals = {g.expression for g in self.kb.open_goals()}
+        watched = [g for g in self.kb.goals([GoalState.ACHIEVED]) if g.keep]
+        open_goals = {g.expression for g in (*self.kb.open_goals(), *watched)}
         posted: list[Goal] = []
         for rule in self.rules:
             watch = self._watch.setdefault(rule.name, _Watch())
@@ -219,7 +229,8 @@ class IntegrityGoals:
                 continue
             try:
                 goal = submit(self.kb, self.domain, rule.goal, priority=rule.priority,
-                              deadline=rule.deadline, source="integrity")  # fmt: skip
+                              deadline=rule.deadline, source="integrity",
+                              keep=rule.keep)  # fmt: skip
             except DomainError as e:
                 self.kb.log_event("INTEGRITY_REFUSED", rule.name, {"reason": str(e)})
                 continue
@@ -231,7 +242,8 @@ class IntegrityGoals:
         return posted
 
     def next_check(self) -> float | None:
-        """When a rule waiting ``for`` its trigger to persist is due (epoch seconds)."""
+        """When a rule waiting ``for`` its trigger to persist is due (the clock's
+        :meth:`~executive.bus.clock.Clock.monotonic` seconds)."""
         due = [
             w.since + r.hold
             for r in self.rules

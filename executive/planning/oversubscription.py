@@ -15,9 +15,11 @@ engine, names a reason for each goal, and costs one call when all goals are reac
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections import defaultdict
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
+from executive.planning.expression import And
 from executive.planning.goals import GoalSpec
 from executive.planning.planner import Planner, PlanningTask, PlanResult, PlanStatus
 
@@ -72,13 +74,25 @@ def plan_goals(planner: Planner, task: PlanningTask, budget: float | None = None
             kept.append(goal)
             best = attempt
         else:
-            unreachable[goal.id] = _reason(goal, kept, attempt)
+            unreachable[goal.id] = unreachable_reason(goal, kept, attempt)
     result = best or first
     return GoalPlan(result, tuple(g.id for g in kept), unreachable, calls)
 
 
-def _reason(goal: GoalSpec, kept: list[GoalSpec], attempt: PlanResult) -> str:
+def missing_for(goal: GoalSpec, result: PlanResult) -> list[str]:
+    """Return the lines of a result's ``missing`` about parts of this goal."""
+    parts = goal.expression.args if isinstance(goal.expression, And) else (goal.expression,)
+    heads = tuple(f"{p} " for p in parts)
+    return [line for line in result.missing if line.startswith(heads)]
+
+
+def unreachable_reason(goal: GoalSpec, kept: Sequence[GoalSpec], attempt: PlanResult) -> str:
+    """Say why no plan reaches a goal together with the ``kept`` ones: what it misses, if the
+    relaxed reachability check tells, else the engine's answer or the goals in the way."""
     by = f" by its deadline ({goal.deadline:g} s from now)" if goal.deadline is not None else ""
+    missing = missing_for(goal, attempt)
+    if missing:  # nothing can make part of it true: the other goals do not matter
+        return f"no plan reaches it{by} from the current state: {'; '.join(missing)} ({attempt.reason})"
     if not attempt.status.no_plan:
         return attempt.reason + (
             f" (with goals {', '.join(str(g.id) for g in kept)})" if kept else ""
@@ -88,3 +102,13 @@ def _reason(goal: GoalSpec, kept: list[GoalSpec], attempt: PlanResult) -> str:
     others = ", ".join(str(g.id) for g in kept)
     plural = "s" if len(kept) > 1 else ""
     return f"no plan reaches it{by} together with goal{plural} {others} (kept first by priority)"
+
+
+def blocked_note(blocked: Mapping[str, str]) -> str:
+    """``"; cannot run now: call_lift, ride_lift (lift_link is ...)"`` or nothing."""
+    if not blocked:
+        return ""
+    actions: defaultdict[str, list[str]] = defaultdict(list)
+    for action, why in sorted(blocked.items()):
+        actions[why].append(action)
+    return "; cannot run now: " + "; ".join(f"{', '.join(a)} ({why})" for why, a in actions.items())

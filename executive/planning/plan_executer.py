@@ -44,9 +44,11 @@ from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
+from executive.bus.clock import Clock, system_clock
 from executive.bus.worker import Worker
 from executive.planning.expression import WorldState, atoms
 from executive.planning.goals import GoalSpec
+from executive.planning.look_ahead import look_ahead, steps_ahead
 from executive.planning.partial_order import PartialOrderPlan
 from executive.planning.plan_run import PlanRun, RunContext
 from executive.planning.recovery import recover
@@ -121,6 +123,9 @@ class PlanExecuter:
         tasks: the actions that have a task; the others complete at once.
         on_replan: called (on the executer's thread) with the reason when a new plan
             is needed; the goal planner wakes up on it.
+        clock: robot time (step timeouts and goal deadlines are robot seconds).
+        watch_ahead: check the rest of the plan when facts change outside it
+            (:mod:`executive.planning.look_ahead`); off only to measure what it gains.
     """
 
     def __init__(
@@ -130,8 +135,13 @@ class PlanExecuter:
         tasks: Collection[str],
         on_replan: Callable[[str], None],
         limits: ExecutionLimits | None = None,
+        *,
+        clock: Clock | None = None,
+        watch_ahead: bool = True,
     ) -> None:
         self.kb = kb
+        self.clock = clock or system_clock()
+        self.watch_ahead = watch_ahead
         self.runner = runner
         self.tasks = frozenset(tasks)
         self.on_replan = on_replan
@@ -150,6 +160,7 @@ class PlanExecuter:
             tell=lambda change: self._tell(change),  # noqa: PLW0108 (report_to replaces _tell)
             on_replan=on_replan,
             tokens=itertools.count(1),
+            clock=self.clock,
         )
         self._run: PlanRun | None = None
         self._goals: list[_Goal] = []
@@ -230,9 +241,15 @@ class PlanExecuter:
         its tasks, undo the at-start effects of those under way, and end the pause."""
         self._call(lambda: self._abandon(reason))
 
-    def facts_changed(self) -> None:
-        """Facts changed outside the executer (``dura state set``): check conditions."""
-        self._worker.post(self._react)
+    def facts_changed(self, changed: Collection[Key] = ()) -> None:
+        """Facts changed outside the executer: check the running steps' conditions, and
+        the rest of the plan for a ``changed`` fact (:mod:`.look_ahead`)."""
+
+        def react() -> None:
+            self._react()
+            self._look_ahead(frozenset(changed))
+
+        self._worker.post(react)
 
     def planning_facts(self) -> list[Fact]:
         """The KB facts with the at-start effects of paused steps undone: the state the
@@ -265,7 +282,9 @@ class PlanExecuter:
             goal = _Goal(spec, atoms(spec.expression))
             if spec.deadline is not None:
                 goal.timer = start_timer(
-                    spec.deadline, self._worker.post, functools.partial(self._deadline, goal)
+                    self.clock.wall(spec.deadline),
+                    self._worker.post,
+                    functools.partial(self._deadline, goal),
                 )
             self._goals.append(goal)
             self._tell(GoalChange(spec.id, GoalState.EXECUTING))
@@ -367,6 +386,15 @@ class PlanExecuter:
             run.fail_plan(
                 f"step {blocked.step.label} cannot start: {blocked.step.at_start} does not hold"
             )
+
+    def _look_ahead(self, changed: frozenset[Key]) -> None:
+        run = self._run
+        if run is None or run.failed or run.finished or not self.watch_ahead:
+            return
+        goals = [g.spec.expression for g in self._goals if not g.done]
+        blocked = look_ahead(steps_ahead(run.runs.values()), self.kb.facts(), changed, goals)
+        if blocked is not None:
+            run.fail_plan(str(blocked))
 
     def _finish(self, run: PlanRun) -> None:
         open_goals = [g for g in self._goals if not g.done]

@@ -10,9 +10,10 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
+from executive.bus.clock import Clock
 from executive.planning.expression import WorldState
 from executive.planning.partial_order import Effect, PartialOrderPlan, Timepoint, apply
 from executive.planning.state_change import Change, PlanChange
@@ -39,6 +40,7 @@ class RunContext:
         tell: report a plan state change to its owner.
         on_replan: ask for a new plan, with the reason.
         tokens: numbers that tell a step's current task from earlier ones.
+        clock: robot time: durations and timeouts are robot seconds.
     """
 
     kb: KnowledgeBase
@@ -50,6 +52,7 @@ class RunContext:
     tell: Callable[[Change], object]
     on_replan: Callable[[str], None]
     tokens: Iterator[int]
+    clock: Clock = field(default_factory=Clock)
 
 
 class PlanRun:
@@ -306,10 +309,11 @@ class PlanRun:
         run.since = time.monotonic()
         if run.step.duration is None:
             return
-        limit = self._c.limits.timeout(run.step.duration)
+        clock = self._c.clock
+        wall = self._c.limits.wall_timeout(run.step.duration, clock)
         token = run.token
-        run.timer = start_timer(
-            limit - run.elapsed, self._c.post, lambda: self.timed_out(run, token, limit)
+        run.timer = start_timer(  # elapsed and the limit are wall time
+            wall - run.elapsed, self._c.post, lambda: self.timed_out(run, token, clock.robot(wall))
         )
 
     def timed_out(self, run: StepRun, token: int, limit: float) -> None:

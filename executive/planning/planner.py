@@ -95,6 +95,7 @@ class PlanResult:
     log: tuple[str, ...] = ()
     time: float = 0.0  # seconds, from sending the job to receiving the answer
     validator: str = ""  # the UP validator that accepted the plan
+    missing: tuple[str, ...] = ()  # without a plan: goal atoms no action can make true
 
     @property
     def ok(self) -> bool:

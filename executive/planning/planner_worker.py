@@ -69,6 +69,10 @@ def _capturing_output(method: Any) -> Any:
     return wrapped
 
 
+# How to install the engines that are optional extras.
+INSTALL = {"tamer": " (it is an optional extra: pip install 'dura[tamer]', or -e '.[tamer]')"}
+
+
 @dataclass
 class _Worker:
     """The worker's state: UP's environment, engines and parsed domains, kept warm."""
@@ -114,7 +118,8 @@ class _Worker:
             from unified_planning.shortcuts import OneshotPlanner
 
             if name not in self.env.factory.engines:
-                raise PlanningError(f"engine '{name}' is not installed")
+                hint = INSTALL.get(name, "")
+                raise PlanningError(f"engine '{name}' is not installed{hint}")
             self.engines[name] = OneshotPlanner(name=name)
         return self.engines[name]
 
@@ -151,16 +156,16 @@ class _Worker:
 
         def result(status: PlanStatus, *lines: str, **more: Any) -> PlanResult:
             return PlanResult(status, more.get("plan"), engine_name, tuple(lines), 0.0,
-                              more.get("validator", ""))  # fmt: skip
+                              more.get("validator", ""), more.get("missing", ()))  # fmt: skip
 
         try:
             problem = frozen(build(self.domain(task.domain), task.world, task.goals, task.blocked))
             engine = self.engine(engine_name)
         except DuraError as e:
             return result(PlanStatus.ERROR, str(e))
-        missing = _missing_features(engine, problem)
-        if missing:
-            return result(PlanStatus.UNSUPPORTED, f"unsupported features: {missing}")
+        unsupported = _missing_features(engine, problem)
+        if unsupported:
+            return result(PlanStatus.UNSUPPORTED, f"unsupported features: {unsupported}")
         try:
             answer = engine.solve(problem, timeout=timeout)
         except Exception as e:  # an engine's own failure is a result, not a crash
@@ -168,7 +173,9 @@ class _Worker:
         lines = [str(m.message).splitlines()[0] for m in answer.log_messages or () if m.message]
         status = _status(answer.status.name)
         if answer.plan is None or status is not PlanStatus.SOLVED:
-            return result(PlanStatus.ERROR if status is PlanStatus.SOLVED else status, *lines)
+            why = _missing(problem, task) if status in _EXPLAINED else ()
+            status = PlanStatus.ERROR if status is PlanStatus.SOLVED else status
+            return result(status, *lines, missing=why)
         valid, validator, reason = _validate(problem, answer.plan, self.validator)
         if not valid:
             return result(PlanStatus.INVALID_PLAN, *lines, reason, validator=validator)
@@ -179,6 +186,19 @@ class _Worker:
         except DuraError as e:
             return result(PlanStatus.ERROR, *lines, str(e))
         return result(PlanStatus.SOLVED, *lines, plan=plan, validator=validator)
+
+
+_EXPLAINED = (PlanStatus.UNSOLVABLE, PlanStatus.NOT_FOUND, PlanStatus.TIMEOUT)
+
+
+def _missing(problem: Any, task: PlanningTask) -> tuple[str, ...]:
+    """The goal atoms no action can make true from the task's world (relaxed)."""
+    from executive.planning.reachability import missing_atoms
+
+    try:
+        return missing_atoms(problem, [g.expression for g in task.goals])
+    except Exception as e:  # an explanation must never cost the result
+        return (f"(reachability not checked: {type(e).__name__}: {e})",)
 
 
 def _status(name: str) -> PlanStatus:

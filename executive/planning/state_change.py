@@ -49,7 +49,7 @@ def apply_change(kb: KnowledgeBase, change: Change) -> bool:
     """
     if isinstance(change, GoalChange):
         goal = kb.goal(change.goal)
-        if not goal.state.can_become(change.state):
+        if not goal.state.can_become(change.state, keep=goal.keep):
             log.debug("goal %d is %s: %s is stale", goal.id, goal.state.value, change)
             return False
         kb.set_goal_state(change.goal, change.state, change.reason)

@@ -14,6 +14,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from executive.bus.clock import Clock
 from executive.planning.partial_order import Step
 from executive.planning.task_runner import Progress, StepReport, StepTask
 
@@ -44,6 +45,12 @@ class ExecutionLimits:
 
     def timeout(self, duration: float) -> float:
         return duration + max(self.margin, self.relative * duration)
+
+    def wall_timeout(self, duration: float, clock: Clock) -> float:
+        """Return the timeout in wall-clock seconds: the duration and its relative share are
+        robot time, the margin is wall time (starting processes and scheduling take as
+        long at any time scale)."""
+        return clock.wall(duration) + max(self.margin, clock.wall(self.relative * duration))
 
 
 @dataclass

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import logging
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -115,11 +115,17 @@ class Discovery:
     """The ROS 2 graph of a domain, from one participant's view."""
 
     def __init__(
-        self, participant: Participant, library: TypeLibrary, *, node: str = "dura"
+        self,
+        participant: Participant,
+        library: TypeLibrary,
+        *,
+        node: str = "dura",
+        aliases: Mapping[str, str] | None = None,
     ) -> None:
         self.participant = participant
         self.library = library
         self.node = node_name("/", node)
+        self.aliases = dict(aliases or {})  # node -> caller id (a component's name)
         self._lock = threading.Lock()
         self._announcing = threading.Lock()  # one announcement at a time, the newest last
         self._writers: dict[bytes, Endpoint] = {}
@@ -153,7 +159,8 @@ class Discovery:
     # --- what the rest of dura asks -------------------------------------------------
 
     def caller(self, publication_handle: int) -> str:
-        """Name a sample's writer as a caller id: its node (``lidar``), else ``dds:<guid>``."""
+        """Name a sample's writer as a caller id: the component its node is (an alias),
+        its node (``robot1/lidar``), else ``dds:<guid>``."""
         found = self._callers.get(publication_handle)
         if found is not None:
             return found
@@ -163,7 +170,8 @@ class Discovery:
         node = self._node_of.get(guid)
         if node is None:
             return f"dds:{guid.hex()}"
-        found = self._callers[publication_handle] = caller_id(node)
+        found = self.aliases.get(node) or caller_id(node)
+        self._callers[publication_handle] = found
         return found
 
     def node_of(self, guid: bytes) -> str | None:

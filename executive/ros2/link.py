@@ -12,6 +12,8 @@ reverse. The composition root opens one and hands its parts to the services::
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from executive.ros2.discovery import Discovery
 from executive.ros2.participant import Participant
 from executive.ros2.topics import Ros2Topics
@@ -23,19 +25,24 @@ from knowledge.ros2_spec import Ros2Spec
 class Ros2Link:
     """One participant in the robot's ROS 2 domain with its types, graph and topics.
 
+    ``nodes`` maps the ROS 2 nodes that are components of the robot to the components'
+    names: their samples carry the component's name as caller id.
+
     Raises:
         ConfigError: an unsupported transport or an invalid message definition.
         BusError: DDS cannot create the participant.
     """
 
-    def __init__(self, spec: Ros2Spec) -> None:
+    def __init__(self, spec: Ros2Spec, *, nodes: Mapping[str, str] | None = None) -> None:
         if spec.transport != "dds":
             raise ConfigError(f"ROS 2 transport '{spec.transport}' is not supported (only dds)")
         self.spec = spec
         self.library = TypeLibrary.of(spec)
         self.participant = Participant(spec.domain_id, name=spec.node)
         try:
-            self.discovery = Discovery(self.participant, self.library, node=spec.node)
+            self.discovery = Discovery(
+                self.participant, self.library, node=spec.node, aliases=nodes
+            )
             self.topics = Ros2Topics(spec, self.participant, self.library, self.discovery)
         except BaseException:
             self.participant.close()

@@ -19,6 +19,7 @@ everything in it; nothing is left to the garbage collector.
 from __future__ import annotations
 
 import ctypes as ct
+import itertools
 import logging
 import threading
 import time
@@ -43,7 +44,7 @@ from cyclonedds.util import duration
 
 # take() without deserialising: DataReader.take would build Python objects of every
 # sample, the cost this module exists to avoid
-from cyclonedds._clayer import ddspy_take  # isort: skip
+from cyclonedds._clayer import ddspy_take, ddspy_write  # isort: skip
 
 from knowledge.errors import BusError
 
@@ -140,6 +141,13 @@ class Reader:
     def guid(self) -> bytes:
         return bytes(self.entity.guid.bytes)
 
+    def matched(self) -> int:
+        """Count the writers this reader is matched with (0 once deleted)."""
+        try:
+            return len(self.entity.get_matched_publications())
+        except DDSException:
+            return 0
+
     def close(self) -> None:
         """Delete the reader (idempotent)."""
         self._participant._delete(self)
@@ -156,6 +164,27 @@ class Writer:
     @property
     def guid(self) -> bytes:
         return bytes(self.entity.guid.bytes)
+
+    @property
+    def instance_handle(self) -> int:
+        """Return the writer's instance handle, which its readers see as the publication handle."""
+        return int(self.entity.instance_handle) & 0xFFFF_FFFF_FFFF_FFFF  # the binding may sign it
+
+    def matched(self) -> int:
+        """Count the readers this writer is matched with (0 once deleted)."""
+        try:
+            return len(self.entity.get_matched_subscriptions())
+        except DDSException:
+            return 0
+
+    def write_raw(self, data: bytes) -> None:
+        """Publish a sample already serialised (XCDR1, with its encapsulation header).
+
+        Raises:
+            BusError: DDS refused it.
+        """
+        if ddspy_write(self.entity._ref, data) < 0:
+            raise BusError(f"cannot write on DDS topic '{self.topic}'")
 
     def write(self, sample: IdlStruct) -> None:
         """Publish a sample (serialised by Cyclone, XCDR1).
@@ -195,6 +224,7 @@ class Participant:
         self._guard = _C.create_guard(ref)
         _C.attach(self._waitset, self._guard, 0)
         self._stopping = False
+        self._ids = itertools.count(1)
         self._thread = threading.Thread(target=self._run, name="ros2-receive", daemon=True)
         self._thread.start()
 
@@ -206,6 +236,12 @@ class Participant:
     @property
     def closed(self) -> bool:
         return self._stopping
+
+    def unique_id(self) -> bytes:
+        """Make a 16-byte id no other endpoint pair has: this participant's GUID prefix and a
+        counter (as rmw_cyclonedds names its clients and services)."""
+        with self._lock:
+            return self.guid[:12] + next(self._ids).to_bytes(4, "big")
 
     # --- entities -------------------------------------------------------------------
 

@@ -20,10 +20,18 @@ DISCOVERY = QosProfile(reliability="reliable", durability="transient_local", dep
 DISCOVERY_READER = QosProfile(
     reliability="reliable", durability="transient_local", history="keep_all", depth=1
 )
+# What rcl_action gives an action's status topic (the rest of an action: the defaults).
+ACTION_STATUS = QosProfile(durability="transient_local", depth=1)
 _UNLIMITED = -1
 
 
-def dds_qos(profile: QosProfile, *, depth: int | None = None, ignore_local: bool = False) -> Qos:
+def dds_qos(
+    profile: QosProfile,
+    *,
+    depth: int | None = None,
+    ignore_local: bool = False,
+    user_data: bytes = b"",
+) -> Qos:
     """Make the DDS QoS of a ROS 2 endpoint with this profile.
 
     Args:
@@ -31,6 +39,8 @@ def dds_qos(profile: QosProfile, *, depth: int | None = None, ignore_local: bool
         depth: a deeper history than the profile's (a reader's own affair: it changes
             nothing a publisher sees).
         ignore_local: ignore what this participant itself publishes.
+        user_data: ``key=value;`` pairs, as rmw_cyclonedds marks the two halves of a
+            service client or server (``clientid=...;``).
     """
     history = (
         Policy.History.KeepAll
@@ -61,4 +71,6 @@ def dds_qos(profile: QosProfile, *, depth: int | None = None, ignore_local: bool
         policies.append(Policy.Durability.Volatile)
     if ignore_local:
         policies.append(Policy.IgnoreLocal.Participant)
+    if user_data:
+        policies.append(Policy.Userdata(data=user_data))
     return Qos(*policies)

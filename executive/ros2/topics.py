@@ -2,7 +2,7 @@
 
 :class:`Ros2Topics` serves the keys ``topic/<name>`` of the ROS 2 topics a robot
 description lists (``ros2: topics:``). For each key in use it keeps one DDS reader
-(``rt/<name>``, the topic's QoS) and turns every sample into a :class:`Ros2Message`:
+(``rt/<name>``, the topic's QoS) and turns every sample into a :class:`~executive.ros2.message.RosMessage`:
 caller id the writer's node (:meth:`Discovery.caller`), ``sent`` the sample's source
 timestamp, ``received`` its take, and a ``payload`` decoded from CDR only when read
 (frequency and timeout observers never decode). ``stamp`` is ``header.stamp``.
@@ -21,9 +21,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from executive.bus.keys import topic as topic_key
-from executive.bus.session import Handler, Message
+from executive.bus.session import Handler
 from executive.ros2.cdr import CdrError, Decoder
 from executive.ros2.discovery import Discovery
+from executive.ros2.message import RosMessage
 from executive.ros2.names import dds_topic, ros_type
 from executive.ros2.participant import Participant, Reader
 from executive.ros2.qos import dds_qos
@@ -34,34 +35,6 @@ from knowledge.ros2_spec import Ros2Spec, Ros2TopicSpec
 log = logging.getLogger("dura.ros2")
 
 READER_DEPTH = 1000  # samples a reader keeps while the receive thread is busy elsewhere
-
-
-@dataclass
-class Ros2Message(Message):
-    """A sample of a ROS 2 topic; ``payload`` is its message as a dict, decoded on first use."""
-
-    feed: _Feed | None = field(default=None, repr=False)
-
-    @property
-    def payload(self) -> dict[str, Any]:
-        if self._payload is None:
-            if self.feed is None:
-                raise BusError(f"{self.key}: a ROS 2 sample without its topic")
-            self._payload = self.feed.decode(self.raw, self.caller_id)
-        return self._payload
-
-    @property
-    def stamp(self) -> float | None:
-        """Return ``header.stamp`` in seconds (a message without a header: its ``stamp``)."""
-        payload = self.payload
-        header = payload.get("header")
-        stamp = header.get("stamp") if isinstance(header, dict) else payload.get("stamp")
-        if isinstance(stamp, dict):
-            sec, nanosec = stamp.get("sec"), stamp.get("nanosec")
-            if isinstance(sec, int) and isinstance(nanosec, int):
-                return sec + nanosec * 1e-9
-            return None
-        return float(stamp) if isinstance(stamp, (int, float)) else None
 
 
 @dataclass
@@ -235,14 +208,14 @@ class Ros2Topics:
             for data, info in samples:
                 if not info.valid_data:
                     continue
-                message = Ros2Message(
+                message = RosMessage(
                     key,
                     data,
                     caller(info.publication_handle),
                     info.source_timestamp * 1e-9,
                     received,
                     None,
-                    feed,
+                    feed.decode,
                 )
                 for handler in handlers:
                     try:

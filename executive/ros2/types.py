@@ -8,6 +8,11 @@ written as, and the :class:`~executive.ros2.cdr.Decoder` that turns received byt
 into dicts. The ROS ``.msg`` types map onto IDL as rosidl maps them: ``byte`` is an
 octet, ``char`` a uint8, ``string<=N`` a bounded string, ``T[N]`` an array, ``T[]``
 and ``T[<=N]`` sequences.
+
+Services' requests and replies travel with a header before the message, the way
+rmw_cyclonedds writes them: the client's 64-bit id and the request's sequence number
+(:meth:`TypeLibrary.wrapped`). Their DDS type is named as the message, with the two
+header members ``guid_`` and ``seq_`` first (ROS 2 field names never end in ``_``).
 """
 
 from __future__ import annotations
@@ -48,6 +53,7 @@ class TypeLibrary:
         self.store = store
         self.distribution = distribution
         self._classes: dict[str, type[IdlStruct]] = {}
+        self._wrapped: dict[str, type[IdlStruct]] = {}
         self._decoders: dict[str, Decoder] = {}
 
     @classmethod
@@ -92,6 +98,17 @@ class TypeLibrary:
             annotations = {f: self._idl_field(d) for f, d in self.fields(name)}
             found = make_idl_struct(name.rpartition("/")[2] + "_", dds_type(name), annotations)
             self._classes[name] = found
+        return found
+
+    def wrapped(self, name: str) -> type[IdlStruct]:
+        """Return the Cyclone DDS class of a request or reply with its header members."""
+        name = self.check(name)
+        found = self._wrapped.get(name)
+        if found is None:
+            annotations = {"guid_": idl.uint64, "seq_": idl.int64}
+            annotations.update({f: self._idl_field(d) for f, d in self.fields(name)})
+            found = make_idl_struct(name.rpartition("/")[2] + "_", dds_type(name), annotations)
+            self._wrapped[name] = found
         return found
 
     def _idl_field(self, desc: tuple[Any, Any]) -> Any:

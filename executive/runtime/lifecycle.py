@@ -32,6 +32,7 @@ from executive.bus.payloads import Command, ComponentState, Lifecycle
 from executive.bus.security import Credentials
 from executive.bus.session import Bus
 from executive.runtime.processes import ComponentProcess, ProcessThread
+from executive.runtime.ros2_launch import launch_program
 from executive.runtime.spawn import command, describe_exit, signal_group
 from executive.runtime.states import StateRecords
 from knowledge.description import ComponentSpec, RobotDescription
@@ -213,7 +214,9 @@ class LifecycleControl:
         if self.credentials is not None:  # its own user: it may do only a component's part
             login = self.credentials.login(security.component_user(spec.name))
             env[security.ENV_USER], env[security.ENV_PASSWORD] = login.user, login.password
-        process = self.processes.fork(spec.name, spec.command, cwd=self.robot.path.parent, env=env)
+        argv, extra = launch_program(self.robot, spec)  # a ROS 2 program runs under its host
+        env.update(extra)
+        process = self.processes.fork(spec.name, argv, cwd=self.robot.path.parent, env=env)
         run = _Run(process, instance)
         with self._lock:
             slot.run = run

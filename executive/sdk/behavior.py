@@ -72,7 +72,8 @@ class Behavior(Component, ABC):
         """Raise :class:`GoalFailed` if a watched input has gone silent."""
         now = time.monotonic()
         for topic, timeout in self._input_timeout.items():
-            silent = now - max(self._heard.get(topic, 0.0), self._goal_runner.fresh_since)
+            wall = now - max(self._heard.get(topic, 0.0), self._goal_runner.fresh_since)
+            silent = self.clock.robot(wall)  # the timeout is robot time
             if silent > timeout:
                 raise GoalFailed(f"no {topic} for {silent:.1f} s")
 
@@ -144,5 +145,6 @@ class Behavior(Component, ABC):
 
     @final
     def sleep(self, seconds: float) -> None:
-        """Sleep ``seconds`` of running time (time paused does not count)."""
+        """Sleep ``seconds`` of running robot time (time paused does not count; with
+        ``DURA_TIME_SCALE=N`` it takes 1/N of that on the wall clock)."""
         self._goal_runner.sleep(seconds)

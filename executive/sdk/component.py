@@ -40,6 +40,7 @@ from typing import Any, ClassVar, TypeVar, final
 from executive.bus import keys
 from executive.bus.api.components import COMPONENT_ACHIEVE, Achievement
 from executive.bus.api.planning import STATE_SET, STATE_UNSET, FactChange
+from executive.bus.clock import Clock, system_clock
 from executive.bus.payloads import ComponentPhase
 from executive.bus.security import ENV_PASSWORD, ENV_USER, Login
 from executive.bus.session import Bus, Message
@@ -103,8 +104,9 @@ class Component:
         self.params: dict[str, Any] = {}
         self.achievements: dict[str, Any] = {}
         self.log = logging.getLogger(f"dura.component.{name}")
+        self.clock: Clock = system_clock()  # robot time (DURA_TIME_SCALE)
         self._framework = Framework(self)
-        self.faults = FaultInjector(on_hang=self._framework.hang)
+        self.faults = FaultInjector(on_hang=self._framework.hang, clock=self.clock)
 
     # --- hooks ------------------------------------------------------------------------
 
@@ -213,14 +215,15 @@ class Component:
 
     @final
     def at_rate(self, hz: float, step: Callable[[], None]) -> None:
-        """Call ``step`` ``hz`` times a second while running (held while paused).
+        """Call ``step`` ``hz`` times a second of robot time while running (held while
+        paused): with ``DURA_TIME_SCALE=N``, N times as often on the wall clock.
 
         Deadlines are absolute, so the rate does not drift; a loop that falls more
         than a period behind skips ahead instead of bursting.
         """
         if hz <= 0:
             raise ComponentError(f"a rate must be positive, not {hz}")
-        period = 1.0 / hz
+        period = self.clock.wall(1.0 / hz)
         framework = self._framework
 
         def loop() -> None:

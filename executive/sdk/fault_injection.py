@@ -19,6 +19,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
+from executive.bus.clock import Clock, system_clock
 from knowledge.errors import ComponentError
 
 log = logging.getLogger("dura.faults")
@@ -88,15 +89,17 @@ class FaultInjector:
         on_hang: called (on any thread) to make the component stop responding.
     """
 
-    def __init__(self, on_hang: Callable[[], None]) -> None:
+    def __init__(self, on_hang: Callable[[], None], clock: Clock | None = None) -> None:
         self._on_hang = on_hang
+        self._clock = clock or system_clock()
         self._active: dict[FaultMode, Fault] = {}
         self._lock = threading.Lock()
         self._ballast: list[bytes] = []
 
     def inject(self, fault: Fault) -> None:
-        """Make a fault strike now, or after ``fault.after`` seconds."""
-        delay = max(fault.after, CRASH_DELAY if fault.mode is FaultMode.CRASH else 0.0)
+        """Make a fault strike now, or after ``fault.after`` seconds (robot time)."""
+        after = self._clock.wall(fault.after)
+        delay = max(after, CRASH_DELAY if fault.mode is FaultMode.CRASH else 0.0)
         if delay > 0:
             timer = threading.Timer(delay, self._strike, (fault,))
             timer.daemon = True
@@ -137,7 +140,7 @@ class FaultInjector:
 
     def stamp(self, stamp: float) -> float:
         fault = self._active.get(FaultMode.STALE_TIMESTAMPS)
-        return stamp - fault.age if fault is not None else stamp
+        return stamp - self._clock.wall(fault.age) if fault is not None else stamp
 
     def _spin(self) -> None:
         while FaultMode.HIGH_CPU in self._active:

@@ -86,9 +86,9 @@ class GoalRunner:
                 raise GoalCancelled("stopped" if framework.ended else "cancelled")
 
     def sleep(self, seconds: float) -> None:
-        """Sleep ``seconds`` of running time (time paused does not count)."""
+        """Sleep ``seconds`` of running robot time (time paused does not count)."""
         framework = self.framework
-        remaining = seconds
+        remaining = self.behavior.clock.wall(seconds)
         while True:
             self.checkpoint()
             if remaining <= 0:

@@ -18,13 +18,20 @@ from executive.planning.task_runner import StepReport, StepTask, TaskRunner
 from executive.tasks.executor import TaskExecutor
 from executive.tasks.task import TaskEnd, TaskHandle, TaskPhase
 from knowledge.description import RobotDescription
-from knowledge.errors import DuraError
+from knowledge.errors import ConfigError, DuraError
 
 
 def behavior_goal(robot: RobotDescription, step: Step) -> dict[str, Any]:
-    """The goal a step's behavior gets: each field from a parameter or a constant."""
-    bindings = step.bindings
-    return {name: arg.resolve(bindings) for name, arg in robot.tasks[step.action].goal.items()}
+    """The goal a step's behavior gets: each field from a parameter, a property of the
+    object a parameter names (``?to.pose``), or a constant.
+
+    Raises:
+        ConfigError: an object without the property a field takes.
+    """
+    bindings, objects = step.bindings, robot.objects
+    return {
+        name: arg.resolve(bindings, objects) for name, arg in robot.tasks[step.action].goal.items()
+    }
 
 
 class _StepTask(StepTask):
@@ -42,6 +49,19 @@ class _StepTask(StepTask):
 
     def cancel(self) -> None:
         self.handle.cancel("the plan no longer needs it")
+
+
+class _Unrun(StepTask):
+    """A step whose task could not even be asked for (its failure is reported)."""
+
+    def pause(self) -> None:
+        pass
+
+    def resume(self) -> None:
+        pass
+
+    def cancel(self) -> None:
+        pass
 
 
 class PlanTasks(TaskRunner):
@@ -70,9 +90,14 @@ class PlanTasks(TaskRunner):
                 report.failed(f"cancelled: {handle.reason}")
             seen.add(phase)
 
+        try:
+            goal = behavior_goal(self.robot, step)
+        except ConfigError as e:
+            report.failed(str(e))  # the planner plans again, with the reason
+            return _Unrun()
         handle = self.tasks.start_task(
             behavior.name,
-            behavior_goal(self.robot, step),
+            goal,
             name=step.label,
             duration=step.duration,
             listener=changed,

@@ -30,28 +30,33 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from executive.testing.harness import GoalEnded, RobotProcess, robot_variant
+from executive.testing.harness import GoalEnded, RobotProcess, WaitTimedOut, robot_variant
 
 if TYPE_CHECKING:
     from monitoring.timeline import Timeline
 
-__all__ = ["GoalEnded", "RobotProcess", "dura_replay", "dura_robot"]
+__all__ = ["GoalEnded", "RobotProcess", "WaitTimedOut", "dura_replay", "dura_robot"]
 
 
 @pytest.fixture
 def dura_robot(tmp_path: Path) -> Iterator[Callable[..., RobotProcess]]:
-    """Start robots: ``dura_robot(description, name="robot", changes=None)`` → a running
-    RobotProcess. ``changes`` modify a copy of the description, nested like its YAML
-    (``{"behaviors": {"move_to": {"max_restarts": 0}}}``)."""
+    """Start robots: ``dura_robot(description, name="robot", changes=None,
+    time_scale=None)`` → a running RobotProcess. ``changes`` modify a copy of the
+    description, nested like its YAML (``{"behaviors": {"move_to": {"max_restarts":
+    0}}}``); ``time_scale=10`` runs robot time ten times faster than the wall clock
+    (default: ``DURA_TIME_SCALE`` of the test's environment, else 1)."""
     started: list[RobotProcess] = []
 
     def start(
-        description: str | Path, name: str = "robot", changes: Mapping[str, Any] | None = None
+        description: str | Path,
+        name: str = "robot",
+        changes: Mapping[str, Any] | None = None,
+        time_scale: float | None = None,
     ) -> RobotProcess:
         folder = tmp_path / name
         if changes:
             description = robot_variant(Path(description), folder / "description", changes)
-        robot = RobotProcess(Path(description), folder)
+        robot = RobotProcess(Path(description), folder, time_scale=time_scale)
         started.append(robot)
         robot.start()
         return robot

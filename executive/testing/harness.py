@@ -27,6 +27,8 @@ import yaml
 
 from executive.bus import security
 from executive.bus.api import planning
+from executive.bus.api.components import COMPONENT_LIST
+from executive.bus.clock import SCALE_VARIABLE, Clock
 from executive.bus.keys import api, component
 from executive.bus.payloads import Command
 from executive.bus.security import Login
@@ -82,6 +84,10 @@ class GoalEnded(AssertionError):
     """A goal ended other than expected, or did not end in time (a test failure)."""
 
 
+class WaitTimedOut(AssertionError):
+    """What a test waited for did not happen in time (a test failure)."""
+
+
 class RobotProcess:
     """The executive of one robot, as a child process (see the module docstring).
 
@@ -90,6 +96,9 @@ class RobotProcess:
         folder: where the knowledge base, the logs and the executive's output go.
         endpoint: where the executive listens (default: a free loopback port).
         run_args: more arguments of ``dura run`` (e.g. ``["--record", "run.mcap"]``).
+        time_scale: robot time runs this many times faster than the wall clock, in the
+            executive and its components (``DURA_TIME_SCALE``); timeouts given to the
+            ``wait_*`` methods stay wall-clock seconds.
     """
 
     def __init__(
@@ -98,12 +107,16 @@ class RobotProcess:
         folder: Path,
         endpoint: str | None = None,
         run_args: Sequence[str] = (),
+        *,
+        time_scale: float | None = None,
     ) -> None:
+        self.clock = Clock(time_scale) if time_scale is not None else Clock.from_environment()
         self.description = Path(description).resolve()
         self.robot = load_robot(self.description)
         self.folder = Path(folder)
         self.folder.mkdir(parents=True, exist_ok=True)
         self.endpoint = endpoint or free_endpoint()
+        self._own_endpoint = endpoint is None  # chosen here: another may be chosen on a clash
         self.run_args = tuple(run_args)
         self.kb_path = self.folder / f"{self.robot.name}.db"
         self.output = self.folder / "executive.log"
@@ -119,22 +132,30 @@ class RobotProcess:
     def __exit__(self, *exc: object) -> None:
         self.stop()
 
-    def start(self, timeout: float = START_TIMEOUT) -> None:
+    def start(self, timeout: float = START_TIMEOUT, *, tries: int = 3) -> None:
         """Start the executive and wait until its bus API answers."""
         if self._process is not None:
             raise DuraError(f"the executive of '{self.robot.name}' runs already")
         argv = [sys.executable, "-m", "executive.cli", "run", str(self.description)]
         argv += ["--endpoint", self.endpoint, "--db", str(self.kb_path)]
         argv += ["--log-dir", str(self.folder / "logs"), "--grace", "1", *self.run_args]
+        env = {**os.environ, **self.clock.environment()}
+        if not self.clock.scaled:
+            env.pop(SCALE_VARIABLE, None)
         with self.output.open("ab") as out:
             self._process = subprocess.Popen(
-                argv, cwd=self.folder, stdout=out, stderr=subprocess.STDOUT, env=os.environ.copy()
+                argv, cwd=self.folder, stdout=out, stderr=subprocess.STDOUT, env=env
             )
         deadline = time.monotonic() + timeout
         while True:
             if self._process.poll() is not None:
                 code = self._process.returncode
                 self._close()
+                if self._own_endpoint and "Address already in use" in self.log_tail(3) and tries:
+                    # another process took the free port between our look and its bind
+                    self.endpoint = free_endpoint()
+                    self.start(timeout, tries=tries - 1)
+                    return
                 raise DuraError(f"the executive exited with {code} at start:\n{self.log_tail()}")
             try:
                 if self._bus is None:
@@ -178,6 +199,16 @@ class RobotProcess:
         """The operator's login to this robot's bus (its credentials are in the folder)."""
         return security.find_login(self.robot.name, security.OPERATOR, [self.folder])
 
+    @property
+    def credentials(self) -> Path:
+        """The robot's bus credentials, as ``dura`` commands run elsewhere need them
+        (``DURA_BUS_CREDENTIALS``)."""
+        return security.credentials_file(self.folder, self.robot.name)
+
+    def environment(self) -> dict[str, str]:
+        """The environment for a ``dura`` command run against this robot from any folder."""
+        return {**os.environ, security.ENV_CREDENTIALS: str(self.credentials)}
+
     def _close(self) -> None:
         if self._bus is not None:
             self._bus.close()
@@ -207,10 +238,16 @@ class RobotProcess:
         return self.bus.request(api(verb), dict(payload or {}), timeout=timeout)
 
     def submit_goal(
-        self, expression: str, *, priority: int = 0, deadline: float | None = None
+        self,
+        expression: str,
+        *,
+        priority: int = 0,
+        deadline: float | None = None,
+        keep: bool = False,
     ) -> int:
-        """Submit a goal; returns its id. Raises BusError if the executive refuses it."""
-        request = planning.GoalAdd(expression, priority, deadline)
+        """Submit a goal (``keep``: a maintenance goal); returns its id. Raises BusError if
+        the executive refuses it."""
+        request = planning.GoalAdd(expression, priority, deadline, keep=keep)
         return int(planning.GOAL_ADD.call(self.bus, request).goal["id"])
 
     def goal(self, goal_id: int) -> dict[str, Any]:
@@ -235,16 +272,70 @@ class RobotProcess:
             now = GoalState(goal["state"])
             if now is wanted:
                 return goal
-            if not now.is_open or time.monotonic() > deadline:
+            ended = not now.is_open and now is not GoalState.UNREACHABLE
+            if ended or time.monotonic() > deadline:
                 why = f": {goal['reason']}" if goal["reason"] else ""
-                happened = "\n".join(
-                    f"  {e['kind']} {e['subject']} {e['data']}" for e in self.events()[-15:]
-                )
                 raise GoalEnded(
                     f"goal {goal_id} {goal['expression']} is {now.value}{why}, not "
-                    f"{wanted.value}; the latest events:\n{happened}"
+                    f"{wanted.value}; the latest events:\n{self._recent()}"
                 )
             time.sleep(0.05)
+
+    def wait_for_component(
+        self, name: str, state: str = "ready", timeout: float = 60.0
+    ) -> dict[str, Any]:
+        """Wait until the launcher reports a component in ``state`` (``ready``: started
+        and configured, so it takes faults and goals); returns its state payload.
+
+        Raises:
+            WaitTimedOut: not within ``timeout`` seconds (with its last state and the
+                latest events).
+            DuraError: the robot has no such component.
+        """
+        if name not in self.robot.components:
+            raise DuraError(f"robot '{self.robot.name}' has no component '{name}'")
+        deadline = time.monotonic() + timeout
+        while True:
+            found = next((c for c in self.components() if c.get("component") == name), {})
+            if found.get("state") == state:
+                return found
+            if time.monotonic() > deadline:
+                raise WaitTimedOut(
+                    f"component {name} is {found.get('state', 'unknown')}, not {state}, "
+                    f"after {timeout:g} s; the latest events:\n{self._recent()}"
+                )
+            time.sleep(0.05)
+
+    def wait_for_event(
+        self, kind: str, subject: str = "", *, after: int = 0, timeout: float = 60.0
+    ) -> dict[str, Any]:
+        """Wait for the first event of ``kind`` whose subject contains ``subject``,
+        logged after the event numbered ``after``; returns it.
+
+        Raises:
+            WaitTimedOut: none within ``timeout`` seconds (with the latest events).
+        """
+        deadline = time.monotonic() + timeout
+        while True:
+            query = planning.EventQuery(after=after, limit=10_000, kind=kind, oldest=True)
+            for event in planning.EVENTS.call(self.bus, query).events:
+                if subject in event["subject"]:
+                    return event
+            if time.monotonic() > deadline:
+                raise WaitTimedOut(
+                    f"no {kind} event{f' about {subject}' if subject else ''} within "
+                    f"{timeout:g} s; the latest events:\n{self._recent()}"
+                )
+            time.sleep(0.05)
+
+    def _recent(self, count: int = 15) -> str:
+        return "\n".join(
+            f"  {e['kind']} {e['subject']} {e['data']}" for e in self.events()[-count:]
+        )
+
+    def components(self) -> list[dict[str, Any]]:
+        """Every component's state payload (``component``, ``state``, ``pid``, ...)."""
+        return COMPONENT_LIST.call(self.bus).components
 
     def cancel_goal(self, goal_id: int) -> None:
         planning.GOAL_CANCEL.call(self.bus, planning.GoalId(goal_id))
@@ -266,7 +357,12 @@ class RobotProcess:
         return [f["text"] for f in reply.facts]
 
     def set_fact(self, fact: str) -> None:
+        """Make a fact true (or set a value: ``(= (battery) 80)``), as ``dura state set``."""
         planning.STATE_SET.call(self.bus, planning.FactChange(fact))
+
+    def unset_fact(self, fact: str) -> None:
+        """Make a fact false, as ``dura state unset``."""
+        planning.STATE_UNSET.call(self.bus, planning.FactChange(fact))
 
     def status(self) -> dict[str, Any]:
         return planning.STATUS.call(self.bus).to_payload()

@@ -27,7 +27,7 @@ class GoalTables(EventLog):
     def _goal(r: sqlite3.Row) -> Goal:
         return Goal(
             r["id"], r["expression"], GoalState(r["state"]), r["priority"], r["deadline"],
-            r["source"], r["reason"], r["created"], r["updated"],
+            r["source"], r["reason"], r["created"], r["updated"], bool(r["keep"]),
         )  # fmt: skip
 
     def add_goal(
@@ -37,16 +37,19 @@ class GoalTables(EventLog):
         priority: int = 0,
         deadline: float | None = None,
         source: str = "user",
+        keep: bool = False,
     ) -> Goal:
         now = time.time()
         with self.transaction() as db:
             cursor = db.execute(
-                "INSERT INTO goals(expression, state, priority, deadline, source, created, updated)"
-                " VALUES (?, ?, ?, ?, ?, ?, ?)",
-                (expression, GoalState.PENDING.value, priority, deadline, source, now, now),
-            )
+                "INSERT INTO goals(expression, state, priority, deadline, source, created,"
+                " updated, keep) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+                (expression, GoalState.PENDING.value, priority, deadline, source, now, now,
+                 int(keep)),
+            )  # fmt: skip
             goal_id = int(cursor.lastrowid or 0)
-            self.log_event("GOAL_ADDED", f"goal {goal_id}", {"expression": expression})
+            data = {"expression": expression, **({"keep": True} if keep else {})}
+            self.log_event("GOAL_ADDED", f"goal {goal_id}", data)
         return self.goal(goal_id)
 
     def goal(self, goal_id: int) -> Goal:
@@ -73,11 +76,11 @@ class GoalTables(EventLog):
             KnowledgeError: no such goal, or its state may not change to ``state``.
         """
         with self.transaction() as db:
-            row = db.execute("SELECT state FROM goals WHERE id = ?", (goal_id,)).fetchone()
+            row = db.execute("SELECT state, keep FROM goals WHERE id = ?", (goal_id,)).fetchone()
             if row is None:
                 raise KnowledgeError(f"no goal {goal_id}")
             current = GoalState(row[0])
-            if not current.can_become(state):
+            if not current.can_become(state, keep=bool(row[1])):
                 raise KnowledgeError(
                     f"goal {goal_id}: cannot go from {current.value} to {state.value}"
                 )

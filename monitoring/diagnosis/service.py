@@ -87,6 +87,7 @@ class DiagnosisService(Service):
         self._entities = [
             bus.subscribe(OBSERVATIONS, self._on_observation),
             api.DIAGNOSIS_MODEL_CHANGE.serve(bus, self._on_model),
+            api.DIAGNOSIS_EXONERATE.serve(bus, self._on_exonerate),
         ]
 
     def stop(self) -> None:
@@ -154,6 +155,20 @@ class DiagnosisService(Service):
             log.info("model update refused: %s", e)
             return api.ModelReply(False, error=str(e))
         return api.ModelReply(True, model.to_payload())
+
+    def _on_exonerate(self, request: api.ExonerationChange) -> api.Exoneration:
+        """Switch exoneration (an OK topic observation clears its topics) at run time; the
+        diagnosis is computed again at once. The switch lasts until the service stops."""
+        wanted = request.on
+        with self._changed:
+            if wanted is None or wanted == self.engine.exonerate:
+                return api.Exoneration(self.engine.exonerate)
+            self.engine.exonerate = wanted
+            self._dirty = True
+            self._changed.notify()
+        log.info("exoneration %s", "on" if wanted else "off")
+        self.context.kb.log_event("EXONERATION", "diagnosis", {"on": wanted})
+        return api.Exoneration(wanted)
 
     # --- the diagnosing thread ----------------------------------------------------------
 

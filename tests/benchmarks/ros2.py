@@ -15,13 +15,20 @@ measured frequency against the publisher's own rate, this process's CPU (all its
 threads: DDS's or Zenoh's reception included), the delay from a sample's source
 timestamp to its handler here (p50/p95), and the time until the timeout observer of
 one topic reports the publisher's stop. A transport's steps stop after the first N
-whose error exceeds 1 %. Last, what decoding a message costs when an observer reads
-its fields (frequency and timeout observers never decode).
+whose error exceeds 1 %. Then, what decoding a message costs when an observer reads
+its fields (frequency and timeout observers never decode). Last, round trips of the
+services and actions dura calls, to the example's stand-in nodes in another process
+(``--rpc`` alone runs only these): a service call (std_srvs/Trigger, with
+rmw_cyclonedds' request header), a lifecycle transition (get_state, change_state), an
+action goal accepted (send_goal), run to its result when it has nothing to do
+(send_goal, get_result), and cancelled (cancel_goal until the result says CANCELED).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import json
 import os
 import random
@@ -182,20 +189,125 @@ def decoding() -> list[tuple[str, float]]:
     return out
 
 
+def serve(domain: int) -> None:
+    """Run the stand-in lidar, odometry and navigator until stdin closes."""
+    from examples.ros2.nodes.lidar import Lidar
+    from examples.ros2.nodes.navigator import Navigator
+    from examples.ros2.nodes.odometry import Odometry
+
+    pin(1)
+    nodes = [Lidar(domain, rate=20.0), Odometry(domain), Navigator(domain, speed=1.0)]
+    for node in nodes:
+        node.start()
+    print("ready", flush=True)
+    sys.stdin.read()
+    for node in nodes:
+        node.close()
+
+
+def round_trips(domain: int, count: int) -> list[tuple[str, list[float]]]:
+    """Milliseconds of each kind of call to the stand-in nodes in another process."""
+    from executive.ros2.action import ActionClient, GoalStatus
+    from executive.ros2.lifecycle import LifecycleClient
+    from executive.ros2.participant import Participant
+    from executive.ros2.service import ServiceClient
+    from knowledge.ros2_messages import message_store
+    from tests.conftest import ROOT
+
+    library = TypeLibrary(message_store("jazzy", [ROOT / "examples" / "ros2" / "msgs"]), "jazzy")
+    nodes = subprocess.Popen(
+        [sys.executable, "-m", "tests.benchmarks.ros2", "--serve", str(domain)],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    assert nodes.stdin is not None and nodes.stdout is not None
+    assert nodes.stdout.readline().strip() == "ready"
+    out: dict[str, list[float]] = {}
+
+    def timed(label: str, call: Any) -> Any:
+        began = time.perf_counter()
+        found = call()
+        out.setdefault(label, []).append((time.perf_counter() - began) * 1000)
+        return found
+
+    try:
+        with Participant(domain, name="bench") as participant:
+            trigger = ServiceClient(participant, library, "/odometry/reset", "std_srvs/srv/Trigger")
+            node = LifecycleClient(participant, library, "/navigator")
+            action = ActionClient(participant, library, "/navigate_to_pose",
+                                  "nav2_msgs/action/NavigateToPose")  # fmt: skip
+            assert trigger.wait(20) and node.wait(20) and action.wait(20)
+            for _ in range(count):
+                timed("service call (Trigger)", lambda: trigger.call(timeout=5))
+            for _ in range(max(1, count // 10)):
+                timed("lifecycle configure + activate", lambda: node.drive("start", timeout=5))
+                timed("lifecycle deactivate + cleanup", lambda: node.drive("stop", timeout=5))
+            node.drive("start", timeout=5)
+            here = {"pose": {"pose": {"position": {"x": 0.0}}}}
+            far = {"pose": {"pose": {"position": {"x": 50.0}}}}
+            for _ in range(max(1, count // 4)):
+                back = action.send(here, timeout=5).result(10)  # where the last one stopped
+                assert back is not None and back.status is GoalStatus.SUCCEEDED
+                goal = timed(
+                    "action goal accepted (send_goal)", lambda: action.send(far, timeout=5)
+                )
+                assert goal.accepted
+                # the stand-in looks for a cancellation ten times a second; the answer is at once
+                timed("action cancel answered (cancel_goal)", lambda g=goal: g.cancel(5))
+                cancelled = goal.result(10)
+                assert cancelled is not None and cancelled.status is GoalStatus.CANCELED
+                action.send(here, timeout=5).result(10)
+                began = time.perf_counter()
+                result = action.send(here, timeout=5).result(10)
+                out.setdefault("action goal to its result (nothing to do)", []).append(
+                    (time.perf_counter() - began) * 1000
+                )
+                assert result is not None and result.status is GoalStatus.SUCCEEDED
+            action.close()
+            node.close()
+            trigger.close()
+    finally:
+        nodes.stdin.close()
+        nodes.wait(30)
+        nodes.stdout.close()
+    return list(out.items())
+
+
+def print_round_trips(domain: int, count: int) -> None:
+    print("round trips to ROS 2 nodes in another process (loopback DDS), ms:")
+    print(f"  {'call':<42} {'n':>4}  {'p50':>6}  {'p95':>6}  {'max':>6}")
+    for label, times in round_trips(domain, count):
+        p95 = statistics.quantiles(times, n=20)[18] if len(times) > 1 else times[0]
+        print(f"  {label:<42} {len(times):>4}  {statistics.median(times):>6.2f}  {p95:>6.2f}  "
+              f"{max(times):>6.2f}")  # fmt: skip
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     parser.add_argument("--duration", type=float, default=6.0, help="seconds per step (6)")
     parser.add_argument("--topics", default="1,10,20,30", help="topic counts to try (1,10,20,30)")
+    parser.add_argument("--rpc", action="store_true", help="only the services and actions")
+    parser.add_argument("--calls", type=int, default=200, help="service calls to time (200)")
     parser.add_argument("--publish", nargs=3, help=argparse.SUPPRESS)
+    parser.add_argument("--serve", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.publish:
         domain, topics, duration = args.publish
         publisher(int(domain), int(topics), float(duration))
         return
+    if args.serve is not None:
+        serve(args.serve)
+        return
     pin(0)
     from tests.executive.ros2.peer import LOOPBACK
 
     domain = random.SystemRandom().randint(1, 230)
+    if args.rpc:
+        with tempfile.TemporaryDirectory() as folder:
+            config = Path(folder) / "cyclonedds.xml"
+            config.write_text(LOOPBACK)
+            os.environ["CYCLONEDDS_URI"] = config.as_uri()
+            print_round_trips(domain, args.calls)
+        return
     print(f"observers on one core (CPU 0), publisher on CPU 1; topics at {RATE:g} Hz each")
     print(
         f"{'transport':>9}  {'topics':>6}  {'msg/s':>8}  {'max error %':>11}  {'CPU %':>6}  "
@@ -227,6 +339,9 @@ def main() -> None:
                 if row["lag95"] <= KEEPING_UP:
                     kept_up = max(kept_up, row["rate"])
             best[name] = (accurate, kept_up)
+        rpc = io.StringIO()
+        with contextlib.redirect_stdout(rpc):  # printed after the summary
+            print_round_trips(domain, args.calls)
     for name, (accurate, kept_up) in best.items():
         print(
             f"{name}: max aggregate rate with every frequency within 1 %: {accurate:.0f} msg/s; "
@@ -238,6 +353,7 @@ def main() -> None:
     print("decoding a ROS 2 message into the dict observers read (scores, timestamp, movement):")
     for label, micros in decoding():
         print(f"  {label:<40} {micros:>7.1f} us")
+    print(rpc.getvalue(), end="")
 
 
 if __name__ == "__main__":

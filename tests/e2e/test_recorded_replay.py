@@ -12,7 +12,6 @@ the fault by hand, so that the diagnosis holds long enough to compare.
 
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 from collections.abc import Callable
@@ -57,7 +56,7 @@ def record(robot: RobotProcess, out: Path) -> subprocess.Popen[str]:
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        env={**robot.environment(), "PYTHONPATH": str(ROOT)},
     )
     assert process.stdout is not None
     assert process.stdout.readline().startswith("dura: recording robot 'usecase'")

@@ -29,7 +29,9 @@ def cli(robot: RobotProcess) -> Dura:
     def dura(*args: str) -> subprocess.CompletedProcess[str]:
         argv = [sys.executable, "-m", "executive.cli", *args]
         argv += ["--robot", str(robot.description), "--endpoint", robot.endpoint]
-        return subprocess.run(argv, capture_output=True, text=True, timeout=60, check=False)
+        return subprocess.run(
+            argv, capture_output=True, text=True, timeout=60, check=False, env=robot.environment()
+        )
 
     return dura
 

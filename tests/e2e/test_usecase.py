@@ -2,7 +2,9 @@
 scheduler, observers, diagnosis and repair, driven through the ``dura_robot`` fixture
 (the pytest plugin users test their own robots with).
 
-Each test reads what happened from the executive's event log, not from timing.
+Each test reads what happened from the executive's event log, not from timing. Robot
+time runs ten times faster than the wall clock (``time_scale``), as in the robot's own
+tests a user writes.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from tests.conftest import USECASE, wait_for
 pytestmark = pytest.mark.slow
 
 Start = Callable[..., RobotProcess]
+FAST = 10.0  # robot time ten times faster than the wall clock
 
 
 def kinds(robot: RobotProcess, subject: str = "") -> list[str]:
@@ -40,7 +43,7 @@ def first(events: list[dict[str, Any]], kind: str, subject: str = "") -> int:
 
 
 def test_goals_are_planned_executed_and_achieved(dura_robot: Start) -> None:
-    robot = dura_robot(USECASE)
+    robot = dura_robot(USECASE, time_scale=FAST)
     pictures = robot.submit_goal("(and (picture_taken lab) (picture_taken office))")
     home = robot.submit_goal("(robot_at dock)")  # holds now, and must hold again at the end
     robot.wait_for(pictures, "achieved", timeout=90)
@@ -51,7 +54,9 @@ def test_goals_are_planned_executed_and_achieved(dura_robot: Start) -> None:
 
 
 def test_a_failed_task_is_replanned_and_the_goal_achieved(dura_robot: Start) -> None:
-    robot = dura_robot(USECASE, changes={"behaviors": {"move_to": {"max_restarts": 0}}})
+    # a move takes 20 robot seconds (2 s of wall time): time to crash it on the way
+    changes = {"behaviors": {"move_to": {"max_restarts": 0, "params": {"duration": 20.0}}}}
+    robot = dura_robot(USECASE, changes=changes, time_scale=FAST)
     goal = robot.submit_goal("(robot_at lab)")
     assert wait_for(lambda: "START" in kinds(robot, "move_to"), 60)
     robot.inject_fault("move_to", "crash")
@@ -66,7 +71,7 @@ def test_a_failed_task_is_replanned_and_the_goal_achieved(dura_robot: Start) -> 
 def test_an_unreachable_goal_is_reported_while_the_others_are_achieved(
     dura_robot: Start,
 ) -> None:
-    robot = dura_robot(USECASE)
+    robot = dura_robot(USECASE, time_scale=FAST)
     reachable = robot.submit_goal("(picture_taken lab)")
     unreachable = robot.submit_goal("(picture_taken dock)", priority=5)
     robot.wait_for(reachable, "achieved", timeout=90)
@@ -76,9 +81,9 @@ def test_an_unreachable_goal_is_reported_while_the_others_are_achieved(
 
 
 def test_a_critical_task_is_not_interrupted_by_replanning(dura_robot: Start) -> None:
-    robot = dura_robot(
-        USECASE, changes={"behaviors": {"take_picture": {"params": {"duration": 3.0}}}}
-    )
+    # a picture takes 30 robot seconds (3 s of wall time): time to add a goal meanwhile
+    changes = {"behaviors": {"take_picture": {"params": {"duration": 30.0}}}}
+    robot = dura_robot(USECASE, changes=changes, time_scale=FAST)
     first_goal = robot.submit_goal("(picture_taken lab)")
     assert wait_for(lambda: "START" in kinds(robot, "take_picture(lab)"), 60)
     second_goal = robot.submit_goal("(picture_taken office)")
@@ -96,7 +101,7 @@ def test_a_critical_task_is_not_interrupted_by_replanning(dura_robot: Start) -> 
 
 
 def test_a_killed_executive_restarts_and_continues_its_open_goals(dura_robot: Start) -> None:
-    robot = dura_robot(USECASE)
+    robot = dura_robot(USECASE, time_scale=FAST)
     goal = robot.submit_goal("(and (picture_taken office) (robot_at dock))")
     assert wait_for(lambda: "START" in kinds(robot, "move_to"), 60)
     pids = [c["pid"] for c in robot.request("component/list")["components"] if c["pid"]]
@@ -108,3 +113,15 @@ def test_a_killed_executive_restarts_and_continues_its_open_goals(dura_robot: St
     robot.wait_for(goal, "achieved", timeout=120)
     assert kinds(robot).count("EXECUTIVE_STARTED") == 2
     assert "(picture_taken office)" in robot.facts("picture_taken")
+
+
+def test_the_readme_example_waits_for_lidar_before_crashing_it(dura_robot: Start) -> None:
+    # the README's planner-in-the-loop test, as written there (with the use case robot)
+    robot: RobotProcess = dura_robot(USECASE, time_scale=10)
+    goal = robot.submit_goal("(robot_at office)")
+    robot.wait_for_component("lidar", "ready", timeout=60)  # started for the drive
+    robot.inject_fault("lidar", "crash")  # any mode of the fault injection table
+    robot.wait_for(goal, "achieved", timeout=90)  # else: the reason and the latest events
+    assert robot.facts("robot_at") == ["(robot_at office)"]
+    restarted = robot.wait_for_event("REPAIR", "lidar", timeout=30)
+    assert restarted["data"]["restart"] is True

@@ -56,3 +56,54 @@ def test_a_problem_is_parsed_against_the_domain_and_its_errors_name_the_problem(
     bad = "(define (problem p) (:domain usecase)\n (:objects a - place)\n (:init (robot_at b)))"
     with pytest.raises(DomainError, match=r"^world.pddl:3: PDDL: "):
         parse_problem(DOMAIN, bad, "world.pddl")
+
+
+def test_a_durative_action_keeps_its_duration_as_written_and_an_instant_one_has_none(
+    tmp_path: Path,
+) -> None:
+    assert read_domain(DOMAIN).actions["move_to"].duration == (
+        "(= ?duration (travel_time ?from ?to))"
+    )
+    path = tmp_path / "d.pddl"
+    path.write_text(
+        "(define (domain d) (:requirements :strips :typing :durative-actions)\n"
+        " (:types t)\n (:predicates (p ?x - t))\n"
+        " (:durative-action slow :parameters (?x - t) ; (not the duration)\n"
+        "   :duration (and (>= ?duration 2)   ; a comment (with parentheses\n"
+        "                  (<= ?duration 5))\n"
+        "   :condition (at start (p ?x)) :effect (at end (not (p ?x))))\n"
+        " (:action quick :parameters (?x - t) :precondition (p ?x) :effect (not (p ?x))))"
+    )
+    actions = read_domain(path).actions
+    assert actions["slow"].duration == "(and (>= ?duration 2) (<= ?duration 5))"
+    assert actions["quick"].duration is None
+
+
+def test_an_object_named_like_its_type_is_accepted_as_rosplan_writes_it(tmp_path: Path) -> None:
+    from tests.executive.planning.planning_cases import DRIVERLOG_DOMAIN, DRIVERLOG_PROBLEM
+
+    domain = tmp_path / "driverlog.pddl"
+    domain.write_text(DRIVERLOG_DOMAIN)
+    problem = parse_problem(domain, DRIVERLOG_PROBLEM, "drive1.pddl")
+    assert {o.name: str(o.type) for o in problem.all_objects} == {
+        "driver": "driver", "truck": "truck", "depot": "location", "market": "location"
+    }  # fmt: skip
+
+
+def test_a_name_declared_twice_is_still_refused_at_its_second_line(tmp_path: Path) -> None:
+    from tests.executive.planning.planning_cases import DRIVERLOG_DOMAIN, DRIVERLOG_TWICE
+
+    domain = tmp_path / "driverlog.pddl"
+    domain.write_text(DRIVERLOG_DOMAIN)
+    with pytest.raises(DomainError, match=r"^twice\.pddl:6: PDDL: name 'depot' is declared twice$"):
+        parse_problem(domain, DRIVERLOG_TWICE, "twice.pddl")
+
+
+def test_a_predicate_declared_twice_is_refused_at_its_second_line(tmp_path: Path) -> None:
+    domain = tmp_path / "twice.pddl"
+    domain.write_text(
+        "(define (domain twice)\n  (:requirements :strips)\n  (:predicates\n"
+        "    (ready)\n    (ready)))\n"
+    )
+    with pytest.raises(DomainError, match=r"twice\.pddl:5: PDDL: name 'ready' is declared twice"):
+        read_domain(domain)

@@ -74,7 +74,7 @@ def test_a_cancelled_goal_cannot_be_planned_again(kb: KnowledgeBase) -> None:
     assert [e.kind for e in kb.events()] == ["GOAL_ADDED", "GOAL_CANCELLED"]
 
 
-@pytest.mark.parametrize("end", [s for s in GoalState if not s.is_open])
+@pytest.mark.parametrize("end", [s for s in GoalState if s.is_final])
 def test_a_goal_that_ended_stays_as_it_ended(kb: KnowledgeBase, end: GoalState) -> None:
     goal = kb.add_goal("(a)")
     kb.set_goal_state(goal.id, end)
@@ -82,6 +82,36 @@ def test_a_goal_that_ended_stays_as_it_ended(kb: KnowledgeBase, end: GoalState) 
         with pytest.raises(KnowledgeError, match=f"cannot go from {end.value} to {state.value}"):
             kb.set_goal_state(goal.id, state)
     assert GOAL_TRANSITIONS[end] == frozenset()
+    assert [s for s in GoalState if s.is_final] == [
+        GoalState.ACHIEVED, GoalState.FAILED, GoalState.CANCELLED
+    ]  # fmt: skip
+
+
+def test_an_unreachable_goal_may_be_reposted_get_a_new_reason_or_be_cancelled(
+    kb: KnowledgeBase,
+) -> None:
+    goal = kb.add_goal("(a)")
+    kb.set_goal_state(goal.id, GoalState.UNREACHABLE, "no plan")
+    assert kb.set_goal_state(goal.id, GoalState.UNREACHABLE, "still none").reason == "still none"
+    with pytest.raises(KnowledgeError, match="cannot go from unreachable to achieved"):
+        kb.set_goal_state(goal.id, GoalState.ACHIEVED)
+    assert kb.set_goal_state(goal.id, GoalState.PENDING, "reachable again").state.is_open
+    kb.set_goal_state(goal.id, GoalState.UNREACHABLE, "no plan")
+    assert kb.set_goal_state(goal.id, GoalState.CANCELLED).state is GoalState.CANCELLED
+
+
+def test_an_achieved_maintenance_goal_may_be_reposted_and_a_plain_one_not(
+    kb: KnowledgeBase,
+) -> None:
+    kept = kb.add_goal("(a)", keep=True)
+    once = kb.add_goal("(a)")
+    assert kept.keep and not once.keep
+    for goal in (kept, once):
+        kb.set_goal_state(goal.id, GoalState.ACHIEVED)
+    assert kb.set_goal_state(kept.id, GoalState.PENDING, "stopped holding").state.is_open
+    with pytest.raises(KnowledgeError, match="goal 2: cannot go from achieved to pending"):
+        kb.set_goal_state(once.id, GoalState.PENDING)
+    assert kb.events(kind="GOAL_ADDED")[0].data == {"expression": "(a)", "keep": True}
 
 
 def test_an_open_goal_is_planned_before_it_executes_and_may_be_planned_again(

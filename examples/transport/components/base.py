@@ -3,32 +3,28 @@ Hz and ``battery`` once a second.
 
 The battery drains by ``drain`` percent per second of driving (and ``idle_drain`` at
 rest) and charges by ``charge_rate`` percent per second while a ``charge`` message
-says so (the docking station). Below ``low`` percent the base makes ``(battery_low)``
-true in the robot's world: the integrity goals take it from there. The level starts at
-``battery`` percent and is kept as an achievement while the base is switched off.
+says so (the docking station). The level starts at ``battery`` percent and is kept as
+an achievement while the base is switched off. The robot description's sensing rule
+turns a low level into ``(battery_low)``; the integrity goals take it from there.
 """
 
 from __future__ import annotations
 
-import time
 from typing import Any
 
 from executive.sdk import Functionality, Message
-from knowledge.errors import BusError
 
 
 class Base(Functionality):
     def on_configure(self, params: dict[str, Any], achievements: dict[str, Any]) -> None:
         self.rate = self.param("rate", 20.0)
         self.level = float(achievements.get("battery", self.param("battery", 100.0)))
-        self.low = self.param("low", 20.0)
         self.drain = self.param("drain", 0.5)
         self.idle_drain = self.param("idle_drain", 0.0)
         self.charge_rate = self.param("charge_rate", 10.0)
         self.x = 0.0
         self.linear = 0.0
         self.commanded = self.charging_until = 0.0
-        self.reported_low = False
 
     def on_start(self) -> None:
         self.subscribe("cmd_vel", self.command)
@@ -39,14 +35,14 @@ class Base(Functionality):
     def command(self, message: Message) -> None:
         linear = message.payload.get("linear", 0.0)
         if isinstance(linear, (int, float)):
-            self.linear, self.commanded = float(linear), time.monotonic()
+            self.linear, self.commanded = float(linear), self.clock.monotonic()
 
     def charge(self, message: Message) -> None:
         on = message.payload.get("on") is True
-        self.charging_until = time.monotonic() + 1.0 if on else 0.0
+        self.charging_until = self.clock.monotonic() + 1.0 if on else 0.0
 
     def step(self) -> None:
-        now, dt = time.monotonic(), 1.0 / self.rate
+        now, dt = self.clock.monotonic(), 1.0 / self.rate
         if now - self.commanded > 0.5:  # a command holds for half a second
             self.linear = 0.0
         self.x += self.linear * dt
@@ -60,15 +56,6 @@ class Base(Functionality):
     def report(self) -> None:
         self.publish("battery", {"level": round(self.level, 2)})
         self.achieve("battery", round(self.level, 2))
-        low = self.level < self.low
-        if low and not self.reported_low:
-            try:
-                self.set_fact("(battery_low)")
-                self.reported_low = True
-            except BusError as e:  # the executive may be busy; say it again next time
-                self.log.warning("could not report the low battery: %s", e)
-        elif not low:
-            self.reported_low = False
 
 
 def main() -> None:

@@ -4,7 +4,6 @@ gripper that is switched off holds what it holds (the state is an achievement)."
 
 from __future__ import annotations
 
-import time
 from typing import Any
 
 from executive.sdk import Functionality, Message
@@ -23,11 +22,11 @@ class Gripper(Functionality):
     def command(self, message: Message) -> None:
         close = message.payload.get("close")
         if isinstance(close, bool) and close != self.wanted:
-            self.wanted, self.done_at = close, time.monotonic() + self.actuation
+            self.wanted, self.done_at = close, self.clock.monotonic() + self.actuation
             self.achieve("closed", close)
 
     def report(self) -> None:
-        if time.monotonic() >= self.done_at:
+        if self.clock.monotonic() >= self.done_at:
             self.closed = self.wanted
         self.publish("grip_state", {"closed": self.closed})
 

@@ -5,7 +5,6 @@ at first at the place ``at`` (default ``hall1``)."""
 
 from __future__ import annotations
 
-import time
 from typing import Any
 
 from executive.sdk import Functionality, Message
@@ -26,11 +25,11 @@ class LiftLink(Functionality):
         to = message.payload.get("to")
         if isinstance(to, str) and to != (self.target or self.at):
             self.at, self.target = None, to
-            self.arrives = time.monotonic() + self.travel
+            self.arrives = self.clock.monotonic() + self.travel
             self.achieve("at", to)  # the car gets there, with the link or without it
 
     def report(self) -> None:
-        if self.target is not None and time.monotonic() >= self.arrives:
+        if self.target is not None and self.clock.monotonic() >= self.arrives:
             self.at, self.target = self.target, None
         self.publish("lift_state", {"at": self.at, "moving": self.target is not None})
 

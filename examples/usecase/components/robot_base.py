@@ -8,7 +8,6 @@ the IMU measures.
 from __future__ import annotations
 
 import math
-import time
 from typing import Any
 
 from executive.sdk import FaultMode, Functionality, Message
@@ -33,10 +32,10 @@ class RobotBase(Functionality):
         linear, angular = message.payload.get("linear", 0.0), message.payload.get("angular", 0.0)
         if isinstance(linear, (int, float)) and isinstance(angular, (int, float)):
             self.linear, self.angular = float(linear), float(angular)
-            self.commanded = time.monotonic()
+            self.commanded = self.clock.monotonic()
 
     def step(self) -> None:
-        if time.monotonic() - self.commanded > self.cmd_timeout:
+        if self.clock.monotonic() - self.commanded > self.cmd_timeout:
             self.linear = self.angular = 0.0
         dt = 1.0 / self.rate
         previous = self.linear

@@ -5,7 +5,6 @@ The goal fails when no image newer than the goal came within ``image_timeout`` s
 
 from __future__ import annotations
 
-import time
 from typing import Any
 
 from executive.sdk import Behavior, GoalFailed, Message
@@ -23,13 +22,13 @@ class TakePicture(Behavior):
         self.subscribe("image", self.see)
 
     def see(self, message: Message) -> None:
-        self.latest = (time.monotonic(), message.payload)
+        self.latest = (self.clock.monotonic(), message.payload)
 
     def execute(self, goal: dict[str, Any]) -> dict[str, Any]:
-        began = time.monotonic()
+        began = self.clock.monotonic()
         self.sleep(self.duration)
         while self.latest is None or self.latest[0] < began:
-            if time.monotonic() - began > self.duration + self.image_timeout:
+            if self.clock.monotonic() - began > self.duration + self.image_timeout:
                 raise GoalFailed(f"no image within {self.image_timeout:g} s")
             self.sleep(POLL)
         image = self.latest[1]

@@ -17,6 +17,8 @@ MAX_LOG_LINES = 10_000
 
 @dataclass(frozen=True)
 class ComponentName(Payload):
+    """A component, by name."""
+
     name: Text
 
 
@@ -29,12 +31,16 @@ class ComponentsReply(Payload):
 
 @dataclass(frozen=True)
 class LogQuery(Payload):
+    """The last ``lines`` lines of a component's log."""
+
     name: Text
     lines: Annotated[int, Between(0, MAX_LOG_LINES)] = 50
 
 
 @dataclass(frozen=True)
 class LogReply(Payload):
+    """The last lines of a component's log, and where the log is."""
+
     name: str
     path: str
     lines: list[str]
@@ -97,16 +103,22 @@ class Configure(ComponentCommand):
 
 @dataclass(frozen=True)
 class Start(ComponentCommand):
+    """Start running (after configure)."""
+
     verb = Command.START
 
 
 @dataclass(frozen=True)
 class Pause(ComponentCommand):
+    """Pause until resumed."""
+
     verb = Command.PAUSE
 
 
 @dataclass(frozen=True)
 class Resume(ComponentCommand):
+    """Resume after a pause."""
+
     verb = Command.RESUME
 
 
@@ -120,6 +132,8 @@ class Reconfigure(ComponentCommand):
 
 @dataclass(frozen=True)
 class Stop(ComponentCommand):
+    """Stop and exit."""
+
     verb = Command.STOP
 
 
@@ -135,6 +149,8 @@ class TakeGoal(ComponentCommand):
 
 @dataclass(frozen=True)
 class CancelGoal(ComponentCommand):
+    """Cancel the goal the behavior is carrying out."""
+
     verb = Command.CANCEL
     goal_id: Text
 

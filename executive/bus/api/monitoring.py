@@ -1,12 +1,12 @@
-"""The monitoring services' API: observers at run time (the observer manager) and the
-diagnosis model (the diagnosis engine)."""
+"""The monitoring services' API: observers at run time (the observer manager), the
+diagnosis model and exoneration (the diagnosis engine)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Any
 
-from executive.bus.keys import DIAGNOSIS_MODEL, observers_api
+from executive.bus.keys import DIAGNOSIS_EXONERATION, DIAGNOSIS_MODEL, observers_api
 from executive.bus.schema import Payload, Text
 from executive.bus.verb import Empty, Verb
 
@@ -31,12 +31,16 @@ class ObserverAdd(Payload):
 
 @dataclass(frozen=True)
 class ObserverChange(Payload):
+    """A new configuration for an observer (it keeps its id)."""
+
     id: Text
     config: Any
 
 
 @dataclass(frozen=True)
 class ObserverId(Payload):
+    """An observer, by id (``<component>/<index>`` for those of the robot description)."""
+
     id: Text
 
 
@@ -75,6 +79,21 @@ class ModelReply(Payload):
     error: str = ""
 
 
+@dataclass(frozen=True)
+class ExonerationChange(Payload):
+    """Switch exoneration on or off; without ``on``, only ask."""
+
+    on: bool | None = None
+
+
+@dataclass(frozen=True)
+class Exoneration(Payload):
+    """Whether an OK topic observation means its topics are not abnormal (the thesis'
+    model: off)."""
+
+    on: bool
+
+
 OBSERVER_LIST = Verb(observers_api("list"), Empty, ObserversReply, threaded=False)
 OBSERVER_ADD = Verb(observers_api("add"), ObserverAdd, ObserverActive, threaded=False)
 OBSERVER_CHANGE = Verb(observers_api("change"), ObserverChange, ObserverActive, threaded=False)
@@ -83,3 +102,4 @@ OBSERVER_ACTIVATE = Verb(observers_api("activate"), ObserverId, ObserverActive, 
 OBSERVER_DEACTIVATE = Verb(observers_api("deactivate"), ObserverId, ObserverActive, threaded=False)
 OBSERVER_LATEST = Verb(observers_api("latest"), Empty, LatestReply, threaded=False, timeout=5.0)
 DIAGNOSIS_MODEL_CHANGE = Verb(DIAGNOSIS_MODEL, ModelChange, ModelReply, threaded=False)
+DIAGNOSIS_EXONERATE = Verb(DIAGNOSIS_EXONERATION, ExonerationChange, Exoneration, timeout=10.0)

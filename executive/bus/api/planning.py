@@ -1,4 +1,5 @@
-"""The high level's API: goals, plans, the world's facts and objects, events, status."""
+"""The high level's API: goals, plans, the world's facts and objects, the domain, events,
+status."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from typing import Annotated, Any
 from executive.bus.keys import api
 from executive.bus.schema import Between, Payload, Text
 from executive.bus.verb import Empty, Verb
-from knowledge.records import GoalState
+from knowledge.lifecycle import GoalState
 
 Count = Annotated[int, Between(0, 2**63 - 1)]
 Priority = Annotated[int, Between(-(10**9), 10**9)]  # what the CLI accepts too
@@ -16,16 +17,20 @@ Priority = Annotated[int, Between(-(10**9), 10**9)]  # what the CLI accepts too
 
 @dataclass(frozen=True)
 class GoalAdd(Payload):
-    """A goal expression with its priority, deadline (seconds from now) and source."""
+    """A goal expression with its priority, deadline (seconds from now) and source;
+    ``keep``: a maintenance goal, re-posted whenever it stops holding."""
 
     expression: Text
     priority: Priority = 0
     deadline: float | None = None
     source: str = "user"
+    keep: bool = False
 
 
 @dataclass(frozen=True)
 class GoalId(Payload):
+    """A goal, by id."""
+
     id: int
 
 
@@ -38,11 +43,15 @@ class GoalQuery(Payload):
 
 @dataclass(frozen=True)
 class GoalReply(Payload):
+    """A goal as stored."""
+
     goal: dict[str, Any]
 
 
 @dataclass(frozen=True)
 class GoalsReply(Payload):
+    """Goals as stored, by id."""
+
     goals: list[dict[str, Any]]
 
 
@@ -63,6 +72,32 @@ class PlanReply(Payload):
 
 
 @dataclass(frozen=True)
+class DryRun(Payload):
+    """Plan for the open goals on the live state without executing (seconds to search;
+    the robot's planner timeout without)."""
+
+    timeout: Annotated[float, Between(0.1, 3600.0)] | None = None
+
+
+@dataclass(frozen=True)
+class DryRunReply(Payload):
+    """What the planner would do now: the plan for the goals it reaches (``steps`` as
+    ``dura plan --offline --json`` prints them), the goals that hold already, and why
+    each other goal is unreachable (by id)."""
+
+    status: str
+    engine: str
+    time: float
+    reason: str
+    goals: list[int]
+    planned: list[int]
+    achieved: list[int]
+    unreachable: dict[str, str]
+    steps: list[dict[str, Any]]
+    makespan: float | None = None
+
+
+@dataclass(frozen=True)
 class StateQuery(Payload):
     """Facts matching ``robot_at``, ``(robot_at lab)``, ``(robot_at *)`` (all without)."""
 
@@ -71,6 +106,8 @@ class StateQuery(Payload):
 
 @dataclass(frozen=True)
 class StateReply(Payload):
+    """Facts (name, args, value, text) and objects (name -> type)."""
+
     facts: list[dict[str, Any]]
     objects: dict[str, str]
 
@@ -84,13 +121,40 @@ class FactChange(Payload):
 
 @dataclass(frozen=True)
 class FactReply(Payload):
+    """The fact as it was set or unset."""
+
     fact: dict[str, Any]
 
 
 @dataclass(frozen=True)
 class ObjectAdd(Payload):
+    """An object of a domain type."""
+
     name: Text
     type: Text
+
+
+@dataclass(frozen=True)
+class ObjectName(Payload):
+    """An object of the world, by name."""
+
+    name: Text
+
+
+@dataclass(frozen=True)
+class DomainReply(Payload):
+    """The robot's domain: ``types`` ``{name, parent}``; ``predicates`` and ``functions``
+    ``{name, parameters}`` (their types); ``actions`` ``{name, parameters [[?name, type]],
+    durative, duration (as written), task, behavior, goal (the behavior's goal fields),
+    blocked (why it cannot run now, or null)}``; ``constants`` by name, their types."""
+
+    name: str
+    path: str
+    types: list[dict[str, Any]]
+    predicates: list[dict[str, Any]]
+    functions: list[dict[str, Any]]
+    actions: list[dict[str, Any]]
+    constants: dict[str, str]
 
 
 @dataclass(frozen=True)
@@ -107,6 +171,8 @@ class EventQuery(Payload):
 
 @dataclass(frozen=True)
 class EventsReply(Payload):
+    """Events of the log, oldest first."""
+
     events: list[dict[str, Any]]
 
 
@@ -132,9 +198,13 @@ GOAL_LIST = Verb(api("goal/list"), GoalQuery, GoalsReply)
 GOAL_SHOW = Verb(api("goal/show"), GoalId, GoalHistory)
 GOAL_CANCEL = Verb(api("goal/cancel"), GoalId, GoalReply)
 PLAN_SHOW = Verb(api("plan/show"), Empty, PlanReply)
+PLAN_DRY_RUN = Verb(api("plan/dry-run"), DryRun, DryRunReply, timeout=120.0)
 STATE_GET = Verb(api("state/get"), StateQuery, StateReply)
 STATE_SET = Verb(api("state/set"), FactChange, FactReply)
 STATE_UNSET = Verb(api("state/unset"), FactChange, FactReply)
 OBJECT_ADD = Verb(api("object/add"), ObjectAdd, ObjectAdd)
+# what left the world with the object: the object {name: type} and the facts that named it
+OBJECT_REMOVE = Verb(api("object/remove"), ObjectName, StateReply)
+DOMAIN_SHOW = Verb(api("domain/show"), Empty, DomainReply)
 EVENTS = Verb(api("events"), EventQuery, EventsReply)
 STATUS = Verb(api("status"), Empty, StatusReply)

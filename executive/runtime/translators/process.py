@@ -39,6 +39,11 @@ class ProcessTranslator(Translator):
         self._program = program = self._spawn(self.argv, DURA_PARAMS=json.dumps(params))
         threading.Thread(target=self._watch, args=(program,), daemon=True).start()
 
+    def exited(self) -> bool:
+        """Tell whether the program was started and has ended."""
+        program = self._program
+        return program is not None and program.poll() is not None
+
     def _watch(self, program: subprocess.Popen[bytes]) -> None:
         returncode = program.wait()
         if not self._stopping:

@@ -169,7 +169,7 @@ def test_plan_show_draws_the_running_robots_plan(
 ) -> None:
     picture = tmp_path / "plan.svg"
     done = dura("plan", "show", "--robot", str(USECASE), "--endpoint", robot.endpoint,
-                "--svg", str(picture))  # fmt: skip
+                "--svg", str(picture), env=robot.environment())  # fmt: skip
     assert done.returncode == 0, done.stderr
     plan = planning.PLAN_SHOW.call(robot.bus).plan
     assert plan is not None
@@ -186,7 +186,7 @@ def test_graph_with_diagnoses_draws_the_running_robots_state(
 ) -> None:
     picture = tmp_path / "graph.svg"
     done = dura("graph", str(USECASE), "--endpoint", robot.endpoint, "--diagnoses",
-                "--svg", str(picture))  # fmt: skip
+                "--svg", str(picture), env=robot.environment())  # fmt: skip
     assert done.returncode == 0, done.stderr
     states: dict[str, Any] = {
         g.get("data-node"): g.get("data-state")

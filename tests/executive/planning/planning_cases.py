@@ -87,3 +87,66 @@ def usecase_kb_fixture(tmp_path: Path) -> Iterator[KnowledgeBase]:
 @functools.cache
 def usecase_domain() -> DomainInfo:
     return read_domain(USECASE_DOMAIN)
+
+
+# A domain with what `dura domain check` warns about, line by line (see its test).
+FLAWED_DOMAIN = """(define (domain flawed)
+  (:requirements :strips :typing :durative-actions :negative-preconditions)
+  (:types place robot gadget)
+  (:predicates
+    (at ?r - robot ?p - place)
+    (road ?a ?b - place)
+    (charged ?r - robot)
+    (door_open ?p - place)
+    (painted ?p - place)
+    (visited ?p - place))
+  (:durative-action drive
+    :parameters (?r - robot ?a ?b - place)
+    :duration (= ?duration 5)
+    :condition (and (at start (at ?r ?a)) (at start (charged ?r)) (over all (road ?a ?b)))
+    :effect (and (at start (not (at ?r ?a))) (at start (not (charged ?r))) (at end (at ?r ?b))))
+  (:durative-action enter
+    :parameters (?r - robot ?p - place)
+    :duration (= ?duration 1)
+    :condition (and (at start (at ?r ?p)) (at start (door_open ?p)))
+    :effect (at end (visited ?p))))
+"""
+FLAWED_PROBLEM = """(define (problem tour) (:domain flawed)
+  (:objects r1 - robot a b c - place)
+  (:init (at r1 a) (charged r1) (road a b))
+  (:goal (and (visited b) (at r1 c))))
+"""
+
+# ROSPlan's test problems name objects like their types (`driver - driver`).
+DRIVERLOG_DOMAIN = """(define (domain driverlog)
+  (:requirements :typing :durative-actions)
+  (:types driver truck location)
+  (:predicates
+    (at ?d - driver ?l - location)
+    (truck_at ?t - truck ?l - location)
+    (driving ?d - driver ?t - truck)
+    (link ?a ?b - location))
+  (:durative-action board
+    :parameters (?d - driver ?t - truck ?l - location)
+    :duration (= ?duration 1)
+    :condition (and (at start (at ?d ?l)) (over all (truck_at ?t ?l)))
+    :effect (and (at start (not (at ?d ?l))) (at end (driving ?d ?t))))
+  (:durative-action drive
+    :parameters (?d - driver ?t - truck ?a ?b - location)
+    :duration (= ?duration 5)
+    :condition (and (over all (driving ?d ?t)) (at start (truck_at ?t ?a))
+                    (over all (link ?a ?b)))
+    :effect (and (at start (not (truck_at ?t ?a))) (at end (truck_at ?t ?b)))))
+"""
+DRIVERLOG_PROBLEM = """(define (problem drive1) (:domain driverlog)
+  (:objects
+    driver - driver
+    truck - truck
+    depot market - location)
+  (:init (at driver depot) (truck_at truck depot) (link depot market))
+  (:goal (truck_at truck market)))
+"""
+# the same object declared twice is still refused, at the second declaration (line 6)
+DRIVERLOG_TWICE = DRIVERLOG_PROBLEM.replace(
+    "depot market - location)", "depot market - location\n    depot - location)"
+)

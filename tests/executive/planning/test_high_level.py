@@ -316,3 +316,57 @@ def test_a_malformed_request_is_refused_by_its_declared_type(robot: Robot) -> No
         robot.bus.request(EVENTS_API.key, {"limit": -1})
     listed = GOAL_LIST.call(robot.bus, GoalQuery([GoalState.PENDING]))
     assert listed.goals == []
+
+
+def test_a_goal_unreachable_until_dura_state_set_is_then_achieved(robot: Robot) -> None:
+    goal = json.loads(robot.dura("goal", "add", "(picture_taken dock)", "--json").stdout)
+    assert wait_for(lambda: state_of(robot, goal["id"]) is GoalState.UNREACHABLE, 60)
+    assert "needs (photographable dock)" in robot.kb.goal(goal["id"]).reason
+    assert robot.dura("state", "set", "(photographable dock)").returncode == 0
+    assert wait_for(lambda: state_of(robot, goal["id"]) is GoalState.ACHIEVED, 60)
+    pending = [e for e in robot.kb.events(kind="GOAL_PENDING") if e.subject == f"goal {goal['id']}"]
+    assert [e.data["reason"] for e in pending] == [
+        "reachable again after STATE_SET (photographable dock)"
+    ]
+
+
+def test_a_maintenance_goal_is_reposted_when_the_plan_takes_it_away(robot: Robot) -> None:
+    home = json.loads(robot.dura("goal", "add", "(robot_at dock)", "--keep", "--json").stdout)
+    assert home["keep"] is True
+    assert wait_for(lambda: state_of(robot, home["id"]) is GoalState.ACHIEVED, 30)
+    listed = robot.dura("goal", "list").stdout.splitlines()
+    assert listed[1].split()[:3] == [str(home["id"]), "achieved,", "watched"], listed
+    picture = json.loads(robot.dura("goal", "add", "(picture_taken lab)", "--json").stdout)
+    assert wait_for(lambda: state_of(robot, picture["id"]) is GoalState.ACHIEVED, 60)
+    assert wait_for(
+        lambda: any(
+            e.subject == f"goal {home['id']}" for e in robot.kb.events(kind="GOAL_PENDING")
+        ),
+        30,
+    )
+    assert wait_for(lambda: state_of(robot, home["id"]) is GoalState.ACHIEVED, 60)
+    assert wait_for(lambda: Fact("robot_at", ("dock",)) in robot.kb.facts(), 30)
+
+
+def test_a_dry_run_plans_on_the_live_state_and_changes_nothing(robot: Robot) -> None:
+    robot.runner.held.add("take_picture")
+    goal = json.loads(robot.dura("goal", "add", "(picture_taken office)", "--json").stdout)
+    robot.runner.wait_for("take_picture(office)")  # the robot is at the office, taking it
+    started = [("START", "take_picture(office)")]  # logged once the runner's report is in
+    assert wait_for(lambda: [(e.kind, e.subject) for e in robot.kb.events()[-1:]] == started, 10)
+    plans, events = len(robot.kb.plans()), len(robot.kb.events())
+    dry = robot.dura("plan", "--dry-run", "--json")
+    assert dry.returncode == 0, dry.stderr
+    reply = json.loads(dry.stdout)
+    assert (reply["status"], reply["planned"], reply["goals"]) == (
+        "solved",
+        [goal["id"]],
+        [goal["id"]],
+    )
+    assert [(s["action"], s["args"]) for s in reply["steps"]] == [("take_picture", ["office"])]
+    assert (len(robot.kb.plans()), len(robot.kb.events())) == (plans, events)
+    shown = robot.dura("plan", "--dry-run")
+    assert f"for goals {goal['id']} (nothing executed)" in shown.stdout
+    robot.runner.wait_for("take_picture(office)").end(None)
+    assert wait_for(lambda: state_of(robot, goal["id"]) is GoalState.ACHIEVED, 30)
+    assert "dry run: nothing to plan (no open goals)" in robot.dura("plan", "--dry-run").stdout

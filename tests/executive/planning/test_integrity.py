@@ -146,3 +146,25 @@ def test_dura_validate_checks_the_robots_integrity_and_repair_rules(
         for line in lines
     ), lines
     assert any(line.startswith(f"{tmp_path / 'repair.yaml'}:") for line in lines), lines
+
+
+def test_a_rule_with_keep_posts_a_maintenance_goal_that_is_not_posted_again_while_watched(
+    usecase_kb: KnowledgeBase, tmp_path: Path
+) -> None:
+    rules = """
+goals:
+  - name: stay_home
+    when: {permanent_fault: lidar}
+    goal: (robot_at dock)
+    keep: true
+"""
+    generator = usecase_rules(usecase_kb, rules, tmp_path)
+    usecase_kb.register_component("lidar", 10)
+    usecase_kb.mark_permanent_fault("lidar", "broken")
+    (goal,) = generator.check()
+    assert goal.keep
+    usecase_kb.set_goal_state(goal.id, GoalState.ACHIEVED)  # watched from now on
+    usecase_kb.reset_component("lidar")
+    assert generator.check() == []
+    usecase_kb.mark_permanent_fault("lidar", "broken again")
+    assert generator.check() == []  # the same goal is achieved and watched: not posted twice

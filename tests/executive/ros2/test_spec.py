@@ -104,3 +104,12 @@ def test_ros2_names_follow_the_rmw_conventions() -> None:
     assert names.ros_type("String") is None
     assert names.node_name("/robot1/", "lidar") == "/robot1/lidar"
     assert names.caller_id(names.node_name("/", "lidar")) == "lidar"
+
+
+def test_the_goals_topic_is_dura_goals_unless_set_or_turned_off(tmp_path: Path) -> None:
+    for extra, expected in (("ros2: {}\n", "/dura/goals"), ("ros2: {goals: patrol/goals}\n",
+                            "/patrol/goals"), ("ros2: {goals: null}\n", None)):  # fmt: skip
+        result = validate(write_robot(tmp_path, "tcp/127.0.0.1:7447", extra=extra))
+        assert not result.errors, result.errors
+        assert result.robot is not None and result.robot.ros2 is not None
+        assert result.robot.ros2.goals == expected

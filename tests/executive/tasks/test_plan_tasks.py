@@ -11,7 +11,7 @@ import pytest
 
 from executive.bus.api.tasks import TASK_STOP, TaskId
 from executive.planning.partial_order import Step
-from executive.planning.plan_executer import StepReport
+from executive.planning.task_runner import Progress, StepReport
 from executive.tasks.executor import TaskExecutor
 from executive.tasks.plan_tasks import PlanTasks
 from executive.tasks.task import TaskEnd
@@ -26,16 +26,16 @@ class Reports:
 
     def __init__(self) -> None:
         self._lock = threading.Lock()
-        self._seen: dict[int, list[tuple[str, Any]]] = {}
+        self._seen: dict[int, list[tuple[Progress, Any]]] = {}
 
     def report(self, step: int) -> StepReport:
-        def post(_: StepReport, kind: str, value: Any) -> None:
+        def post(_: StepReport, kind: Progress, value: Any) -> None:
             with self._lock:
                 self._seen.setdefault(step, []).append((kind, value))
 
         return StepReport(post)
 
-    def of(self, step: int) -> list[tuple[str, Any]]:
+    def of(self, step: int) -> list[tuple[Progress, Any]]:
         with self._lock:
             return list(self._seen.get(step, []))
 
@@ -60,7 +60,7 @@ def test_a_step_its_plan_cancels_reports_nothing_and_one_a_user_stops_fails(
         dropped.cancel()
         TASK_STOP.call(r.bus, TaskId(task_of(tasks, "take_picture(office)")["id"]))
         assert wait_for(lambda: reports.of(1) != [], 30)
-        assert reports.of(1)[-1] == ("failed", "cancelled: stopped by the user")
+        assert reports.of(1)[-1] == (Progress.FAILED, "cancelled: stopped by the user")
         assert wait_for(lambda: task_of(tasks, "take_picture(lab)")["state"] == "cancelled", 30)
         assert task_of(tasks, "take_picture(lab)")["ended_by"] == TaskEnd.REQUESTER.value
-        assert all(kind != "failed" for kind, _ in reports.of(0)), reports.of(0)
+        assert all(kind is not Progress.FAILED for kind, _ in reports.of(0)), reports.of(0)

@@ -10,6 +10,7 @@ from typing import Any
 
 import pytest
 
+from executive.bus.api.monitoring import DIAGNOSIS_EXONERATE, ExonerationChange
 from executive.bus.keys import DIAGNOSES, DIAGNOSIS_MODEL, OBSERVATIONS
 from executive.bus.payloads import DiagnosisInfo
 from executive.bus.service import Context
@@ -49,6 +50,11 @@ class Peer:
                 left = deadline - time.monotonic()
                 assert left > 0, f"no {status} {diagnoses} in {self.received}"
                 self.arrived.wait(left)
+
+    def forget(self) -> None:
+        """Forget the diagnoses received so far."""
+        with self.arrived:
+            self.received.clear()
 
     def observe(self, kind: str, resource: list[str], value: int, stamp: float) -> None:
         self.bus.publish(
@@ -152,3 +158,23 @@ def test_a_model_change_is_rediagnosed(running: tuple[DiagnosisService, Peer]) -
     )
     assert reply["ok"] is True
     peer.wait_for("DIAGNOSED", [["N4"]])
+
+
+def test_exoneration_switched_at_run_time_diagnoses_again_at_once_and_is_logged(
+    running: tuple[DiagnosisService, Peer],
+) -> None:
+    service, peer = running
+    add_thesis_model(peer)
+    peer.observe("frequency", ["m3"], -1, 1.0)
+    peer.observe("frequency", ["m1"], 0, 1.0)
+    peer.wait_for("DIAGNOSED", [["N1"], ["N2"], ["N3"]])
+    assert DIAGNOSIS_EXONERATE.call(peer.bus, ExonerationChange()).on is False
+    peer.forget()  # from here on, only what the switch brings
+    assert DIAGNOSIS_EXONERATE.call(peer.bus, ExonerationChange(True)).on is True
+    peer.wait_for("DIAGNOSED", [["N2"], ["N3"]])  # m1 is OK: N1 is cleared
+    assert DIAGNOSIS_EXONERATE.call(peer.bus, ExonerationChange()).on is True
+    peer.forget()
+    assert DIAGNOSIS_EXONERATE.call(peer.bus, ExonerationChange(False)).on is False
+    peer.wait_for("DIAGNOSED", [["N1"], ["N2"], ["N3"]])
+    logged = [e.data for e in service.context.kb.events(kind="EXONERATION")]
+    assert logged == [{"on": True}, {"on": False}]

@@ -1,0 +1,83 @@
+"""A dry run (PlanSys2's "get plan"): what the planner would do now, without doing it.
+
+It plans for the open goals from the state the goal planner would plan from (the
+knowledge base's facts, with the at-start effects of paused steps undone), without the
+actions that cannot run now, with the same engine and the same choice of goals by
+priority, and changes nothing: no goal or plan state, no event, no pause of the plan
+under way. Its search waits for the goal planner's (one engine, one worker).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from executive.bus.api.planning import DryRunReply
+from executive.bus.clock import Clock
+from executive.planning.expression import Signature, WorldState
+from executive.planning.goals import specs
+from executive.planning.oversubscription import blocked_note, plan_goals
+from executive.planning.partial_order import PartialOrderPlan
+from executive.planning.planner import Planner, PlanningTask
+from executive.planning.problem import World
+from knowledge.domain import DomainInfo
+from knowledge.knowledge_base import KnowledgeBase
+from knowledge.records import Fact
+
+
+def dry_run(
+    kb: KnowledgeBase,
+    domain: DomainInfo,
+    planner: Planner,
+    facts: Sequence[Fact],
+    blocked: Mapping[str, str],
+    *,
+    clock: Clock,
+    timeout: float | None = None,
+) -> DryRunReply:
+    """Plan for the open goals on the live state; nothing is stored or executed."""
+    objects = kb.objects()
+    open_goals = kb.open_goals()
+    usable, refused = specs(open_goals, Signature.of(domain, objects), clock=clock)
+    unreachable = {str(i): r.reason for i, r in refused.items()}
+    state = WorldState(facts)
+    achieved = [g.id for g in usable if state.holds(g.expression)]
+    todo = tuple(g for g in usable if g.id not in achieved)
+    ids = [g.id for g in open_goals]
+    if not todo:
+        why = "no open goal needs a plan" if ids else "no open goals"
+        return DryRunReply("nothing_to_do", planner.engine, 0.0, why, ids, [], achieved,
+                           unreachable, [], None)  # fmt: skip
+    task = PlanningTask(domain.path, World(objects, tuple(facts)), todo, frozenset(blocked))
+    outcome = plan_goals(planner, task, timeout)
+    note = blocked_note(blocked)
+    unreachable.update({str(i): why + note for i, why in outcome.unreachable.items()})
+    result = outcome.result
+    plan = result.plan if outcome.ok else None
+    return DryRunReply(
+        status=result.status.value,
+        engine=result.engine,
+        time=round(result.time, 4),
+        reason=result.reason,
+        goals=ids,
+        planned=list(outcome.planned) if outcome.ok else [],
+        achieved=achieved,
+        unreachable=unreachable,
+        steps=steps_json(plan),
+        makespan=plan.makespan if plan is not None else None,
+    )
+
+
+def steps_json(plan: PartialOrderPlan | None) -> list[dict[str, Any]]:
+    """Return a plan's steps as plain data, as ``dura plan --offline --json`` prints them."""
+    return [
+        {
+            "index": s.index,
+            "action": s.action,
+            "args": list(s.args),
+            "start": s.start,
+            "duration": s.duration,
+            "after": [{"step": p.step, "at": p.at.value} for p in s.after],
+        }
+        for s in (plan.steps if plan is not None else ())
+    ]

@@ -1,0 +1,231 @@
+"""The ``sensing:`` section of a robot description: facts and values read from topics.
+
+ROSPlan's sensing interface, written as data: each rule watches one field of one topic
+(dura's bus, or a ROS 2 topic of the ``ros2:`` section) and keeps a PDDL fact or a
+numeric value in the knowledge base in step with it::
+
+    sensing:
+      - name: battery_low          # unique (default: the fact or value)
+        topic: battery             # a topic a component publishes, or a ROS 2 topic
+        field: level               # dotted path in the message (list items by index)
+        fact: (battery_low)        # true while the condition holds, false otherwise
+        below: 20                  # the condition: below, above or equals (one of them)
+        clear_above: 30            # hysteresis: false again only above 30 (with below)
+        hold: 2                    # robot seconds a new verdict must last to count
+      - topic: battery
+        field: level
+        value: (battery_level)     # a numeric function: the field's number
+        min_change: 1              # only changes of at least 1 are written
+
+``clear_below`` goes with ``above``. ``equals`` compares with a number, a string or a
+boolean. Names are checked against the domain and the objects by ``dura validate``
+(:mod:`knowledge.validation`); the executive runs the rules
+(:mod:`executive.planning.sensing`).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import yaml
+
+from knowledge.finding import Report
+from knowledge.yamlsource import Section, did_you_mean, line_of, to_python
+
+if TYPE_CHECKING:
+    from knowledge.description import RobotDescription
+    from knowledge.domain import DomainInfo
+
+FIELD_PATH = re.compile(r"[A-Za-z_][A-Za-z0-9_]*|-?\d+")
+CONDITIONS = ("below", "above", "equals")
+
+
+@dataclass(frozen=True)
+class SensingRuleSpec:
+    """One sensing rule, as written (see the module docstring)."""
+
+    name: str
+    topic: str
+    path: str  # the ``field`` as written: a dotted path
+    fact: str | None = None  # a ground atom, ``(battery_low)``
+    value: str | None = None  # a ground function, ``(battery_level)``
+    below: float | None = None
+    above: float | None = None
+    equals: Any = None
+    clear_above: float | None = None
+    clear_below: float | None = None
+    hold: float = 0.0
+    min_change: float = 0.0
+    line: int = 0
+    lines: Mapping[str, int] = field(default_factory=dict, compare=False, repr=False)
+
+    def line_of(self, key: str) -> int:
+        return self.lines.get(key, self.line)
+
+    @property
+    def condition(self) -> str:
+        """Return the condition as written: ``level < 20 (false again above 30)``."""
+        if self.below is not None:
+            clear = f" (false again above {self.clear_above:g})" if self.clear_above else ""
+            return f"{self.path} < {self.below:g}{clear}"
+        if self.above is not None:
+            clear = f" (false again below {self.clear_below:g})" if self.clear_below else ""
+            return f"{self.path} > {self.above:g}{clear}"
+        return f"{self.path} = {self.equals!r}"
+
+
+def field_problem(path: str) -> str:
+    """Say why a dotted field path is malformed, or return an empty string."""
+    parts = path.split(".")
+    if not path or not all(FIELD_PATH.fullmatch(p) for p in parts):
+        return (
+            f"field '{path}' is not a dotted path of field names and list indexes "
+            "(e.g. 'level', 'pose.position.x', 'ranges.0')"
+        )
+    return ""
+
+
+def read_sensing(top: Section, report: Report) -> tuple[SensingRuleSpec, ...]:
+    """Read the ``sensing:`` list of a robot description (problems go to ``report``)."""
+    rules: list[SensingRuleSpec] = []
+    names: set[str] = set()
+    for node in top.sequence("sensing"):
+        rule = _rule(node, report)
+        if rule is None:
+            continue
+        if rule.name in names:
+            report.error(rule.line, f"duplicate sensing rule name '{rule.name}'")
+            continue
+        names.add(rule.name)
+        rules.append(rule)
+    return tuple(rules)
+
+
+def _optional(s: Section, key: str) -> float | None:
+    return s.number(key, 0.0) if s.has(key) else None
+
+
+def _rule(node: yaml.Node, report: Report) -> SensingRuleSpec | None:
+    s = Section(node, "sensing rule", report)
+    if not s.valid:
+        return None
+    topic = s.text("topic", required=True)
+    path = s.text("field", required=True)
+    fact, value = s.text("fact"), s.text("value")
+    name = s.text("name") or fact or value or f"sensing rule at line {s.line}"
+    s.what = f"sensing rule '{name}'"
+    below, above = _optional(s, "below"), _optional(s, "above")
+    equals_node = s.node("equals")
+    equals = to_python(equals_node) if isinstance(equals_node, yaml.ScalarNode) else None
+    clear_above, clear_below = _optional(s, "clear_above"), _optional(s, "clear_below")
+    hold = s.number("hold", 0.0, minimum=0.0)
+    min_change = s.number("min_change", 0.0, minimum=0.0)
+    lines = {k: s.key_line(k) for k in s.written()}
+    s.close()
+    ok = topic is not None and path is not None
+    if path is not None and field_problem(path):
+        report.error(s.key_line("field"), f"{s.what}: {field_problem(path)}")
+        ok = False
+    if (fact is None) == (value is None):
+        report.error(s.line, f"{s.what} needs exactly one of 'fact' and 'value'")
+        ok = False
+    given = [k for k in CONDITIONS if s.has(k)]
+    if equals_node is not None and equals is None:
+        report.error(
+            line_of(equals_node), f"'equals' of {s.what} must be a number, string or boolean"
+        )
+        ok = False
+    if fact is not None and len(given) != 1:
+        report.error(s.line, f"{s.what}: a fact needs exactly one of {', '.join(CONDITIONS)}")
+        ok = False
+    if value is not None and given:
+        report.error(s.key_line(given[0]), f"{s.what}: a value takes no '{given[0]}'")
+        ok = False
+    for clear, level, goes_with, limit in (
+        ("clear_above", clear_above, "below", below),
+        ("clear_below", clear_below, "above", above),
+    ):
+        if level is None:
+            continue
+        if limit is None:
+            report.error(s.key_line(clear), f"{s.what}: '{clear}' goes with '{goes_with}'")
+            ok = False
+        elif (level < limit) if goes_with == "below" else (level > limit):
+            report.error(
+                s.key_line(clear),
+                f"{s.what}: '{clear}' ({level:g}) must not undo '{goes_with}' ({limit:g})",
+            )
+            ok = False
+    if not ok or topic is None or path is None:
+        return None
+    return SensingRuleSpec(
+        name, topic.strip("/"), path, fact, value, below, above, equals, clear_above,
+        clear_below, hold, min_change, s.line, lines,
+    )  # fmt: skip
+
+
+def check_sensing(
+    robot: RobotDescription, domain: DomainInfo, objects: Mapping[str, str], report: Report
+) -> None:
+    """Check that each rule names a topic the robot has, and a fact (value) of the domain's
+    predicates (functions) with the right number and types of known objects."""
+    published = sorted({t for c in robot.components.values() for t in c.publishes})
+    ros2 = sorted(robot.ros2.topics) if robot.ros2 is not None else []
+    known = {**domain.constants, **objects}
+    for rule in robot.sensing:
+        if rule.topic not in published and rule.topic not in ros2:
+            report.error(
+                rule.line_of("topic"),
+                f"sensing rule '{rule.name}' reads topic '{rule.topic}', which no component "
+                f"publishes and the ros2: section does not list"
+                f"{did_you_mean(rule.topic, published + ros2)}",
+            )
+        if rule.fact is not None:
+            problem = atom_problem(rule.fact, domain.predicates, known, domain, "predicate")
+            if problem:
+                report.error(rule.line_of("fact"), f"sensing rule '{rule.name}': {problem}")
+        if rule.value is not None:
+            problem = atom_problem(rule.value, domain.functions, known, domain, "function")
+            if problem:
+                report.error(rule.line_of("value"), f"sensing rule '{rule.name}': {problem}")
+
+
+def atom_problem(
+    text: str,
+    signatures: Mapping[str, tuple[str, ...]],
+    objects: Mapping[str, str],
+    domain: DomainInfo,
+    what: str,
+) -> str:
+    """Say why ``(name obj ...)`` is not a ground atom of the domain, or return ''."""
+    words = text.strip().removeprefix("(").removesuffix(")").split()
+    if not text.strip().startswith("(") or not text.strip().endswith(")") or not words:
+        return f"'{text}' is not a {what} in parentheses, e.g. (battery_low)"
+    name, args = words[0], words[1:]
+    if name not in signatures:
+        return f"unknown {what} '{name}'{did_you_mean(name, sorted(signatures))}"
+    types = signatures[name]
+    if len(args) != len(types):
+        return f"'{name}' takes {len(types)} argument{'s' * (len(types) != 1)}, not {len(args)}"
+    for i, (arg, wanted) in enumerate(zip(args, types, strict=True)):
+        if arg not in objects:
+            return f"unknown object '{arg}'{did_you_mean(arg, sorted(objects))}"
+        if not _is_a(objects[arg], wanted, domain.supertypes):
+            return (
+                f"argument {i + 1} of '{name}' must be a {wanted}, but '{arg}' is a {objects[arg]}"
+            )
+    return ""
+
+
+def _is_a(type_name: str, wanted: str, parents: Mapping[str, str | None]) -> bool:
+    current: str | None = type_name
+    seen: set[str] = set()
+    while current is not None and current not in seen:
+        if current == wanted:
+            return True
+        seen.add(current)
+        current = parents.get(current)
+    return wanted == "object"
