@@ -205,27 +205,29 @@ class HighLevel(Service):
         )
         self._blocked = self.blocked()
         self.goals = GoalPlanner(kb, self.domain, self.planner, self.executer, blocked=self.blocked)
-        with self._lock:
+        with self._lock:  # the diagnoses that came meanwhile, then each as it comes
             self.integrity = IntegrityGoals(kb, self.domain, rules, clock=self.clock)
             if self._diagnoses:
                 self.integrity.diagnosed(self._diagnoses)
-            self._integrity_thread = threading.Thread(
+            integrity = self._integrity_thread = threading.Thread(
                 target=self._integrity_loop, name="integrity-goals", daemon=True
             )
-            self._integrity_thread.start()
-            self.executer.start()
-            self.goals.start()
-            self.sensing = Sensing(
-                kb,
-                self.domain,
-                robot.sensing,
-                subscribe=self._subscribe,
-                changed=self._sensed,
-                clock=self.clock,
-            )
-            self.sensing.start()
-            self._running = [self.sensing.stop, self.goals.stop, self.executer.stop]
-            self._ready.set()
+        # started outside the lock: starting subscribes on the bus, whose callback
+        # threads may be waiting for the lock (a diagnosis)
+        integrity.start()
+        self.executer.start()
+        self.goals.start()
+        self.sensing = Sensing(
+            kb,
+            self.domain,
+            robot.sensing,
+            subscribe=self._subscribe,
+            changed=self._sensed,
+            clock=self.clock,
+        )
+        self.sensing.start()
+        self._running = [self.sensing.stop, self.goals.stop, self.executer.stop]
+        self._ready.set()
 
     def wait_ready(self, timeout: float | None = None) -> bool:
         """Wait until the high level plans (the planner parsed the domain and
@@ -267,7 +269,7 @@ class HighLevel(Service):
         self._begin.clear()
         with self._lock:
             thread, self._integrity_thread = self._integrity_thread, None
-        if thread is not None:
+        if thread is not None and thread.ident is not None:  # it had started
             thread.join()
         for entity in self._declared:
             with contextlib.suppress(Exception):

@@ -303,19 +303,27 @@ def start_times(runs: int, tmp: Path) -> dict[str, list[float]]:
     folder.mkdir(parents=True, exist_ok=True)
     description = ROOT / "examples/usecase/robot.yaml"
     out: dict[str, list[float]] = {"status": [], "warm": [], "python": []}
-    for _ in range(runs + 1):  # the first creates the credentials and the knowledge base
+    for i in range(runs + 1):  # the first creates the credentials and the knowledge base
         endpoint = free_endpoint()
+        log = folder / f"executive-{i}.log"
         began = time.monotonic()
-        process = subprocess.Popen(
-            [sys.executable, "-m", "executive.cli", "run", str(description), "--endpoint",
-             endpoint, "--db", str(folder / "usecase.db"), "--log-dir", str(folder / "logs")],
-            cwd=folder, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-        )  # fmt: skip
+        with log.open("w") as err:
+            process = subprocess.Popen(
+                [sys.executable, "-m", "executive.cli", "run", str(description), "--endpoint",
+                 endpoint, "--db", str(folder / "usecase.db"), "--log-dir", str(folder / "logs")],
+                cwd=folder, stdout=subprocess.DEVNULL, stderr=err,
+                env={**os.environ, "PYTHONFAULTHANDLER": "1"},
+            )  # fmt: skip
         try:
             answered, warm = _ready("usecase", folder, endpoint, began)
         finally:
             process.send_signal(signal.SIGTERM)
-            process.wait(30)
+            try:
+                process.wait(30)
+            except subprocess.TimeoutExpired:
+                process.send_signal(signal.SIGABRT)  # its threads' stacks into the log
+                process.wait(10)
+                raise RuntimeError(f"dura run did not stop within 30 s: see {log}") from None
         out["status"].append(answered)
         out["warm"].append(warm)
         began = time.monotonic()
