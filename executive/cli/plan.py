@@ -125,7 +125,7 @@ def run_show(args: argparse.Namespace) -> int:
     if plan is None:
         print("no plan yet")
         return 0
-    states = {s["index"]: s["state"] for s in reply.execution.get("steps", [])}
+    states = step_states(plan, reply.execution)
     steps = plan["steps"]
     span = max((s["start"] + (s["duration"] or 0.0) for s in steps), default=0.0)
     goals = ", ".join(str(g) for g in plan["goal_ids"]) or "-"
@@ -172,6 +172,14 @@ def run_dry_run(args: argparse.Namespace) -> int:
     ]  # fmt: skip
     table(["#", "start", "duration", "step", "after", "timeline"], rows)
     return 0
+
+
+def step_states(plan: dict[str, Any], execution: dict[str, Any]) -> dict[int, str]:
+    """Each step's state: live while the plan executes (``paused`` too), else as stored."""
+    states = {s["index"]: s.get("state", "-") for s in plan["steps"]}
+    if execution.get("plan") == plan["id"]:
+        states.update({s["index"]: s["state"] for s in execution.get("steps", [])})
+    return states
 
 
 def write_svg(target: str, picture: str) -> bool:

@@ -93,8 +93,14 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    robot = load_robot(args.robot)
+    robot = load_robot(args.robot, domain=False)  # the planner worker checks the domain
     stop = threading.Event()
+    failure: list[str] = []
+
+    def failed(reason: str) -> None:
+        failure.append(reason)
+        stop.set()
+
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())
     executive = Executive(
@@ -108,32 +114,37 @@ def run(args: argparse.Namespace) -> int:
         sequential_starts=args.starts == "sequential",
         record=args.record.resolve() if args.record is not None else None,
         record_max_size=args.record_max_size,
+        on_failure=failed,
     )
-    with executive, contextlib.ExitStack() as dashboard:
-        endpoint = local_endpoint(executive.endpoint)
-        write_run_file(robot.name, endpoint, robot.path, executive.credentials_path)
-        try:
-            url = None
-            if args.dashboard is not None:
-                from executive.dashboard.server import Dashboard
+    endpoint = local_endpoint(executive.endpoint)
+    executive.on_open = lambda: write_run_file(
+        robot.name, endpoint, robot.path, executive.credentials_path
+    )
+    with contextlib.ExitStack() as running:
+        running.callback(remove_run_file)  # last, also when the executive fails to start
+        running.enter_context(executive)
+        url = None
+        if args.dashboard is not None:
+            from executive.dashboard.server import Dashboard
 
-                page = Dashboard.connect(robot, endpoint, host=args.dashboard_host,
-                                         port=args.dashboard)  # fmt: skip
-                url = dashboard.enter_context(page).url
-            if args.json:
-                print_json({"robot": robot.name, "endpoint": endpoint, "pid": os.getpid(),
-                            **({"dashboard": url} if url else {})})  # fmt: skip
-            else:
-                print(
-                    f"dura: executive of robot '{robot.name}' runs on {endpoint} (pid "
-                    f"{os.getpid()}, knowledge base {shown(executive.kb_path)}); Ctrl-C stops it"
-                )
-                if url:
-                    print(f"dura: dashboard on {url}")
-            sys.stdout.flush()
-            stop.wait()
-        finally:
-            remove_run_file()
+            page = Dashboard.connect(robot, endpoint, host=args.dashboard_host,
+                                     port=args.dashboard)  # fmt: skip
+            url = running.enter_context(page).url
+        if args.json:
+            print_json({"robot": robot.name, "endpoint": endpoint, "pid": os.getpid(),
+                        **({"dashboard": url} if url else {})})  # fmt: skip
+        else:
+            print(
+                f"dura: executive of robot '{robot.name}' runs on {endpoint} (pid "
+                f"{os.getpid()}, knowledge base {shown(executive.kb_path)}); Ctrl-C stops it"
+            )
+            if url:
+                print(f"dura: dashboard on {url}")
+        sys.stdout.flush()
+        stop.wait()
+    if failure:
+        print(f"dura: {failure[0]}", file=sys.stderr)
+        return 1
     if not args.json:
         print(f"dura: executive of robot '{robot.name}' stopped")
     return 0
