@@ -59,6 +59,8 @@ class Executive:
             :class:`~executive.planning.high_level.HighLevel`); ``dura run`` stops then.
         on_open: called once the bus API answers, before the other services start
             (``dura run`` writes its run file then, for the commands run beside it).
+        progress: told what the executive does now while it starts (``dura run``'s
+            live line on a terminal).
     """
 
     def __init__(
@@ -77,6 +79,7 @@ class Executive:
         record_max_size: int | None = None,
         on_failure: Callable[[str], None] | None = None,
         on_open: Callable[[], None] | None = None,
+        progress: Callable[[str], None] | None = None,
     ) -> None:
         self.robot = robot
         self.endpoint = endpoint or robot.endpoint
@@ -92,6 +95,7 @@ class Executive:
         self.record_max_size = record_max_size
         self.on_failure = on_failure
         self.on_open = on_open
+        self.progress = progress or (lambda _: None)
         self.tasks: TaskExecutor | None = None
         self.launcher: Launcher | None = None
         self._stack = contextlib.ExitStack()
@@ -99,12 +103,14 @@ class Executive:
     def __enter__(self) -> Executive:
         clock = system_clock()  # a bad DURA_TIME_SCALE stops the executive here, with why
         with contextlib.ExitStack() as stack:
+            self.progress("taking the knowledge base's run lock")
             lock = stack.enter_context(RunLock(self.kb_path))  # one executive per KB
             if lock.predecessor is not None:
                 end_leftovers(lock.predecessor)
             robot, components = self.robot, list(self.robot.components)
             credentials = security.ensure_credentials(self.credentials_path, robot.name, components)
             users = self.credentials_path.with_suffix(".users")
+            self.progress(f"opening the bus on {self.endpoint}")
             self.bus = stack.enter_context(
                 Bus(
                     robot.name,
@@ -116,6 +122,7 @@ class Executive:
                     access=security.access_control(robot.name, components),
                 )
             )
+            self.progress(f"opening the knowledge base {self.kb_path}")
             self.kb = stack.enter_context(KnowledgeBase(self.kb_path))
             self.kb.log_event(
                 "EXECUTIVE_STARTED",
@@ -134,6 +141,7 @@ class Executive:
             stack.callback(self.high_level.stop)  # if a later start fails
             if self.on_open is not None:
                 self.on_open()
+            self.progress("loading the launcher")
             from executive.runtime.launcher import Launcher
 
             self.launcher = stack.enter_context(
@@ -149,13 +157,16 @@ class Executive:
             )
             self.ros2: Ros2Link | None = None
             if self.robot.ros2 is not None:  # Cyclone DDS loads only for a ROS 2 robot
+                self.progress("joining the ROS 2 domain")
                 from executive.ros2.link import Ros2Link
 
                 nodes = {c.ros2.node: name for name, c in self.robot.components.items()
                          if c.ros2 is not None and c.ros2.node is not None}  # fmt: skip
                 self.ros2 = stack.enter_context(Ros2Link(self.robot.ros2, nodes=nodes))
                 self.high_level.sources = (self.ros2.topics,)  # before it starts sensing
+            self.progress("loading the services")
             for service in self.services(context):
+                self.progress(f"starting the {service.name} service")
                 service.start()
                 stack.callback(service.stop)
             self.bus.declare_alive(EXECUTIVE_ALIVE)

@@ -15,6 +15,7 @@ from executive.cli.arguments import megabytes, rate, seconds
 from executive.cli.client import remove_run_file, write_run_file
 from executive.cli.dashboard import add_dashboard_address, port
 from executive.cli.output import add_json_flag, print_json, shown
+from executive.cli.progress import LiveLine
 from executive.executive import Executive
 from executive.runtime.launcher import local_endpoint
 from knowledge.robot import load_robot
@@ -122,7 +123,9 @@ def run(args: argparse.Namespace) -> int:
     )
     with contextlib.ExitStack() as running:
         running.callback(remove_run_file)  # last, also when the executive fails to start
-        running.enter_context(executive)
+        with LiveLine(shown=not args.json) as line:
+            executive.progress = line.doing
+            running.enter_context(executive)
         url = None
         if args.dashboard is not None:
             from executive.dashboard.server import Dashboard
