@@ -19,7 +19,32 @@ import time
 from pathlib import Path
 
 from executive.cli.output import section, table
-from tests.e2e.kill_rounds import KillRounds
+from tests.e2e.kill_rounds import KillRounds, Round
+
+
+def kill_rounds(count: int, *, seed: int = 15, longest: float = 3.0) -> list[Round]:
+    """Run ``count`` kill rounds on one knowledge base; each round as it ends is printed."""
+    with tempfile.TemporaryDirectory(prefix="dura-recovery-") as tmp:
+        rounds = KillRounds(Path(tmp), seed=seed)
+        try:
+            for _ in range(count):
+                done = rounds.round(longest)
+                mark = "ok" if not done.left else "WRONG"
+                print(f"round {done.number}: {mark} ({done.did})", flush=True)
+            rounds.final_check()
+        finally:
+            rounds.close()
+    return rounds.rounds
+
+
+def rounds(count: int) -> tuple[int, int, str]:
+    """For :mod:`tests.benchmarks.reliability`: the rounds whose facts were right after
+    the kill and after the restart, the rounds, and what they covered."""
+    done = kill_rounds(count)
+    correct = sum(not r.problems for r in done)
+    mid_step = [r for r in done if r.running]
+    replanned = sum(r.plans > 1 for r in mid_step)
+    return correct, len(done), f"{len(mid_step)} while a step ran, {replanned} after a replan"
 
 
 def main() -> None:
@@ -31,17 +56,7 @@ def main() -> None:
     )
     args = parser.parse_args()
     began = time.monotonic()
-    with tempfile.TemporaryDirectory(prefix="dura-recovery-") as tmp:
-        rounds = KillRounds(Path(tmp), seed=args.seed)
-        try:
-            for _ in range(args.rounds):
-                done = rounds.round(args.longest)
-                mark = "ok" if not done.left else "WRONG"
-                print(f"round {done.number}: {mark} ({done.did})", flush=True)
-            rounds.final_check()
-        finally:
-            rounds.close()
-    done_rounds = rounds.rounds
+    done_rounds = kill_rounds(args.rounds, seed=args.seed, longest=args.longest)
     n = len(done_rounds)
     after_kill = sum(not r.left for r in done_rounds)
     after_restart = sum(r.recovered == [] for r in done_rounds)
