@@ -8,6 +8,7 @@ import contextlib
 import gc
 import importlib
 import os
+import signal
 import sys
 import threading
 from collections.abc import Sequence
@@ -153,13 +154,34 @@ def entry() -> None:
     gc.disable()
     try:
         args = parse()
+    except KeyboardInterrupt:  # Ctrl-C while the command loads: no traceback
+        sys.exit(130)
     finally:
         gc.freeze()
         gc.enable()
+    if getattr(args, "exits_at_once", False):  # nothing of its own to clean up after Ctrl-C
+        signal.signal(signal.SIGINT, _interrupted)
     code = execute(args)
     if getattr(args, "exits_at_once", False):
         _exit_at_once(code)
     sys.exit(code)
+
+
+INTERRUPT_GRACE = 5.0  # seconds a command has to end after Ctrl-C
+
+
+def _interrupted(signum: int, frame: Any) -> None:
+    """Ctrl-C: interrupt the command as Python does, and make sure it ends. A command
+    interrupted inside Zenoh (opening a session, or closing one while messages arrive)
+    could otherwise wait forever at its exit; after ``INTERRUPT_GRACE`` seconds it ends
+    with 130 whatever it waits for. Only for the commands that keep nothing open (see
+    :func:`exits_at_once`): the others stop what they started, however long it takes."""
+    with contextlib.suppress(OSError, ValueError):
+        sys.stdout.flush()
+    ender = threading.Timer(INTERRUPT_GRACE, os._exit, (130,))
+    ender.daemon = True
+    ender.start()
+    raise KeyboardInterrupt
 
 
 def exits_at_once(parser: Any) -> None:

@@ -14,6 +14,7 @@ from executive.bus.api.monitoring import OBSERVER_LATEST
 from executive.bus.keys import OBSERVATIONS
 from executive.bus.session import Bus
 from executive.bus.wording import number
+from executive.cli import exits_at_once
 from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json, table
 
@@ -36,6 +37,7 @@ def register(sub: Any) -> None:
         help="redraw the table as observations arrive (with --json: one JSON line each)",
     )
     add_json_flag(p)
+    exits_at_once(p)
     p.set_defaults(run=run)
 
 
