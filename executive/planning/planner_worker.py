@@ -261,24 +261,29 @@ def serve() -> None:
     devnull = os.open(os.devnull, os.O_RDWR)
     os.dup2(devnull, 0)
     os.dup2(2, 1)  # stray prints go to the worker log, never into the protocol
-    worker = _Worker(Path(tempfile.gettempdir()) / "engine-output.txt")
-    worker.setup()
-    send_frame(protocol_out, "ready")
-    with contextlib.suppress(BrokenPipeError):  # dura died while the worker planned
-        for message in _frames(protocol_in):
-            kind, engine, *args = message
-            try:
-                answer = getattr(worker, kind)(engine, *args)
-            except DuraError as e:  # a planning job's failure is a result; others raise it
-                answer = (
-                    PlanResult(PlanStatus.ERROR, None, engine, (str(e),)) if kind == "solve" else e
-                )
-            send_frame(protocol_out, answer)
-    # the input closed: dura is done with this worker, or died without cleaning up
-    # (SIGKILL); either way the engines' temporary files go with it
-    own = Path(tempfile.gettempdir())
-    if own.name.startswith(TMP_PREFIX):
-        shutil.rmtree(own, ignore_errors=True)
+    try:
+        worker = _Worker(Path(tempfile.gettempdir()) / "engine-output.txt")
+        worker.setup()
+        with contextlib.suppress(BrokenPipeError):  # dura died while the worker worked
+            send_frame(protocol_out, "ready")
+            for message in _frames(protocol_in):
+                kind, engine, *args = message
+                try:
+                    answer = getattr(worker, kind)(engine, *args)
+                except DuraError as e:  # a planning job's failure is a result; others raise
+                    answer = (
+                        PlanResult(PlanStatus.ERROR, None, engine, (str(e),))
+                        if kind == "solve"
+                        else e
+                    )
+                send_frame(protocol_out, answer)
+    finally:
+        # the input closed or the output broke: dura is done with this worker, or died
+        # without cleaning up (SIGKILL), also while the worker still warmed up; either
+        # way the engines' temporary files go with it
+        own = Path(tempfile.gettempdir())
+        if own.name.startswith(TMP_PREFIX):
+            shutil.rmtree(own, ignore_errors=True)
 
 
 if __name__ == "__main__":
