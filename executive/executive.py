@@ -91,7 +91,10 @@ class Executive:
             if lock.predecessor is not None:
                 end_leftovers(lock.predecessor)
             robot, components = self.robot, list(self.robot.components)
-            credentials = security.ensure_credentials(self.credentials_path, robot.name, components)
+            credentials = security.ensure_credentials(
+                self.credentials_path, robot.name, components, robot.hosts
+            )
+            security.write_host_credentials(credentials, self.folder, robot.hosts)
             users = self.credentials_path.with_suffix(".users")
             self.bus = stack.enter_context(
                 Bus(
@@ -101,7 +104,7 @@ class Executive:
                     listen=True,
                     login=credentials.login(security.EXECUTIVE),
                     dictionary=security.dictionary(credentials, users),
-                    access=security.access_control(robot.name, components),
+                    access=security.access_control(robot.name, components, robot.hosts),
                 )
             )
             self.kb = stack.enter_context(KnowledgeBase(self.kb_path))
@@ -168,7 +171,9 @@ class Executive:
         return [
             *recording,
             ComponentApi(context, self.launcher, by_hand=self.tasks),
-            ResourceMonitor(context, rate=self.resource_rate),
+            ResourceMonitor(  # host agents measure the components they run themselves
+                context, rate=self.resource_rate, components=self.robot.placed_on(None)
+            ),
             ObserverManager(context, sources=[ros2.topics] if ros2 is not None else []),
             DiagnosisService(context, learn=True),
             RuleService(context),

@@ -299,3 +299,30 @@ def find_login(robot: str, user: str, folders: Iterable[Path]) -> Login | None:
                 )
             return credentials.login(user)
     return None
+
+
+def find_host_login(robot: str, host: str, folder: Path, named: Path | None = None) -> Login:
+    """A host agent's login: from ``named``, else the file ``DURA_BUS_CREDENTIALS`` names,
+    else ``.dura/<robot>.<host>.bus.json``, else ``.dura/<robot>.bus.json`` in ``folder``.
+
+    Raises:
+        BusError: none of them is there, or the one there is unusable.
+    """
+    env = os.environ.get(ENV_CREDENTIALS)
+    if named is not None or env:
+        candidates = [named or Path(str(env))]
+    else:
+        candidates = [host_credentials_file(folder, robot, host), credentials_file(folder, robot)]
+    for path in candidates:
+        if path.exists() or len(candidates) == 1:
+            credentials = read_credentials(path)
+            if credentials.robot != robot:
+                raise BusError(
+                    f"{path}: bus credentials of robot '{credentials.robot}', not '{robot}'"
+                )
+            return credentials.login(host_user(host))
+    wanted = host_credentials_file(Path("."), robot, host)
+    raise BusError(
+        f"no bus credentials for host '{host}': copy {wanted} from the executive's folder "
+        f"into {folder / '.dura'} (chmod 600), or name it with --credentials"
+    )

@@ -107,9 +107,11 @@ class ProcessHost(ABC):
         """Whether processes can be started there now."""
         return True
 
+    @abstractmethod
     def open(self) -> None:
         """Start what the host needs (threads, subscriptions)."""
 
+    @abstractmethod
     def close(self) -> None:
         """Release it (after every process has ended)."""
 
@@ -127,6 +129,7 @@ class ProcessHost(ABC):
     def signal(self, process: ProcessHandle, signum: int, *, group: bool = True) -> None:
         """Signal a process's group (or only its supervisor) unless it has ended."""
 
+    @abstractmethod
     def note(self, process: ProcessHandle, text: str) -> None:
         """A line of dura's own in the process's log (where the host keeps one)."""
 

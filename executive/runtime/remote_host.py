@@ -145,6 +145,9 @@ class RemoteHost(ProcessHost):
         except DuraError as e:  # it ended meanwhile, or the host is gone: its end comes
             log.info("cannot signal '%s' on host '%s': %s", process.name, self.name, e)
 
+    def note(self, process: ProcessHandle, text: str) -> None:
+        """The agent writes its own lines (started, the end) into the log there."""
+
     def log_path(self, component: str) -> str:
         return f"{self.name}:{self._logs.get(component, f'.dura/logs/{component}.log')}"
 
@@ -284,9 +287,7 @@ class Hosts:
     def _report(self, name: str, components: set[str], *, available: bool) -> None:
         """Tell the diagnosis engine whether the components of a host are there."""
         for component in sorted(components):
-            message = (
-                f"its host '{name}' is back" if available else f"its host '{name}' was lost"
-            )
+            message = f"its host '{name}' is back" if available else f"its host '{name}' was lost"
             info = ObservationInfo(
                 "component",
                 (component,),
