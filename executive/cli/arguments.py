@@ -90,3 +90,15 @@ def megabytes(text: str) -> int:
     if not 1 / 16 <= value <= 1 << 20:
         raise argparse.ArgumentTypeError(f"must be from 0.0625 to {1 << 20} MB, not {text}")
     return round(value * (1 << 20))
+
+
+def event_kind(text: str) -> str:
+    """A kind of event dura logs (any case): ``FAIL``, ``task_failed``."""
+    from executive.bus.event_kinds import KINDS
+
+    kind = text.upper()
+    if kind not in KINDS:
+        raise argparse.ArgumentTypeError(
+            f"no event is of kind '{text}'; the kinds are: {', '.join(sorted(KINDS))}"
+        )
+    return kind

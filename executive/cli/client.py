@@ -2,12 +2,14 @@
 
 ``dura run`` writes ``.dura/executive.json`` (robot, endpoint, pid) in its working
 folder; commands run in the same folder find the executive there. ``--robot
-ROBOT.yaml`` (with ``--endpoint``, if the executive listens elsewhere) names it instead.
+ROBOT.yaml`` (with ``--endpoint``, if the executive listens elsewhere) names it instead;
+in the folder where that robot's executive runs, ``--robot`` alone finds it there.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 from pathlib import Path
@@ -32,7 +34,11 @@ def add_client_options(parser: Any) -> None:
         type=Path,
         help="the robot whose executive to ask (default: the one 'dura run' runs in this folder)",
     )
-    parser.add_argument("--endpoint", help="where that executive listens (default: the robot's)")
+    parser.add_argument(
+        "--endpoint",
+        help="where that executive listens (default: where the one that runs in this folder "
+        "does, if it is that robot's; else where the robot's description says)",
+    )
 
 
 def write_run_file(robot: str, endpoint: str, description: Path, credentials: Path) -> None:
@@ -54,7 +60,9 @@ def remove_run_file() -> None:
 
 
 def _target(args: argparse.Namespace) -> tuple[str, str, Login | None]:
-    """The robot's name, the endpoint of its executive and the operator's login."""
+    """The robot's name, the endpoint of its executive and the operator's login: the
+    executive that runs in this folder, unless ``--robot`` names another robot (then
+    at ``--endpoint``, else where its description says)."""
     if args.robot is not None:
         from knowledge.robot import read_robot  # YAML and the schema: only with --robot
 
@@ -62,8 +70,18 @@ def _target(args: argparse.Namespace) -> tuple[str, str, Login | None]:
         if robot is None:
             errors = [f for f in findings if f.is_error]
             raise DuraError(str(errors[0]) if errors else f"{args.robot}: unusable")
+        if args.endpoint is None and RUN_FILE.is_file():
+            with contextlib.suppress(DuraError):  # this folder's executive, if it is this robot's
+                name, endpoint, login = _running_here(args)
+                if name == robot.name:
+                    return name, endpoint, login
         login = security.find_login(robot.name, security.OPERATOR, [Path.cwd()])
         return robot.name, args.endpoint or robot.endpoint, login
+    return _running_here(args)
+
+
+def _running_here(args: argparse.Namespace) -> tuple[str, str, Login | None]:
+    """The executive ``dura run`` runs in this folder, from its run file."""
     try:
         found = json.loads(RUN_FILE.read_text())
         name, endpoint = str(found["robot"]), str(found["endpoint"])

@@ -9,6 +9,7 @@ from typing import Any
 
 from executive.bus.api import components
 from executive.bus.payloads import ComponentState, Lifecycle
+from executive.bus.wording import plural
 from executive.cli import exits_at_once
 from executive.cli.arguments import count, seconds
 from executive.cli.client import add_client_options, ask
@@ -132,7 +133,9 @@ def run_lifecycle(args: argparse.Namespace) -> int:
         faulting = tasks.COMPONENT_RESTART if args.verb == "restart" else tasks.COMPONENT_FAULT
         fault = ask(args, faulting, tasks.ComponentFault(name), timeout=timeout)
         state = ComponentState.from_payload(fault.state)
-        faults = f", {fault.faults} faults" + (", permanently faulty" if fault.permanent else "")
+        faults = f", {plural(fault.faults, 'fault')}" + (
+            ", permanently faulty" if fault.permanent else ""
+        )
         payload = {**fault.state, "faults": fault.faults, "permanent": fault.permanent}
     else:
         switch = components.COMPONENT_START if args.verb == "start" else components.COMPONENT_STOP

@@ -27,7 +27,8 @@ from pathlib import Path
 from typing import Any
 
 from executive.bus.keys import DIAGNOSES, EVENTS
-from executive.cli.demo import Timeline, _summary
+from executive.cli.demo import summary
+from executive.cli.demo_timeline import Timeline, replans
 from executive.cli.output import print_json
 from executive.ros2.names import dds_topic
 from executive.ros2.participant import Participant
@@ -71,6 +72,28 @@ def run(args: argparse.Namespace) -> int:
 
 def _demo(args: argparse.Namespace, folder: Path) -> int:
     timeline = Timeline(quiet=args.json, everything=args.all_events)
+    try:
+        goals, status, arrays = _scenario(folder, timeline)
+    finally:
+        timeline.close()
+    ok = all(g["state"] == "achieved" for g in goals)
+    elapsed = time.time() - timeline.start
+    if args.json:
+        print_json(
+            {"ok": ok, "elapsed": round(elapsed, 2), "goals": goals, "faults": status["faults"],
+             "plans": timeline.plans, "replans": len(replans(timeline.events)),
+             "events": timeline.events,
+             "diagnoses": timeline.diagnoses, "ros2_diagnostic_arrays": arrays}
+        )  # fmt: skip
+        return 0 if ok else 1
+    summary(goals, status, timeline, elapsed)
+    print(f"ROS 2 tools saw {arrays} DiagnosticArrays on /diagnostics", flush=True)
+    return 0 if ok else 1
+
+
+def _scenario(folder: Path, timeline: Timeline) -> tuple[list[dict[str, Any]], dict[str, Any], int]:
+    """Run the patrol on a robot in ``folder``: the goals, the status and how many
+    DiagnosticArrays ROS 2 heard."""
     say = timeline.say
     domain = random.SystemRandom().randint(1, 230)
     config = folder / "cyclonedds.xml"
@@ -79,12 +102,14 @@ def _demo(args: argparse.Namespace, folder: Path) -> int:
     os.environ["CYCLONEDDS_URI"] = config.as_uri()  # the executive and its nodes inherit it
     try:
         description = robot_variant(EXAMPLE, folder / "robot", {"ros2": {"domain_id": domain}})
-        say(f"starting the executive of the ROS 2 patrol robot in {folder} (DDS domain {domain})")
+        say("DEMO", f"starting the executive of the ROS 2 patrol robot in {folder} "
+            f"(DDS domain {domain})")  # fmt: skip
         with (
             RobotProcess(description, folder / "run") as robot,
             Participant(domain, name="demo") as participant,
             contextlib.ExitStack() as closing,
         ):
+            timeline.use(robot.kb_path)
             robot.bus.subscribe(EVENTS, timeline.on_event)
             robot.bus.subscribe(DIAGNOSES, timeline.on_diagnoses)
             ros = _Ros2Side(participant)
@@ -92,10 +117,10 @@ def _demo(args: argparse.Namespace, folder: Path) -> int:
             reply = ros.submit(GOAL)
             if not reply.get("accepted"):
                 raise DuraError(f"demo: the goal from ROS 2 was refused: {reply.get('reason')}")
-            say(f"{'ROS 2 GOAL':<17} goal {reply['goal']['id']} from /dura/goals: {GOAL}")
+            say("ROS 2 GOAL", f"goal {reply['goal']['id']} from /dura/goals: {GOAL}")
             timeline.wait("START", "move_to")
             time.sleep(1.5)  # let it drive a little
-            say(f"{'INJECT':<17} the lidar driver stops publishing /scan (/lidar/inject_fault)")
+            say("INJECT", "the lidar driver stops publishing /scan (/lidar/inject_fault)")
             ros.stall_lidar()
             timeline.wait("FAULT", "lidar", timeout=30)
             goals = _wait_for_goals(robot)
@@ -106,18 +131,7 @@ def _demo(args: argparse.Namespace, folder: Path) -> int:
             os.environ.pop("CYCLONEDDS_URI", None)
         else:
             os.environ["CYCLONEDDS_URI"] = before
-    ok = all(g["state"] == "achieved" for g in goals)
-    elapsed = time.time() - timeline.start
-    if args.json:
-        print_json(
-            {"ok": ok, "elapsed": round(elapsed, 2), "goals": goals, "faults": status["faults"],
-             "events": timeline.events, "diagnoses": timeline.diagnoses,
-             "ros2_diagnostic_arrays": arrays}
-        )  # fmt: skip
-        return 0 if ok else 1
-    _summary(goals, status, timeline, elapsed)
-    print(f"ROS 2 tools saw {arrays} DiagnosticArrays on /diagnostics", flush=True)
-    return 0 if ok else 1
+    return goals, status, arrays
 
 
 def _wait_for_goals(robot: RobotProcess) -> list[dict[str, Any]]:

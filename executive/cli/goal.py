@@ -10,6 +10,7 @@ import time
 from typing import Any, TextIO
 
 from executive.bus.api import planning as api
+from executive.bus.event_text import describe
 from executive.bus.keys import EVENTS
 from executive.bus.session import Bus, Message
 from executive.cli import exits_at_once
@@ -336,7 +337,7 @@ def run_show(args: argparse.Namespace) -> int:
         print()
         table(
             ["time", "event", "details"],
-            [[clock(e["stamp"]), e["kind"], details(e["data"])] for e in reply.events],
+            [[clock(e["stamp"]), e["kind"], describe(e)] for e in reply.events],
         )
     return 0
 
@@ -348,11 +349,3 @@ def run_cancel(args: argparse.Namespace) -> int:
     else:
         print(f"goal {goal['id']}: {goal['state']}")
     return 0
-
-
-def details(data: Any) -> str:
-    """An event's data on one line: ``key value, key value``."""
-    if not isinstance(data, dict):
-        return str(data)
-    shown = {k: v for k, v in data.items() if v not in (None, "", [], {}) and k != "stamp"}
-    return ", ".join(f"{k} {v}" for k, v in shown.items())

@@ -33,7 +33,11 @@ def register(sub: Any) -> None:
         action="store_true",
         help="draw the running executive's state: component states, diagnoses, faults",
     )
-    p.add_argument("--endpoint", help="where the executive listens (default: the robot's)")
+    p.add_argument(
+        "--endpoint",
+        help="where the executive listens (default: where the one that runs in this folder "
+        "does, if it is this robot's; else where the description says)",
+    )
     p.set_defaults(run=run)
 
 

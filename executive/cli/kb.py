@@ -9,6 +9,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from executive.bus.event_text import describe
+from executive.bus.wording import plural, seconds
 from executive.cli.arguments import count
 from executive.cli.output import add_json_flag, print_json, section, shown, table
 from knowledge.errors import DuraError
@@ -85,7 +87,7 @@ def run_show(args: argparse.Namespace) -> int:
                 g["id"],
                 g["state"],
                 g["priority"],
-                g["deadline"],
+                None if g["deadline"] is None else seconds(g["deadline"]),
                 g["source"],
                 g["expression"],
                 g["reason"],
@@ -119,13 +121,10 @@ def run_show(args: argparse.Namespace) -> int:
             for c in data["components"]
         ],
     )
-    section(f"last {args.events} events")
+    section(f"last {plural(args.events, 'event')}")
     table(
-        ["id", "time", "kind", "subject", "data"],
-        [
-            [e["id"], _clock(e["stamp"]), e["kind"], e["subject"], e["data"] or ""]
-            for e in data["events"]
-        ],
+        ["id", "time", "kind", "event"],
+        [[e["id"], _clock(e["stamp"]), e["kind"], describe(e)] for e in data["events"]],
     )
     return 0
 
@@ -161,6 +160,6 @@ def run_repair(args: argparse.Namespace) -> int:
         return 0
     kept = sum(done.kept.values())
     lost = sum(done.lost.values())
-    print(f"{shown(done.path)}: repaired: kept {kept} rows, could not read {lost}")
+    print(f"{shown(done.path)}: repaired: kept {plural(kept, 'row')}, could not read {lost}")
     print(f"the damaged file is kept as {shown(done.kept_aside)}")
     return 0

@@ -13,6 +13,7 @@ from typing import Any
 from executive.bus.api.monitoring import OBSERVER_LATEST
 from executive.bus.keys import OBSERVATIONS
 from executive.bus.session import Bus
+from executive.bus.wording import number
 from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json, table
 
@@ -53,10 +54,21 @@ def _row(payload: dict[str, Any], now: float) -> list[str]:
     if callerids:
         resource += f" [{', '.join(callerids)}]"
     values = payload.get("values") or {}
-    value = ", ".join(f"{k} {v:.4g}" for k, v in values.items()) or "-"
+    value = ", ".join(_measured(k, v) for k, v in values.items()) or "-"
     age = max(0.0, now - float(payload.get("stamp", now)))
     state = f"{payload.get('observation_msg', '')} ({payload.get('observation')})"
-    return [resource, str(payload.get("type", "")), state, value, f"{age:.1f}s"]
+    return [resource, str(payload.get("type", "")), state, value, f"{age:.1f} s"]
+
+
+UNITS = {"frequency": "Hz", "silence": "s", "age": "s", "delay": "s", "cpu": "%"}
+
+
+def _measured(quantity: str, value: float) -> str:
+    """A measured value with its unit: ``frequency 10 Hz``, ``silence 0.06 s``."""
+    if quantity == "memory":
+        return f"memory {number(value / (1 << 20))} MiB"
+    unit = UNITS.get(quantity, "")
+    return f"{quantity} {number(value)}" + (f" {unit}" if unit else "")
 
 
 def _table(observations: list[dict[str, Any]]) -> None:

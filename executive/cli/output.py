@@ -5,9 +5,11 @@ from __future__ import annotations
 import json
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, TextIO
+
+from executive.bus.wording import pairs
 
 
 def add_json_flag(parser: Any) -> None:
@@ -43,8 +45,20 @@ def table(headers: Sequence[str], rows: Sequence[Sequence[Any]], out: TextIO | N
         out.write("  ".join(v.ljust(w) for v, w in zip(row, widths, strict=True)).rstrip() + "\n")
 
 
-def section(title: str, out: TextIO | None = None) -> None:
-    (out or sys.stdout).write(f"\n{title}\n")
+BAR = 40  # characters of a timeline
+
+
+def bar(start: float, duration: float | None, span: float) -> str:
+    """A step's place in a timeline of ``BAR`` characters scaled to ``span`` seconds."""
+    span = span or 1.0
+    first = min(BAR - 1, int(start / span * BAR))
+    width = max(1, round((duration or 0.0) / span * BAR))
+    return "|" + (" " * first + "█" * min(width, BAR - first)).ljust(BAR) + "|"
+
+
+def section(title: str, out: TextIO | None = None, *, first: bool = False) -> None:
+    """A title, after a blank line unless it is the ``first`` thing printed."""
+    (out or sys.stdout).write(f"{title}\n" if first else f"\n{title}\n")
 
 
 def _cell(value: Any) -> str:
@@ -56,4 +70,6 @@ def _cell(value: Any) -> str:
         return f"{value:g}"
     if isinstance(value, (list, tuple)):
         return " ".join(_cell(v) for v in value) or "-"
+    if isinstance(value, Mapping):
+        return pairs(value) or "-"
     return str(value)

@@ -12,9 +12,10 @@ from typing import Any
 
 from executive.bus.api import planning as api
 from executive.bus.api import tasks
+from executive.bus.wording import plural
 from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
-from executive.cli.output import add_json_flag, print_json, shown, table
+from executive.cli.output import add_json_flag, bar, print_json, shown, table
 from executive.dashboard import gantt
 from executive.planning.expression import TRUE
 from executive.planning.goals import GoalSpec
@@ -23,8 +24,6 @@ from executive.planning.planner import Planner, PlanningTask, PlanResult, engine
 from executive.planning.problem import read_world
 from knowledge.description import DEFAULT_ENGINE
 from knowledge.errors import DuraError
-
-BAR = 40  # characters of the timeline
 
 
 def register(sub: Any) -> None:
@@ -92,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     with Planner(args.engine, args.timeout or 30.0) as planner:
         result = planner.solve(task)
     if args.svg is not None and result.plan is not None:
-        title = f"{problem.name}: {len(result.plan.steps)} steps, makespan {result.plan.makespan:g} s, by {result.engine}"
+        title = f"{problem.name}: {plural(len(result.plan.steps), 'step')}, makespan {result.plan.makespan:g} s, by {result.engine}"
         if write_svg(args.svg, gantt.render(gantt.offline_gantt(result.plan, title))):
             return 0
     if args.json:
@@ -102,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"dura: {shown(problem)}: no plan: {result.reason}", file=sys.stderr)
         return 1
     print(
-        f"{shown(problem)}: {len(result.plan.steps)} steps, makespan {result.plan.makespan:g} s, "
+        f"{shown(problem)}: {plural(len(result.plan.steps), 'step')}, makespan {result.plan.makespan:g} s, "
         f"by {result.engine} in {result.time:.2f} s, validated by {result.validator}"
     )
     print_timeline(result.plan)
@@ -188,14 +187,6 @@ def write_svg(target: str, picture: str) -> bool:
 
 def _duration(duration: float | None) -> str:
     return "-" if duration is None else f"{duration:g}"
-
-
-def bar(start: float, duration: float | None, span: float) -> str:
-    """A step's place in a timeline of ``BAR`` characters scaled to ``span`` seconds."""
-    span = span or 1.0
-    first = min(BAR - 1, int(start / span * BAR))
-    width = max(1, round((duration or 0.0) / span * BAR))
-    return "|" + (" " * first + "█" * min(width, BAR - first)).ljust(BAR) + "|"
 
 
 def _after(step: Step) -> str:

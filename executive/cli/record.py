@@ -19,6 +19,7 @@ from executive.bags.recording import (
 )
 from executive.bus.api.components import COMPONENT_LIST
 from executive.bus.keys import EXECUTIVE_ALIVE
+from executive.bus.wording import plural
 from executive.cli.arguments import count, megabytes
 from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json, shown
@@ -88,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
         print_json({"path": str(args.out), "messages": recorder.messages, "files": recorder.files})
     else:
         print(
-            f"dura: recorded {recorder.messages} messages of robot '{bus.robot}' in "
-            f"{recorder.files} file(s), the newest {shown(args.out)}"
+            f"dura: recorded {plural(recorder.messages, 'message')} of robot '{bus.robot}' in "
+            f"{plural(recorder.files, 'file')}, the newest {shown(args.out)}"
         )
     return 0

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from executive.bus.session import Message
+from executive.bus.wording import plural
 from executive.cli.arguments import factor, seconds
 from executive.cli.output import add_json_flag, print_json, shown
 from executive.testing.replay import BagReplay
@@ -178,7 +179,7 @@ class Printer:
     def summary(self, timeline: Timeline) -> None:
         out = self.out
         length = timeline.end - timeline.begin
-        out.write(f"\nsummary: {length:.3f} s replayed, {timeline.messages} messages\n")
+        out.write(f"\nsummary: {length:.3f} s replayed, {plural(timeline.messages, 'message')}\n")
         holds = timeline.holds()
         if not holds:
             out.write("  nothing was diagnosed\n")
@@ -193,7 +194,7 @@ class Printer:
             fired.setdefault((repair.rule, repair.action), []).append(repair.time)
         for (rule, action), times in fired.items():
             when = ", ".join(f"{t:.3f}" for t in times)
-            out.write(f"  rule {rule} would {action}: {len(times)} time(s) ({when})\n")
+            out.write(f"  rule {rule} would {action}: {plural(len(times), 'time')} ({when})\n")
         for hold in timeline.recorded_holds():
             periods = ", ".join(f"{a:.3f}-{b:.3f}" for a, b in hold.periods)
             out.write(

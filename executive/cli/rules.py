@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from executive.bus.wording import plural
 from executive.cli.output import add_json_flag, print_json, shown
 from knowledge.errors import AspError
 from knowledge.finding import Finding, Report, finding_of
@@ -56,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
         print(finding, file=sys.stderr)
     if errors:
         return 1
-    print(f"{shown(args.rules)}: valid: {len(rule_set.rules)} rules")
+    print(f"{shown(args.rules)}: valid: {plural(len(rule_set.rules), 'rule')}")
     for rule in rule_set.rules:
         print(f"  {rule.name}: {rule.action.describe()}")
     return 0

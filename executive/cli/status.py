@@ -10,12 +10,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from executive.bus.api import planning as api
+from executive.bus.event_text import diagnosis, line
 from executive.bus.keys import EVENTS
 from executive.bus.session import Bus, Message
 from executive.cli import exits_at_once
-from executive.cli.arguments import count
+from executive.cli.arguments import count, event_kind
 from executive.cli.client import add_client_options, ask, connect
-from executive.cli.goal import GOAL_HEADERS, details, goal_rows
+from executive.cli.goal import GOAL_HEADERS, goal_rows
 from executive.cli.output import add_json_flag, print_json, section, table
 
 if TYPE_CHECKING:
@@ -35,7 +36,12 @@ def register(sub: Any) -> None:
     events.add_argument(
         "-n", "--lines", type=count, default=30, metavar="N", help="how many past events (30)"
     )
-    events.add_argument("--kind", metavar="KIND", help="only events of this kind (e.g. FAIL)")
+    events.add_argument(
+        "--kind",
+        type=event_kind,
+        metavar="KIND",
+        help="only events of this kind (e.g. FAIL, TASK_FAILED, COMPONENT_READY)",
+    )
     events.add_argument("--follow", action="store_true", help="keep printing new events")
     events.add_argument(
         "--db", type=Path, metavar="FILE", help="read this knowledge base file, not a robot"
@@ -52,15 +58,6 @@ def register(sub: Any) -> None:
         exits_at_once(cmd)
         add_client_options(cmd)
         add_json_flag(cmd)
-
-
-def event_line(event: dict[str, Any]) -> str:
-    """One event as a line of a timeline."""
-    stamp = float(event.get("stamp", 0.0))
-    clock = time.strftime("%H:%M:%S", time.localtime(stamp)) + f".{int(stamp % 1 * 1000):03d}"
-    text = f"{clock}  {event.get('kind', '?'):<18} {event.get('subject', '')}"
-    more = details(event.get("data") or {})
-    return f"{text}  {more}" if more else text
 
 
 def run_events(args: argparse.Namespace) -> int:
@@ -151,7 +148,7 @@ def _is_event(message: Message) -> bool:
 
 
 def _show(event: dict[str, Any], as_json: bool) -> None:
-    print(json.dumps(event, sort_keys=True) if as_json else event_line(event), flush=True)
+    print(json.dumps(event, sort_keys=True) if as_json else line(event), flush=True)
 
 
 def run_status(args: argparse.Namespace) -> int:
@@ -165,7 +162,7 @@ def run_status(args: argparse.Namespace) -> int:
 
 def print_status(status: dict[str, Any], out: Any = None) -> None:
     out = out or sys.stdout
-    section(f"robot {status['robot']}: goals", out)
+    section(f"robot {status['robot']}: goals", out, first=True)
     table(GOAL_HEADERS, goal_rows(status["goals"]), out)
     plan, execution = status.get("plan"), status.get("execution") or {}
     if plan is not None:
@@ -176,7 +173,7 @@ def print_status(status: dict[str, Any], out: Any = None) -> None:
             [
                 [
                     s["index"],
-                    f"{s['start']:.2f}",
+                    f"{s['start']:.3f}",
                     "-" if s["duration"] is None else f"{s['duration']:g}",
                     f"{s['action']}({', '.join(s['args'])})",
                     states.get(s["index"], "-"),
@@ -213,5 +210,4 @@ def print_status(status: dict[str, Any], out: Any = None) -> None:
         )
     diagnoses = status.get("diagnoses") or {}
     if diagnoses:
-        found = ["{" + ", ".join(d) + "}" for d in diagnoses.get("diagnoses", [])]
-        section(f"diagnosis: {diagnoses.get('status')} {' or '.join(found)}", out)
+        section(f"diagnosis: {diagnosis(diagnoses)}", out)

@@ -9,8 +9,7 @@ from typing import Any
 from executive.bus.api import tasks as api
 from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
-from executive.cli.output import add_json_flag, print_json, section, table
-from executive.cli.plan import bar
+from executive.cli.output import add_json_flag, bar, print_json, section, table
 from knowledge.errors import DuraError
 
 
@@ -91,7 +90,7 @@ def run_start(args: argparse.Namespace) -> int:
     if args.json:
         print_json(reply.to_payload())
     else:
-        print(f"task {reply.id}: {args.task} requested")
+        print(f"task {reply.id}: {request.label} requested")
     return 0
 
 

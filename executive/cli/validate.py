@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from executive.bus.wording import plural
 from executive.cli import exits_at_once
 from executive.cli.output import add_json_flag, print_json, shown
 from executive.cli.reader_environment import use_reader_environment
@@ -63,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     observers = check_observer_file(args.robot)
     if observers is not None:
         specs, findings = observers
-        summary = f"{len(specs)} observers ({', '.join(s.type for s in specs) or 'none'})"
+        summary = f"{plural(len(specs), 'observer')} ({', '.join(s.type for s in specs) or 'none'})"
         return _report(args, findings, True, summary)
     result = validate(args.robot)
     robot = result.robot
@@ -76,8 +77,9 @@ def run(args: argparse.Namespace) -> int:
     summary = ""
     if robot is not None:
         summary = (
-            f"robot '{robot.name}', {len(robot.functionalities)} functionalities, "
-            f"{len(robot.behaviors)} behaviors, {len(robot.tasks)} tasks, "
+            f"robot '{robot.name}', "
+            f"{plural(len(robot.functionalities), 'functionality', 'functionalities')}, "
+            f"{plural(len(robot.behaviors), 'behavior')}, {plural(len(robot.tasks), 'task')}, "
             f"domain '{result.domain.name if result.domain else '?'}'"
         )
     return _report(args, findings, robot is not None, summary)
@@ -104,6 +106,6 @@ def _report(args: argparse.Namespace, findings: list[Finding], usable: bool, sum
         return 1
     print(
         f"{shown(args.robot)}: valid: {summary}"
-        + (f", {len(warnings)} warnings" if warnings else "")
+        + (f", {plural(len(warnings), 'warning')}" if warnings else "")
     )
     return 0

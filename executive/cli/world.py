@@ -7,6 +7,7 @@ import argparse
 from typing import Any
 
 from executive.bus.api import planning as api
+from executive.bus.wording import plural
 from executive.cli import exits_at_once
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
@@ -104,6 +105,6 @@ def run_object_remove(args: argparse.Namespace) -> int:
         return 0
     ((name, type_name),) = removed.objects.items()
     facts = [f["text"] for f in removed.facts]
-    also = f", and {len(facts)} facts: {', '.join(facts)}" if facts else ""
+    also = f", and {plural(len(facts), 'fact')}: {', '.join(facts)}" if facts else ""
     print(f"object {name} - {type_name} removed{also}")
     return 0

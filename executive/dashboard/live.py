@@ -14,6 +14,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from executive.bus.event_text import describe
 from executive.bus.payloads import DiagnosisInfo, Lifecycle
 from executive.dashboard import gantt, graph, svg
 from knowledge.description import FunctionalitySpec, RobotDescription
@@ -171,8 +172,8 @@ class LiveState:
     # --- what the bus brought ----------------------------------------------------------
 
     def add_event(self, event: dict[str, Any]) -> bool:
-        """Keep a logged event; returns whether it is new (the log and the live
-        subscription may both bring it)."""
+        """Keep a logged event with its readable line (``text``, for the page); returns
+        whether it is new (the log and the live subscription may both bring it)."""
         number = event.get("id")
         if isinstance(number, int):
             if number in self._seen:
@@ -181,6 +182,7 @@ class LiveState:
             if len(self._seen) > 4 * PLAN_EVENTS_KEPT:
                 oldest = sorted(self._seen)[: 2 * PLAN_EVENTS_KEPT]
                 self._seen.difference_update(oldest)
+        event.setdefault("text", describe(event))
         self.events.append(event)
         kind = str(event.get("kind", ""))
         subject = str(event.get("subject", ""))

@@ -19,6 +19,7 @@ from collections import defaultdict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
+from executive.bus.wording import seconds
 from executive.planning.expression import And
 from executive.planning.goals import GoalSpec
 from executive.planning.planner import Planner, PlanningTask, PlanResult, PlanStatus
@@ -89,7 +90,9 @@ def missing_for(goal: GoalSpec, result: PlanResult) -> list[str]:
 def unreachable_reason(goal: GoalSpec, kept: Sequence[GoalSpec], attempt: PlanResult) -> str:
     """Say why no plan reaches a goal together with the ``kept`` ones: what it misses, if the
     relaxed reachability check tells, else the engine's answer or the goals in the way."""
-    by = f" by its deadline ({goal.deadline:g} s from now)" if goal.deadline is not None else ""
+    by = (
+        f" by its deadline ({seconds(goal.deadline)} from now)" if goal.deadline is not None else ""
+    )
     missing = missing_for(goal, attempt)
     if missing:  # nothing can make part of it true: the other goals do not matter
         return f"no plan reaches it{by} from the current state: {'; '.join(missing)} ({attempt.reason})"

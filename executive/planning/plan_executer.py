@@ -275,9 +275,10 @@ class PlanExecuter:
         old = [] if self._run is None else [r for r in self._run.runs.values() if r.state.active]
         for g in self._goals:
             cancel_timer(g.timer)
+        previous = None if self._run is None else self._run.plan_id
         run = self._run = PlanRun(plan, plan_id, self._context)
         for left in run.adopt(old):
-            run.cancel(left, "not in the new plan", undo=True)
+            run.cancel(left, "not in the new plan", undo=True, plan=previous)
         self._tell(PlanChange(plan_id, PlanState.EXECUTING))
         self._goals = []
         for spec in goals:

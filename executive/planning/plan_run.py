@@ -160,7 +160,8 @@ class PlanRun:
             if run.state.active:
                 self.cancel(run, reason, undo=True)
 
-    def cancel(self, run: StepRun, reason: str, *, undo: bool) -> None:
+    def cancel(self, run: StepRun, reason: str, *, undo: bool, plan: int | None = None) -> None:
+        """Cancel a step; ``plan``: the plan it belongs to, if an earlier one's."""
         if run.held is not None and run.held[0] is Progress.SUCCEEDED:
             # it ended while paused: its effects are real, whatever the new plan assumed
             run.state = StepState.RUNNING
@@ -173,7 +174,7 @@ class PlanRun:
         if undo:
             self.undo(run)
         run.state = StepState.CANCELLED
-        self.event("CANCEL", run, reason=reason)
+        self.event("CANCEL", run, reason=reason, **({} if plan is None else {"plan": plan}))
 
     # --- a step's life ----------------------------------------------------------------
 

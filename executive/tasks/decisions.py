@@ -47,6 +47,7 @@ class Decision:
         start_later: waiting tasks that start later, with their start (epoch seconds).
         behind_running: waiting tasks that start when a running task ends (it may
             overrun, so they get no time).
+        behind: for each of those, the running tasks it waits for.
         configuration: the system configuration to run after the decision.
         transition: the steps from the running configuration to that one.
     """
@@ -57,6 +58,7 @@ class Decision:
     start_now: Mapping[str, Mapping[str, str]] = field(default_factory=dict)
     start_later: Mapping[str, float] = field(default_factory=dict)
     behind_running: frozenset[str] = frozenset()
+    behind: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     configuration: SystemConfiguration = field(default_factory=SystemConfiguration)
     transition: Transition = field(default_factory=Transition)
 
@@ -106,14 +108,16 @@ def decide(
     reconfigured: dict[str, Mapping[str, str]] = {}
     start_now: dict[str, Mapping[str, str]] = {}
     start_later: dict[str, float] = {}
-    behind: set[str] = set()
+    behind: dict[str, tuple[str, ...]] = {}
     for task_id, assignment in result.assignments.items():
         task, providers = by_id[task_id], dict(assignment.providers)
         if task.phase.holds:
             if providers != dict(task.providers):
                 reconfigured[task_id] = providers
         elif any(a in by_id and by_id[a].phase.holds for a in assignment.after):
-            behind.add(task_id)
+            behind[task_id] = tuple(
+                a for a in assignment.after if a in by_id and by_id[a].phase.holds
+            )
         elif assignment.start <= NOW:
             start_now[task_id] = providers
         else:
@@ -131,6 +135,7 @@ def decide(
         start_now=start_now,
         start_later=start_later,
         behind_running=frozenset(behind),
+        behind=behind,
     )
     return _changes(decision, running, target, functionalities)
 

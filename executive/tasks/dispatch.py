@@ -194,9 +194,10 @@ class Dispatcher:
             self.ledger.event("TASK_RECONFIGURED", task, before=task.providers, after=providers)
             task.providers = dict(providers)
         for task_id in decision.behind_running:
-            self.ledger.get(task_id).start_at = None  # it waits for a running task
+            waiting = self.ledger.get(task_id)  # it waits for a running task, not a time
+            waiting.start_at, waiting.behind = None, decision.behind.get(task_id, ())
         for task_id, start in decision.start_later.items():
-            self.ledger.get(task_id).start_at = start
+            self.ledger.get(task_id).start_at, self.ledger.get(task_id).behind = start, ()
         for task_id, providers in decision.start_now.items():
             task = self.ledger.get(task_id)
             task.providers, task.start_at = dict(providers), None

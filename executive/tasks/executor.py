@@ -353,7 +353,7 @@ class TaskExecutor(Service):
         if spec is not None:  # the objects it names must be in the world, of their types
             check_objects(spec, request.goal, self._domain(), self.kb.objects())
         handle = self.start_task(
-            behavior, request.goal, name=request.task, duration=request.duration,
+            behavior, request.goal, name=request.label, duration=request.duration,
             earliest=request.earliest or 0.0, deadline=request.deadline,
             together=tuple(request.together),
         )  # fmt: skip

@@ -35,13 +35,18 @@ class Snapshot:
 
     def schedule(self, now: float) -> ScheduleReply:
         """The running and waiting tasks in time (seconds from ``now``), the running
-        and the faulty functionalities."""
+        and the faulty functionalities. A task that waits behind running ones starts
+        when the last of them is due to end (or now, if they overran)."""
         rows = []
-        for t in self.tasks:
+        ends: dict[str, float] = {}
+        for t in self.tasks:  # oldest first: the tasks one waits behind come before it
             if t.phase.final:
                 continue
             at = t.began if t.phase.holds else t.start_at
             start = (now if at is None else at) - now
+            if not t.phase.holds and at is None and t.behind:
+                start = max([0.0, *(ends[b] for b in t.behind if b in ends)])
+            ends[t.id] = start + t.duration
             rows.append({**t.to_payload(), "start": round(start, 3),
                          "end": round(start + t.duration, 3)})  # fmt: skip
         return ScheduleReply(rows, sorted(self.running), sorted(self.faulty))

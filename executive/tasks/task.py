@@ -93,6 +93,7 @@ class TaskView:
             what it last held, after it ended).
         began: when its behavior first ran.
         start_at: its scheduled start, while it waits for a later one.
+        behind: the running tasks it waits for, while it waits behind them.
     """
 
     id: str
@@ -107,6 +108,7 @@ class TaskView:
     providers: Mapping[str, str] = field(default_factory=dict)
     began: float | None = None
     start_at: float | None = None
+    behind: tuple[str, ...] = ()
     reason: str = ""
     end: TaskEnd | None = None
     result: Mapping[str, Any] | None = None
@@ -157,6 +159,7 @@ class Task:
     result: dict[str, Any] | None = None
     done: threading.Event = field(default_factory=threading.Event)
     start_at: float | None = None  # scheduled start (epoch), while waiting
+    behind: tuple[str, ...] = ()  # the running tasks it waits for, while waiting
     repair: TaskAction = TaskAction.RESTART  # how it goes on after a repair
 
     def usage(self) -> TaskUsage:
@@ -178,6 +181,7 @@ class Task:
             providers=dict(self.providers),
             began=self.began,
             start_at=self.start_at,
+            behind=self.behind,
             reason=self.reason,
             end=self.end,
             result=self.result,

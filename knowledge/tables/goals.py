@@ -11,6 +11,7 @@ from __future__ import annotations
 import sqlite3
 import time
 from collections.abc import Iterable
+from typing import Any
 
 from knowledge.errors import KnowledgeError
 from knowledge.records import Goal, GoalState, Plan, PlanState, PlanStep
@@ -104,10 +105,18 @@ class GoalTables(EventLog):
         engine: str = "",
         goal_ids: Iterable[int] = (),
     ) -> Plan:
-        """Store a new plan; any plan still pending or executing is superseded."""
+        """Store a new plan; any plan still pending or executing is superseded (its
+        PLAN_STORED event says which it ``replaces``)."""
         now = time.time()
         steps = list(steps)
         with self.transaction() as db:
+            replaced = [
+                int(r[0])
+                for r in db.execute(
+                    "SELECT id FROM plans WHERE state IN (?, ?) ORDER BY id",
+                    (PlanState.PENDING.value, PlanState.EXECUTING.value),
+                )
+            ]
             db.execute(
                 "UPDATE plans SET state = ?, updated = ? WHERE state IN (?, ?)",
                 (
@@ -130,11 +139,10 @@ class GoalTables(EventLog):
                     for s in steps
                 ],
             )
-            self.log_event(
-                "PLAN_STORED",
-                f"plan {plan_id}",
-                {"steps": len(steps), "engine": engine},
-            )
+            stored: dict[str, Any] = {"steps": len(steps), "engine": engine}
+            if replaced:
+                stored["replaces"] = replaced[-1]
+            self.log_event("PLAN_STORED", f"plan {plan_id}", stored)
         return self.plan(plan_id)
 
     def plan(self, plan_id: int) -> Plan:

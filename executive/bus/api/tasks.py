@@ -24,6 +24,13 @@ class TaskStart(Payload):
     deadline: Seconds | None = None
     together: list[str] = field(default_factory=list)
 
+    @property
+    def label(self) -> str:
+        """The task's name in lists and logs, by its goal fields as a plan step is by its
+        objects: ``move_to(start=dock, target=lab)``."""
+        fields = ", ".join(f"{key}={value}" for key, value in self.goal.items())
+        return f"{self.task}({fields})" if fields else self.task
+
 
 @dataclass(frozen=True)
 class TaskStarted(Payload):

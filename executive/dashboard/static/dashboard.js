@@ -265,9 +265,11 @@ function aboutGoal(event, id) {
     (data.goal_ids || []).includes(id) || data.goal === id;
 }
 
-function details(data) {
-  return Object.entries(data || {}).map(([k, v]) =>
-    `${k}=${typeof v === "object" ? JSON.stringify(v) : v}`).join("  ");
+function details(event) {
+  // the server's readable line (executive/bus/event_text.py), else the raw data
+  if (event.text) return event.text;
+  return [event.subject, ...Object.entries(event.data || {}).map(([k, v]) =>
+    `${k}=${typeof v === "object" ? JSON.stringify(v) : v}`)].join("  ");
 }
 
 function drawEvents(fresh) {
@@ -283,8 +285,7 @@ function drawEvents(fresh) {
       el("td", null, e.id),
       el("td", null, clock(e.stamp)),
       el("td", null, e.kind),
-      el("td", null, e.subject),
-      el("td", { class: "mono" }, details(e.data)),
+      el("td", null, details(e)),
     )));
   page.lastEventId = Math.max(lastId, ...page.events.map((e) => e.id || 0));
 }

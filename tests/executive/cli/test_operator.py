@@ -245,14 +245,14 @@ def test_events_are_read_from_a_knowledge_base_file(tmp_path: Path) -> None:
     path = tmp_path / "stopped.db"
     with KnowledgeBase(path) as kb:
         kb.log_event("GOAL_ADDED", "goal 1", {"expression": "(robot_at lab)"})
-        kb.log_event("FAULT", "lidar", {"reason": "exited"})
+        kb.log_event("FAULT", "lidar", {"count": 1, "permanent": False, "reason": "exited"})
         kb.log_event("GOAL_ACHIEVED", "goal 1")
     shown = run_dura("events", "--db", str(path))
     assert shown.returncode == 0, shown.stderr
-    assert [line.split()[1:3] for line in shown.stdout.splitlines()] == [
-        ["GOAL_ADDED", "goal"],
-        ["FAULT", "lidar"],
-        ["GOAL_ACHIEVED", "goal"],
+    assert [line.split(maxsplit=1)[1] for line in shown.stdout.splitlines()] == [
+        "GOAL_ADDED             goal 1: (robot_at lab)",
+        "FAULT                  lidar: fault 1: exited",
+        "GOAL_ACHIEVED          goal 1",
     ]
     faults = run_dura("events", "--db", str(path), "--kind", "FAULT", "--json")
     assert [e["subject"] for e in json.loads(faults.stdout)["events"]] == ["lidar"]

@@ -81,7 +81,7 @@ def test_replaying_the_same_bag_twice_prints_the_same(dura: Dura, tmp_path: Path
     assert lines[-3:] == [
         "summary: 19.900 s replayed, 180 messages",
         "  diagnosis lidar: held 2.000 s (10.520-12.520)",
-        "  rule restart_lidar would restart lidar: 1 time(s) (10.520)",
+        "  rule restart_lidar would restart lidar: 1 time (10.520)",
     ]
     json_first, json_second = replay(dura, bag, "--json"), replay(dura, bag, "--json")
     assert json_first.stdout == json_second.stdout

@@ -123,3 +123,9 @@ def test_observations_keep_the_last_minutes_of_their_values(state: LiveState) ->
 
 def test_without_a_plan_the_plan_view_says_so(state: LiveState) -> None:
     assert state.view("plan")["title"] == "no plan yet"
+
+
+def test_an_event_reaches_the_page_with_its_readable_line(state: LiveState) -> None:
+    state.add_event({"id": 9, "kind": "FAULT", "subject": "lidar",
+                     "data": {"count": 1, "permanent": False, "reason": "crashed"}})  # fmt: skip
+    assert state.view("events")["events"][-1]["text"] == "lidar: fault 1: crashed"

@@ -80,6 +80,7 @@ def test_a_second_move_waits_behind_the_running_one_without_a_time() -> None:
     first = running("1", LIDAR)
     d = decision(first, task("2"))
     assert d.behind_running == {"2"}
+    assert d.behind == {"2": ("1",)}  # what the schedule view draws it after
     assert not d.start_now and not d.start_later and d.wake is None
     assert d.transition.empty  # the first keeps its configuration
     assert d.configuration == on(first)

@@ -40,3 +40,18 @@ def test_a_task_asked_for_joins_the_snapshot_as_waiting() -> None:
     assert [(t["id"], t["name"], t["state"]) for t in snapshot.task_list()] == [
         ("7", "move_to(dock, lab)", "waiting")
     ]
+
+
+def test_a_task_waiting_behind_a_running_one_is_drawn_after_it_as_the_scheduler_decided() -> None:
+    snapshot = Snapshot(
+        (
+            TaskView("1", "move_to", 5.0, phase=TaskPhase.RUNNING, providers=CAM, began=NOW - 1.0),
+            TaskView("2", "move_to", 5.0, behind=("1",)),
+        )
+    )
+    assert [(r["id"], r["start"], r["end"]) for r in snapshot.schedule(NOW).tasks] == [
+        ("1", -1.0, 4.0),
+        ("2", 4.0, 9.0),
+    ]
+    overran = snapshot.schedule(NOW + 6.0)  # the first runs longer than planned
+    assert [(r["id"], r["start"]) for r in overran.tasks] == [("1", -7.0), ("2", 0.0)]

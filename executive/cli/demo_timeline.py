@@ -1,0 +1,311 @@
+"""What ``dura demo`` shows while the robot works: a line for each event that matters
+(as :mod:`executive.bus.event_text` reads it) and each diagnosis, in the order they
+happened; each plan the robot executes as a compact timeline when it starts, with the
+plan it replaces and why; and, on a terminal only, a last line saying what the robot
+does now, so that the demo is never silent.
+
+Events and diagnoses come on two bus subscriptions (two threads), so a rule that fired
+on a diagnosis may arrive before it: lines wait ``SETTLE`` seconds and are printed in
+the order of their stamps.
+"""
+
+from __future__ import annotations
+
+import heapq
+import io
+import itertools
+import queue
+import shutil
+import sys
+import threading
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any, TextIO
+
+from executive.bus.event_kinds import WIDTH
+from executive.bus.event_text import describe, diagnosis
+from executive.bus.session import Message
+from executive.bus.wording import listed, plural, seconds
+from executive.cli.output import bar, table
+from knowledge.errors import DuraError
+
+SETTLE = 0.3  # seconds a line waits for what happened before it to arrive
+TICK = 0.1  # seconds between two looks of the printer
+INDENT = " " * 9  # under the time column
+
+# What a person wants to see of the event log; the rest is there with --all-events.
+SHOWN = {
+    "GOAL_ADDED", "GOAL_ACHIEVED", "GOAL_FAILED", "GOAL_UNREACHABLE", "GOAL_CANCELLED",
+    "START", "END", "FAIL", "REPLAN", "CANCEL",
+    "COMPONENT_READY", "COMPONENT_EXITED", "COMPONENT_FAILED", "FAULT", "PERMANENT_FAULT",
+    "INTEGRITY_GOAL", "CONFIGURATION", "TASK_FAILED", "TASK_PAUSED", "TASK_RESUMED",
+    "REPAIR", "TASK_RESTARTED", "RULE_FIRED", "RULE_FAILED",
+}  # fmt: skip
+
+
+def replans(events: Sequence[Mapping[str, Any]]) -> list[int]:
+    """The plans (ids) that replaced another while it ran, or that came after a plan
+    failed (REPLAN), from the event log in its order: the robot's replans."""
+    replacing: set[int] = set()
+    failed = False
+    found = []
+    for event in events:
+        kind, data = event.get("kind"), event.get("data") or {}
+        if kind == "REPLAN":
+            failed = True
+        elif kind == "PLAN_STORED" and data.get("replaces"):
+            replacing.add(_plan_id(event))
+        elif kind == "PLAN_START":
+            plan = _plan_id(event)
+            if plan in replacing or failed:
+                found.append(plan)
+            failed = False
+    return found
+
+
+def _plan_id(event: Mapping[str, Any]) -> int:
+    return int(str(event.get("subject", "plan 0")).removeprefix("plan "))
+
+
+class Timeline:
+    """Prints the demo as it goes (see the module docstring) and keeps what it saw.
+
+    Args:
+        quiet: print nothing (``--json``); everything is still kept.
+        everything: show every event, not only those in ``SHOWN``.
+        out: where to print.
+    """
+
+    def __init__(self, *, quiet: bool, everything: bool, out: TextIO | None = None) -> None:
+        self.start = time.time()
+        self.out = out or sys.stdout
+        self.quiet = quiet
+        self.everything = everything
+        self.live = not quiet and self.out.isatty()
+        self.events: list[dict[str, Any]] = []
+        self.diagnoses: list[dict[str, Any]] = []
+        self.plans: list[dict[str, Any]] = []  # each executed plan, as it started
+        self.arrived: queue.Queue[dict[str, Any]] = queue.Queue()  # for wait()
+        self.activity = "starting the executive"
+        self._kb_path: Path | None = None
+        self._lock = threading.Lock()
+        self._pending: list[tuple[float, int, str, dict[str, Any]]] = []  # a heap by stamp
+        self._order = itertools.count()
+        self._last_diagnosis = ""
+        self._states: dict[str, str] = {}  # component → its last COMPONENT_ kind
+        self._resumed: set[Any] = set()  # COMPONENT_READY events after a pause
+        self._planning = ""  # the reason of the newest planning round
+        self._why: dict[int, str] = {}  # plan → why it was made (replacing, or after a failure)
+        self._replaces: dict[int, int] = {}
+        self._failed = ""  # why the last plan failed, until the next one starts
+        self._running: dict[str, None] = {}  # steps under way, in order
+        self._starting: dict[str, None] = {}  # components coming up
+        self._drawn = ""  # the live line on the terminal
+        self._stop = threading.Event()
+        self._printer = threading.Thread(target=self._print_loop, name="demo-timeline")
+        self._printer.start()
+
+    def use(self, kb_path: Path) -> None:
+        """Read executed plans from this knowledge base (the robot's)."""
+        self._kb_path = kb_path
+
+    def close(self) -> None:
+        """Print what is still waiting and take the live line away."""
+        self._stop.set()
+        self._printer.join()
+        self._flush(everything=True)
+        self._clear()
+
+    # --- what comes in (bus threads, the demo's thread) ---------------------------------
+
+    def say(self, kind: str, text: str) -> None:
+        """A line of the demo's own (what it does to the robot), at once."""
+        self._push(time.time(), kind, {"text": text})
+
+    def doing(self, activity: str) -> None:
+        """What the robot does now, for the live line."""
+        self.activity = activity
+
+    def on_event(self, message: Message) -> None:
+        event = message.payload
+        with self._lock:
+            self.events.append(event)
+            self._follow(event)
+        self.arrived.put(event)
+        self._push(float(event.get("stamp") or time.time()), "event", event)
+
+    def on_diagnoses(self, message: Message) -> None:
+        payload = message.payload
+        shown = diagnosis(payload)
+        with self._lock:
+            self.diagnoses.append(payload)
+            if shown == self._last_diagnosis:
+                return
+            self._last_diagnosis = shown
+        self._push(float(payload.get("stamp") or time.time()), "DIAGNOSIS", {"text": shown})
+
+    def wait(self, kind: str, subject: str = "", timeout: float = 60.0) -> dict[str, Any]:
+        """The next event of ``kind`` about ``subject``: a component (``lidar``, not
+        ``lidar_filter``) or an action (``move_to`` for ``move_to(dock, lab)``)."""
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise DuraError(f"demo: no {kind} {subject} within {timeout:g} s")
+            try:
+                event = self.arrived.get(timeout=left)
+            except queue.Empty:
+                continue
+            about = str(event.get("subject", ""))
+            if event.get("kind") == kind and (
+                not subject or about == subject or about.startswith(subject + "(")
+            ):
+                return event
+
+    def _push(self, stamp: float, kind: str, item: dict[str, Any]) -> None:
+        with self._lock:
+            heapq.heappush(self._pending, (stamp, next(self._order), kind, item))
+
+    def _follow(self, event: Mapping[str, Any]) -> None:
+        """Keep up with what the robot does (in the log's order, under the lock)."""
+        kind, subject = str(event.get("kind", "")), str(event.get("subject", ""))
+        data = event.get("data") or {}
+        if kind.startswith("COMPONENT_"):
+            if kind == "COMPONENT_READY" and self._states.get(subject) == "COMPONENT_PAUSED":
+                self._resumed.add(event.get("id"))
+            self._states[subject] = kind
+        if kind == "PLANNING":
+            self._planning = str(data.get("reason", ""))
+            self.activity = f"planning ({self._planning})" if self._planning else "planning"
+        elif kind == "PLAN_STORED":
+            plan = _plan_id(event)
+            self._why[plan] = self._planning
+            if data.get("replaces"):
+                self._replaces[plan] = int(data["replaces"])
+        elif kind == "REPLAN":
+            self._failed = str(data.get("reason", "")) or "it failed"
+        elif kind == "PLAN_START":  # why this plan, as things stood when it started
+            plan = _plan_id(event)
+            replaces = self._replaces.get(plan)
+            self._why[plan] = self._why.get(plan, "") if replaces else self._failed
+            self._failed = ""
+        elif kind == "START":
+            self._running[subject] = None
+        elif kind in ("END", "FAIL", "CANCEL"):
+            self._running.pop(subject, None)
+        elif kind == "COMPONENT_STARTING":
+            self._starting[subject] = None
+        elif kind in ("COMPONENT_READY", "COMPONENT_FAILED", "COMPONENT_EXITED"):
+            self._starting.pop(subject, None)
+        if self._starting:
+            self.activity = f"starting {', '.join(self._starting)}"
+        elif self._running and kind != "PLANNING":
+            self.activity = f"running {', '.join(self._running)}"
+
+    # --- the printer's thread -----------------------------------------------------------
+
+    def _print_loop(self) -> None:
+        while not self._stop.wait(TICK):
+            self._flush(everything=False)
+            self._draw()
+
+    def _flush(self, *, everything: bool) -> None:
+        due = time.time() - SETTLE
+        while True:
+            with self._lock:
+                if not self._pending or (not everything and self._pending[0][0] > due):
+                    return
+                stamp, _, kind, item = heapq.heappop(self._pending)
+            self._show(stamp, kind, item)
+
+    def _show(self, stamp: float, kind: str, item: dict[str, Any]) -> None:
+        if kind != "event":
+            self._line(stamp, kind, item["text"])
+            return
+        kind = str(item.get("kind", "?"))
+        if kind == "PLAN_START":
+            self._plan(stamp, item)
+            return
+        if not self.everything and (kind not in SHOWN or self._repeated(item)):
+            return
+        self._line(stamp, kind, describe(item))
+
+    def _repeated(self, event: Mapping[str, Any]) -> bool:
+        """A component ready again after a pause (the task's line says it resumed)."""
+        with self._lock:
+            return event.get("id") in self._resumed
+
+    def _plan(self, stamp: float, event: Mapping[str, Any]) -> None:
+        plan_id = _plan_id(event)
+        with self._lock:
+            why, replaces = self._why.get(plan_id, ""), self._replaces.get(plan_id)
+        stored = self._stored(plan_id)
+        data = event.get("data") or {}
+        steps = stored.get("steps", [])
+        span = max((s["start"] + (s["duration"] or 0.0) for s in steps), default=0.0)
+        goals = list(data.get("goals", []))
+        head = f"plan {plan_id} by {stored.get('engine') or '?'} for "
+        head += (f"goal {goals[0]}" if len(goals) == 1 else f"goals {listed(goals)}") + ": "
+        head += f"{plural(len(steps), 'step')}, {seconds(span)}"
+        if replaces:
+            head += f"; replaces plan {replaces}" + (f": {why}" if why else "")
+        elif why:
+            head += f"; the plan before failed: {why}"
+        self.plans.append({**stored, "goals": data.get("goals", []), "replaces": replaces,
+                           "why": why})  # fmt: skip
+        rows = io.StringIO()
+        table(
+            ["#", "start", "step", "timeline"],
+            [
+                [s["index"], f"{s['start']:.1f}", f"{s['action']}({', '.join(s['args'])})",
+                 bar(s["start"], s["duration"], span)]
+                for s in steps
+            ],
+            rows,
+        )  # fmt: skip
+        self._line(stamp, "PLAN", head)
+        for row in rows.getvalue().splitlines():
+            self._write(INDENT + row)
+
+    def _stored(self, plan_id: int) -> dict[str, Any]:
+        """The plan as the knowledge base holds it (``{}`` if it cannot be read)."""
+        if self._kb_path is None:
+            return {"id": plan_id}
+        from knowledge.knowledge_base import KnowledgeBase
+        from knowledge.records import to_plain
+
+        try:
+            with KnowledgeBase(self._kb_path, readonly=True) as kb:
+                return dict(to_plain(kb.plan(plan_id)))
+        except DuraError:
+            return {"id": plan_id}
+
+    # --- output -------------------------------------------------------------------------
+
+    def _line(self, stamp: float, kind: str, text: str) -> None:
+        self._write(f"{stamp - self.start:6.1f}s  {kind:<{WIDTH}}  {text}".rstrip())
+
+    def _write(self, text: str) -> None:
+        if self.quiet:
+            return
+        self._clear()
+        self.out.write(text + "\n")
+        self.out.flush()
+
+    def _draw(self) -> None:
+        """The live line, when what it says changed (the clock in whole seconds)."""
+        if not self.live:
+            return
+        now = f"{int(time.time() - self.start):4d}s    now: {self.activity}"
+        if self._drawn == now:
+            return
+        width = shutil.get_terminal_size().columns
+        self.out.write("\r" + now[: width - 1] + "\x1b[K")
+        self.out.flush()
+        self._drawn = now
+
+    def _clear(self) -> None:
+        if self._drawn:
+            self.out.write("\r\x1b[K")
+            self._drawn = ""
