@@ -114,8 +114,16 @@ class FaultHandler:
         ends come as their own faults); schedule again on the worker."""
 
         def changed() -> None:
+            placed = self.robot.placed_on(host)
             if connected:  # no longer reported unavailable to the diagnosis engine
-                self.configurator.host_back(self.robot.placed_on(host))
+                self.configurator.host_back(placed)
+            else:  # every functionality we kept there is a fault, counted here at once
+                kept = [n for n in placed if n in self.robot.functionalities
+                        and self.configurator.expects(n)]  # fmt: skip
+                for name in kept:  # before the first repair stops the others
+                    self.configurator.lost(name)
+                for name in kept:
+                    self.fault(name, f"its host '{host}' was lost")
             self._reschedule(f"host '{host}' {'joined' if connected else 'was lost'}")
 
         self._post(changed)
@@ -174,12 +182,15 @@ class FaultHandler:
         name = state.component
         if not self.configurator.expects(name):
             return  # not ours to keep running
+        kind = self.robot.components[name].kind
+        if kind is Kind.FUNCTIONALITY and name in self.launcher.unavailable():
+            return  # its host was lost: on_host counts the faults of all it ran
         why = state.reason or (
             f"exited with code {state.exit_code}"
             if state.signal is None
             else f"killed by signal {state.signal}"
         )
-        if self.robot.components[name].kind is Kind.BEHAVIOR:
+        if kind is Kind.BEHAVIOR:
             if self.configurator.by_hand(name) and not any(
                 t.behavior == name for t in self.ledger.holding()
             ):
