@@ -4,12 +4,19 @@
 Services start in order and stop in reverse; the launcher stops every component when
 the executive closes. While it runs, the executive holds the liveliness token
 ``alive/executive``: components end themselves when it vanishes.
+
+The monitoring services (observers, diagnosis, repair rules) talk to the rest only over
+the bus, so they can also run in a process of their own (``dura run --only
+monitoring``, :class:`ServiceProcess`), beside an executive that runs without them
+(``dura run --without monitoring``).
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import threading
+from collections.abc import Callable, Collection, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -18,6 +25,7 @@ from executive.bus.clock import system_clock
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus
+from executive.bus.topic_source import TopicSource
 from executive.planning.high_level import HighLevel
 from executive.runtime.component_api import ComponentApi, listed
 from executive.runtime.launcher import Launcher
@@ -25,6 +33,7 @@ from executive.runtime.run_lock import RunLock, end_leftovers
 from executive.tasks.executor import TaskExecutor
 from executive.tasks.plan_tasks import PlanTasks
 from knowledge.description import RobotDescription
+from knowledge.errors import BusError, ConfigError
 from knowledge.knowledge_base import KnowledgeBase
 from monitoring.diagnosis.service import DiagnosisService
 from monitoring.observer_manager import ObserverManager
@@ -33,6 +42,22 @@ from monitoring.resource_monitor import ResourceMonitor
 
 if TYPE_CHECKING:
     from executive.ros2.link import Ros2Link
+
+
+MONITORING = "monitoring"
+SEPARABLE = (MONITORING,)
+"""The groups of services that can run in a process of their own."""
+
+RETRY = 1.0  # seconds between attempts to reach the executive
+
+
+def monitoring_services(context: Context, sources: Sequence[TopicSource] = ()) -> list[Service]:
+    """The observers, the diagnosis engine and the repair rules, in the order they start."""
+    return [
+        ObserverManager(context, sources=list(sources)),
+        DiagnosisService(context, learn=True),
+        RuleService(context),
+    ]
 
 
 class Executive:
@@ -53,6 +78,7 @@ class Executive:
             the first run, user-only) and the logs (default: the current folder).
         record: record the bus traffic to this MCAP file (``dura run --record``).
         record_max_size: bytes at which the recording is rotated (default: the recorder's).
+        without: groups of services (:data:`SEPARABLE`) another process runs.
     """
 
     def __init__(
@@ -69,8 +95,15 @@ class Executive:
         sequential_starts: bool = False,
         record: Path | None = None,
         record_max_size: int | None = None,
+        without: Collection[str] = (),
     ) -> None:
+        unknown = sorted(set(without) - set(SEPARABLE))
+        if unknown:
+            raise ConfigError(
+                f"no group of services {unknown[0]!r} (groups: {', '.join(SEPARABLE)})"
+            )
         self.robot = robot
+        self.without = frozenset(without)
         self.endpoint = endpoint or robot.endpoint
         self.kb_path = kb_path or robot.kb_path()
         self.folder = folder or Path.cwd()
@@ -174,9 +207,11 @@ class Executive:
             ResourceMonitor(  # host agents measure the components they run themselves
                 context, rate=self.resource_rate, components=self.robot.placed_on(None)
             ),
-            ObserverManager(context, sources=[ros2.topics] if ros2 is not None else []),
-            DiagnosisService(context, learn=True),
-            RuleService(context),
+            *(
+                monitoring_services(context, [ros2.topics] if ros2 is not None else [])
+                if MONITORING not in self.without
+                else []
+            ),
             *extra,
             self.tasks,
             self.high_level,
@@ -188,3 +223,65 @@ class Executive:
 
     def __exit__(self, *exc: object) -> None:
         self._stack.close()
+
+
+class ServiceProcess:
+    """A group of the executive's services in a process of their own (``dura run --only
+    GROUP``): connected to the executive's bus as the trusted user ``service``, with the
+    robot's knowledge base (which the executive holds the lock of).
+
+    Args:
+        robot: the robot.
+        group: which services (:data:`SEPARABLE`).
+        endpoint: the executive's endpoint (default: the robot's).
+        kb_path: the knowledge base (default: the robot's).
+        folder: the working folder whose ``.dura/`` holds the bus credentials.
+        say: told one line at each change, for the operator.
+    """
+
+    def __init__(
+        self,
+        robot: RobotDescription,
+        group: str,
+        *,
+        endpoint: str | None = None,
+        kb_path: Path | None = None,
+        folder: Path | None = None,
+        say: Callable[[str], None] = lambda line: None,
+    ) -> None:
+        if group not in SEPARABLE:
+            raise ConfigError(f"no group of services {group!r} (groups: {', '.join(SEPARABLE)})")
+        self.robot = robot
+        self.group = group
+        self.endpoint = endpoint or robot.endpoint
+        self.kb_path = kb_path or robot.kb_path()
+        self.folder = folder or Path.cwd()
+        self._say = say
+
+    def run(self, stop: threading.Event) -> None:
+        """Serve until ``stop`` is set (waiting first, if need be, for the executive).
+
+        Raises:
+            BusError: the credentials are there but unusable.
+        """
+        login = security.find_login(self.robot.name, security.SERVICE, [self.folder])
+        bus = None
+        said = False
+        while bus is None and not stop.is_set():
+            try:
+                bus = Bus(self.robot.name, name=self.group, endpoint=self.endpoint, login=login)
+            except BusError as e:
+                if not said:
+                    self._say(f"waiting for the executive at {self.endpoint} ({e})")
+                    said = True
+                stop.wait(RETRY)
+        if bus is None:
+            return
+        with contextlib.ExitStack() as stack:
+            stack.callback(bus.close)
+            kb = stack.enter_context(KnowledgeBase(self.kb_path))
+            for service in monitoring_services(Context(self.robot, bus, kb)):
+                service.start()
+                stack.callback(service.stop)
+            self._say(f"{self.group} runs, connected to {self.endpoint}")
+            stop.wait()
