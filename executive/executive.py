@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from executive.bus import security
 from executive.bus.clock import system_clock
-from executive.bus.keys import EXECUTIVE_ALIVE
+from executive.bus.keys import EXECUTIVE_ALIVE, service_alive
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus
 from executive.bus.topic_source import TopicSource
@@ -283,5 +283,6 @@ class ServiceProcess:
             for service in monitoring_services(Context(self.robot, bus, kb)):
                 service.start()
                 stack.callback(service.stop)
-            self._say(f"{self.group} runs, connected to {self.endpoint}")
+            bus.declare_alive(service_alive(self.group))  # who runs the group, for all to see
+            self._say("runs")
             stop.wait()

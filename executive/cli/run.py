@@ -170,6 +170,7 @@ def run_only(args: argparse.Namespace, robot: RobotDescription, stop: threading.
         sys.stdout.flush()
 
     services = ServiceProcess(robot, args.only, endpoint=endpoint, kb_path=args.db, say=say)
+    say(f"connects to {endpoint}; Ctrl-C stops it")
     services.run(stop)
     say("stopped")
     return 0

@@ -16,7 +16,7 @@ import psutil
 import pytest
 
 from executive.bus import security
-from executive.bus.keys import DIAGNOSES, component, topic
+from executive.bus.keys import DIAGNOSES, component, service_alive, topic
 from executive.bus.payloads import ComponentState, Lifecycle
 from executive.bus.security import Login
 from executive.bus.session import Bus, Message
@@ -233,8 +233,10 @@ def test_monitoring_in_a_process_of_its_own_diagnoses_a_fault_of_the_main_proces
         ) as monitoring:
             try:
                 assert monitoring.stdout is not None
-                line = monitoring.stdout.readline()
-                assert "monitoring runs, connected to" in line, line
+                lines = [monitoring.stdout.readline() for _ in range(2)]
+                assert lines[0].startswith("dura: monitoring of robot 'usecase': connects to")
+                assert lines[1] == "dura: monitoring of robot 'usecase': runs\n", lines
+                assert wait_for(lambda: robot.bus.alive(service_alive("monitoring")), 10)
 
                 def diagnosis(message: Message) -> None:
                     heard.append(message.payload)
