@@ -51,6 +51,17 @@ SEPARABLE = (MONITORING,)
 RETRY = 1.0  # seconds between attempts to reach the executive
 
 
+def separable(group: str) -> str:
+    """``group`` if it names a group of services that can run apart.
+
+    Raises:
+        ConfigError: it does not.
+    """
+    if group not in SEPARABLE:
+        raise ConfigError(f"no group of services {group!r} (groups: {', '.join(SEPARABLE)})")
+    return group
+
+
 def monitoring_services(context: Context, sources: Sequence[TopicSource] = ()) -> list[Service]:
     """The observers, the diagnosis engine and the repair rules, in the order they start."""
     return [
@@ -97,11 +108,8 @@ class Executive:
         record_max_size: int | None = None,
         without: Collection[str] = (),
     ) -> None:
-        unknown = sorted(set(without) - set(SEPARABLE))
-        if unknown:
-            raise ConfigError(
-                f"no group of services {unknown[0]!r} (groups: {', '.join(SEPARABLE)})"
-            )
+        for group in without:
+            separable(group)
         self.robot = robot
         self.without = frozenset(without)
         self.endpoint = endpoint or robot.endpoint
@@ -249,10 +257,8 @@ class ServiceProcess:
         folder: Path | None = None,
         say: Callable[[str], None] = lambda line: None,
     ) -> None:
-        if group not in SEPARABLE:
-            raise ConfigError(f"no group of services {group!r} (groups: {', '.join(SEPARABLE)})")
         self.robot = robot
-        self.group = group
+        self.group = separable(group)
         self.endpoint = endpoint or robot.endpoint
         self.kb_path = kb_path or robot.kb_path()
         self.folder = folder or Path.cwd()
