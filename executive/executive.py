@@ -1,8 +1,12 @@
 """The executive process: its bus (listening), knowledge base, launcher and services
 (monitoring, diagnosis, repair rules, task executor, high level).
 
-Services start in order and stop in reverse; the launcher stops every component when
-the executive closes. While it runs, the executive holds the liveliness token
+The bus API answers first: as soon as the bus listens and the knowledge base is open,
+the high level recovers from a crash, serves its verbs (``status`` among them) and
+warms its planner up in the background; only then are the other services' modules
+imported and the services started, in order (and stopped in reverse). The high level
+begins planning once all of them run. The launcher stops every component when the
+executive closes. While it runs, the executive holds the liveliness token
 ``alive/executive``: components end themselves when it vanishes.
 
 The monitoring services (observers, diagnosis, repair rules) talk to the rest only over
@@ -25,23 +29,18 @@ from executive.bus.clock import system_clock
 from executive.bus.keys import EXECUTIVE_ALIVE, service_alive
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus
-from executive.bus.topic_source import TopicSource
 from executive.planning.high_level import HighLevel
-from executive.runtime.component_api import ComponentApi, listed
-from executive.runtime.launcher import Launcher
 from executive.runtime.run_lock import RunLock, end_leftovers
-from executive.tasks.executor import TaskExecutor
-from executive.tasks.plan_tasks import PlanTasks
 from knowledge.description import RobotDescription
-from knowledge.errors import BusError, ConfigError
+from knowledge.errors import BusError, ConfigError, DuraError
 from knowledge.knowledge_base import KnowledgeBase
-from monitoring.diagnosis.service import DiagnosisService
-from monitoring.observer_manager import ObserverManager
-from monitoring.repair.service import RuleService
-from monitoring.resource_monitor import ResourceMonitor
 
 if TYPE_CHECKING:
+    from executive.bus.topic_source import TopicSource
     from executive.ros2.link import Ros2Link
+    from executive.runtime.launcher import Launcher
+    from executive.tasks.executor import TaskExecutor
+    from executive.tasks.plan_tasks import PlanTasks
 
 
 MONITORING = "monitoring"
@@ -64,6 +63,10 @@ def separable(group: str) -> str:
 
 def monitoring_services(context: Context, sources: Sequence[TopicSource] = ()) -> list[Service]:
     """The observers, the diagnosis engine and the repair rules, in the order they start."""
+    from monitoring.diagnosis.service import DiagnosisService
+    from monitoring.observer_manager import ObserverManager
+    from monitoring.repair.service import RuleService
+
     return [
         ObserverManager(context, sources=list(sources)),
         DiagnosisService(context, learn=True),
@@ -89,6 +92,13 @@ class Executive:
             the first run, user-only) and the logs (default: the current folder).
         record: record the bus traffic to this MCAP file (``dura run --record``).
         record_max_size: bytes at which the recording is rotated (default: the recorder's).
+        on_failure: called with the reason when the executive cannot go on (its domain
+            does not fit the robot: checked while it runs, see
+            :class:`~executive.planning.high_level.HighLevel`); ``dura run`` stops then.
+        on_open: called once the bus API answers, before the other services start
+            (``dura run`` writes its run file then, for the commands run beside it).
+        progress: told what the executive does now while it starts (``dura run``'s
+            live line on a terminal).
         without: groups of services (:data:`SEPARABLE`) another process runs.
     """
 
@@ -106,6 +116,9 @@ class Executive:
         sequential_starts: bool = False,
         record: Path | None = None,
         record_max_size: int | None = None,
+        on_failure: Callable[[str], None] | None = None,
+        on_open: Callable[[], None] | None = None,
+        progress: Callable[[str], None] | None = None,
         without: Collection[str] = (),
     ) -> None:
         for group in without:
@@ -123,11 +136,17 @@ class Executive:
         self.sequential_starts = sequential_starts
         self.record = record
         self.record_max_size = record_max_size
+        self.on_failure = on_failure
+        self.on_open = on_open
+        self.progress = progress or (lambda _: None)
+        self.tasks: TaskExecutor | None = None
+        self.launcher: Launcher | None = None
         self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> Executive:
         clock = system_clock()  # a bad DURA_TIME_SCALE stops the executive here, with why
         with contextlib.ExitStack() as stack:
+            self.progress("taking the knowledge base's run lock")
             lock = stack.enter_context(RunLock(self.kb_path))  # one executive per KB
             if lock.predecessor is not None:
                 end_leftovers(lock.predecessor)
@@ -137,6 +156,7 @@ class Executive:
             )
             security.write_host_credentials(credentials, self.folder, robot.hosts)
             users = self.credentials_path.with_suffix(".users")
+            self.progress(f"opening the bus on {self.endpoint}")
             self.bus = stack.enter_context(
                 Bus(
                     robot.name,
@@ -148,6 +168,7 @@ class Executive:
                     access=security.access_control(robot.name, components, robot.hosts),
                 )
             )
+            self.progress(f"opening the knowledge base {self.kb_path}")
             self.kb = stack.enter_context(KnowledgeBase(self.kb_path))
             self.kb.log_event(
                 "EXECUTIVE_STARTED",
@@ -155,6 +176,20 @@ class Executive:
                 {"endpoint": self.endpoint, "pid": os.getpid(), "time_scale": clock.scale},
             )
             stack.callback(self.kb.log_event, "EXECUTIVE_STOPPED", self.robot.name)
+            context = Context(self.robot, self.bus, self.kb)
+            self.high_level = HighLevel(
+                context,
+                self._plan_tasks,
+                status={"tasks": self._tasks, "components": self._components},
+                on_failure=self.on_failure,
+            )
+            self.high_level.open()  # the API answers from here on
+            stack.callback(self.high_level.stop)  # if a later start fails
+            if self.on_open is not None:
+                self.on_open()
+            self.progress("loading the launcher")
+            from executive.runtime.launcher import Launcher
+
             self.launcher = stack.enter_context(
                 Launcher(
                     self.robot,
@@ -168,12 +203,16 @@ class Executive:
             )
             self.ros2: Ros2Link | None = None
             if self.robot.ros2 is not None:  # Cyclone DDS loads only for a ROS 2 robot
+                self.progress("joining the ROS 2 domain")
                 from executive.ros2.link import Ros2Link
 
                 nodes = {c.ros2.node: name for name, c in self.robot.components.items()
                          if c.ros2 is not None and c.ros2.node is not None}  # fmt: skip
                 self.ros2 = stack.enter_context(Ros2Link(self.robot.ros2, nodes=nodes))
-            for service in self.services(Context(self.robot, self.bus, self.kb)):
+                self.high_level.sources = (self.ros2.topics,)  # before it starts sensing
+            self.progress("loading the services")
+            for service in self.services(context):
+                self.progress(f"starting the {service.name} service")
                 service.start()
                 stack.callback(service.stop)
             self.bus.declare_alive(EXECUTIVE_ALIVE)
@@ -182,17 +221,19 @@ class Executive:
 
     def services(self, context: Context) -> list[Service]:
         """The services of the executive, in the order they start (and stop reversed):
-        monitoring first, so that it watches every component the executive starts."""
-        ros2 = self.ros2
+        monitoring first, so that it watches every component the executive starts; the
+        high level last (its API answers already: it begins planning)."""
+        from executive.runtime.component_api import ComponentApi
+        from executive.tasks.executor import TaskExecutor
+        from monitoring.resource_monitor import ResourceMonitor
+
+        launcher = self.launcher
+        if launcher is None:
+            raise DuraError("the launcher must run before the services")
         self.tasks = TaskExecutor(
-            context, self.launcher, linger=self.linger, sequential=self.sequential_starts
+            context, launcher, linger=self.linger, sequential=self.sequential_starts
         )
-        self.high_level = HighLevel(
-            context,
-            PlanTasks(self.tasks, self.robot),
-            status={"tasks": self.tasks.tasks, "components": self._components},
-            sources=[ros2.topics] if ros2 is not None else [],
-        )
+        ros2 = self.ros2
         extra: list[Service] = []
         last: list[Service] = []
         if ros2 is not None:
@@ -211,7 +252,7 @@ class Executive:
             recording.append(Recording(context, self.record, max_size=size))
         return [
             *recording,
-            ComponentApi(context, self.launcher, by_hand=self.tasks),
+            ComponentApi(context, launcher, by_hand=self.tasks),
             ResourceMonitor(  # host agents measure the components they run themselves
                 context, rate=self.resource_rate, components=self.robot.placed_on(None)
             ),
@@ -226,7 +267,24 @@ class Executive:
             *last,
         ]
 
+    def _plan_tasks(self) -> PlanTasks:
+        """The task executor as the high level's runner of plan steps (once it runs)."""
+        from executive.tasks.plan_tasks import PlanTasks
+
+        if self.tasks is None:
+            raise DuraError("the task executor has not started")
+        return PlanTasks(self.tasks, self.robot)
+
+    def _tasks(self) -> list[dict[str, Any]]:
+        if self.tasks is None:
+            raise DuraError("the task executor is starting")
+        return self.tasks.tasks()
+
     def _components(self) -> list[dict[str, Any]]:
+        if self.launcher is None:
+            raise DuraError("the launcher is starting")
+        from executive.runtime.component_api import listed
+
         return [listed(self.launcher, s) for s in self.launcher.states()]
 
     def __exit__(self, *exc: object) -> None:

@@ -132,9 +132,14 @@ def parse(domain: Path) -> Problem:
         raise DomainError(located(domain, _error_line(e, text), f"PDDL: {_error_text(e)}")) from e
 
 
-def parse_problem(domain: Path, problem_text: str, source: str = "problem") -> Problem:
-    """Parse a domain with a problem given as text (the problem's errors name ``source``)."""
-    parse(domain)  # the domain's own errors name the domain file
+def parse_problem(
+    domain: Path, problem_text: str, source: str = "problem", *, domain_checked: bool = False
+) -> Problem:
+    """Parse a domain with a problem given as text (the problem's errors name ``source``;
+    unless ``domain_checked``, the domain is parsed alone first, so that its own errors
+    name the domain file)."""
+    if not domain_checked:
+        parse(domain)
     try:
         return _reader().parse_problem_string(_prepare(_read(domain)), problem_text)
     except Exception as e:
@@ -171,7 +176,11 @@ def read_domain(path: Path) -> DomainInfo:
     Raises:
         DomainError: the file cannot be read or is not a valid PDDL domain.
     """
-    problem = parse(path)
+    return describe(parse(path), path)
+
+
+def describe(problem: Problem, path: Path) -> DomainInfo:
+    """The signatures of a parsed domain (``path``: its file, for the actions' lines)."""
     text = _read(path)
     lines = {
         m.group(2).lower(): text.count("\n", 0, m.start()) + 1 for m in _ACTION_HEAD.finditer(text)

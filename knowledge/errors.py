@@ -37,6 +37,10 @@ class BusError(DuraError):
     """The message bus failed: no answer, no executive, a malformed message."""
 
 
+class NoAnswer(BusError):
+    """Nobody answered a request (no service serves its key, or none in time)."""
+
+
 class BagError(DuraError):
     """A recording (a ROS 2 bag, an MCAP file) cannot be read, mapped or written."""
 

@@ -78,19 +78,22 @@ class PlanState(enum.Enum):
     SUCCEEDED = "succeeded"
     FAILED = "failed"
     SUPERSEDED = "superseded"
+    CANCELLED = "cancelled"  # ended because none of its goals was open any more
 
     def can_become(self, state: PlanState) -> bool:
         """Whether a plan in this state may change to ``state`` (see PLAN_TRANSITIONS)."""
         return state in PLAN_TRANSITIONS[self]
 
 
+_PLAN_ENDS = frozenset(
+    {PlanState.SUCCEEDED, PlanState.FAILED, PlanState.SUPERSEDED, PlanState.CANCELLED}
+)
+
 PLAN_TRANSITIONS: Mapping[PlanState, frozenset[PlanState]] = {
-    PlanState.PENDING: frozenset({PlanState.EXECUTING, PlanState.FAILED, PlanState.SUPERSEDED}),
-    PlanState.EXECUTING: frozenset({PlanState.SUCCEEDED, PlanState.FAILED, PlanState.SUPERSEDED}),
+    PlanState.PENDING: _PLAN_ENDS - {PlanState.SUCCEEDED} | {PlanState.EXECUTING},
+    PlanState.EXECUTING: _PLAN_ENDS,
     # a plan that ended stays as it ended (a superseded plan cannot fail afterwards)
-    PlanState.SUCCEEDED: frozenset(),
-    PlanState.FAILED: frozenset(),
-    PlanState.SUPERSEDED: frozenset(),
+    **{end: frozenset() for end in _PLAN_ENDS},
 }
 """The changes the knowledge base allows, from each plan state."""
 

@@ -21,6 +21,7 @@ __all__ = [  # the states live in knowledge.lifecycle; records names them too
     "GOAL_TRANSITIONS",
     "KEEP_TRANSITIONS",
     "PLAN_TRANSITIONS",
+    "STEP_STATES",
     "ComponentRecord",
     "Event",
     "Fact",
@@ -51,15 +52,22 @@ class Goal:
     keep: bool = False  # a maintenance goal: re-posted whenever it stops holding
 
 
+STEP_STATES = ("pending", "dispatched", "running", "ended", "failed", "cancelled", "adopted")
+"""What happened to a stored plan step: not run (yet), asked of the task executor,
+running, and how it ended; ``adopted``: the next plan continues it (as its own step)."""
+
+
 @dataclass(frozen=True)
 class PlanStep:
-    """One action of a plan: what, with which objects, when and for how long."""
+    """One action of a plan: what, with which objects, when and for how long, and what
+    happened to it (one of :data:`STEP_STATES`)."""
 
     index: int
     action: str
     args: tuple[str, ...]
     start: float
     duration: float | None = None
+    state: str = "pending"
 
 
 @dataclass(frozen=True)

@@ -255,15 +255,16 @@ def read_robot(
     return robot, report.findings
 
 
-def load_robot(path: Path) -> RobotDescription:
-    """Read and fully validate a robot description (domain included).
+def load_robot(path: Path, *, domain: bool = True) -> RobotDescription:
+    """Read and fully validate a robot description (its domain included, unless
+    ``domain`` is false: then its PDDL is checked by whoever parses it).
 
     Raises:
         ConfigError: with the first problem; ``dura validate`` lists them all.
     """
     from knowledge.validation import validate
 
-    result = validate(Path(path))
+    result = validate(Path(path), domain=domain)
     errors = [f for f in result.findings if f.is_error]
     if errors or result.robot is None:
         more = (

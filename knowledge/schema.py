@@ -112,6 +112,8 @@ MIGRATIONS: tuple[tuple[str, ...], ...] = (
     _statements("""
     ALTER TABLE goals ADD COLUMN keep INTEGER NOT NULL DEFAULT 0
     """),
+    # 3: what happened to each step of a plan (written by the plan executer)
+    ("ALTER TABLE plan_steps ADD COLUMN state TEXT NOT NULL DEFAULT 'pending'",),
 )
 
 VERSION = len(MIGRATIONS)

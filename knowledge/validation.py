@@ -10,6 +10,7 @@ import graphlib
 import importlib.util
 import os
 import shutil
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -252,22 +253,21 @@ def _module_below(folder: Path, parts: list[str]) -> bool:
     return base.with_suffix(".py").is_file() or (base / "__init__.py").is_file()
 
 
-def validate(path: Path, text: str | None = None) -> Validation:
-    """Read a robot description and run every check, the PDDL domain included."""
+def validate(path: Path, text: str | None = None, *, domain: bool = True) -> Validation:
+    """Read a robot description and run every check, the PDDL domain included unless
+    ``domain`` is false (``dura run`` checks the domain in its planner worker, so that
+    it starts without unified-planning: :func:`check_domain` on what the worker read)."""
     robot, findings = read_robot(Path(path), text)
     report = Report(str(path))
-    domain: DomainInfo | None = None
+    info: DomainInfo | None = None
     if robot is not None:
         _components_checks(robot, report)
-        if robot.domain.is_file():
+        if domain and robot.domain.is_file():
             try:
-                domain = read_domain(robot.domain)
+                info = read_domain(robot.domain)
             except DomainError as e:
                 findings.append(finding_of(e, str(path)))
-        if domain is not None:
-            domain_report = Report(str(robot.domain))
-            check_tasks(robot, domain, report, domain_report)
-            findings.extend(domain_report.findings)
+        if info is not None:
             objects: dict[str, str] = {}
             if robot.problem is not None and robot.problem.is_file():
                 try:
@@ -278,9 +278,25 @@ def validate(path: Path, text: str | None = None) -> Validation:
                     report.error(None, f"cannot read problem {robot.problem}: {e}")
                 except DomainError as e:
                     findings.append(finding_of(e, str(path)))
-            check_sensing(robot, domain, objects, report)
+            findings.extend(check_domain(robot, info, objects, report))
     all_findings = tuple(sorted(findings + report.findings, key=_order))
-    return Validation(robot, domain, all_findings)
+    return Validation(robot, info, all_findings)
+
+
+def check_domain(
+    robot: RobotDescription,
+    domain: DomainInfo,
+    objects: Mapping[str, str],
+    report: Report | None = None,
+) -> list[Finding]:
+    """Check the robot's tasks and sensing rules against its parsed domain and the
+    problem's ``objects``: the findings in the domain file; those in the description go
+    to ``report`` (or are returned too)."""
+    own = report if report is not None else Report(str(robot.path))
+    domain_report = Report(str(robot.domain))
+    check_tasks(robot, domain, own, domain_report)
+    check_sensing(robot, domain, objects, own)
+    return [*(own.findings if report is None else ()), *domain_report.findings]
 
 
 def _order(f: Finding) -> tuple[str, int, int]:

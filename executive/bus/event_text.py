@@ -151,6 +151,8 @@ def _step(subject: str, data: Data, kind: str) -> str:
         text += f" (plan {data['plan']}, step {data['step']})"
     if kind == "START" and data.get("undo"):
         text += "; at start: " + ", ".join(_effect(u) for u in data["undo"])
+    if kind == "ADOPT" and data.get("from_plan") is not None:
+        text += f" continues plan {data['from_plan']}'s step {data.get('from_step')}"
     if kind == "END" and isinstance(data.get("result"), Mapping) and data["result"]:
         text += f"; result: {pairs(data['result'])}"
     return _why(text, data.get("reason"))
@@ -165,6 +167,13 @@ def _effect(undo: Any) -> str:
     if before is None or before is False:
         return fact
     return f"{fact} from {number(before)}"
+
+
+def _recovered(subject: str, data: Data, kind: str) -> str:
+    cancelled = list(data.get("cancelled") or [])
+    if not cancelled:
+        return "recovery: no step was left under way"
+    return f"recovery: cancelled {listed(cancelled)}, left under way by the last executive"
 
 
 def _integrity(subject: str, data: Data, kind: str) -> str:
@@ -290,7 +299,7 @@ _TEXTS: Mapping[str, Text] = {
     "EXONERATION": _exoneration,
     "GOAL_ADDED": _goal_added, "PLANNING": _planning, "PLAN_STORED": _plan_stored,
     "PLAN_START": _plan_start, "REPLAN": _replan, "DISPATCH": _step, "START": _step,
-    "END": _step, "FAIL": _step, "CANCEL": _step,
+    "END": _step, "FAIL": _step, "CANCEL": _step, "ADOPT": _step, "RECOVERED": _recovered,
     "INTEGRITY_GOAL": _integrity, "INTEGRITY_REFUSED": _integrity,
     "CONFIGURATION": _configuration, "REPAIR": _repair, "FAULT": _fault,
     "PERMANENT_FAULT": _permanent_fault, "COMPONENT_RESET": _reset,

@@ -191,7 +191,7 @@ class Command(enum.Enum):
     """The verbs of a request on ``component/<name>/cmd``: ``{"cmd": verb, ...}``.
 
     Each verb's fields, and the reply, are declared in :mod:`executive.bus.api.components`
-    (:class:`~executive.bus.api.components.ComponentCommand`).
+    (:class:`~executive.bus.api.component_commands.ComponentCommand`).
     """
 
     CONFIGURE = "configure"

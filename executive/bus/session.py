@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 import zenoh
 
 from executive.bus.security import Login
-from knowledge.errors import BusError, DuraError
+from knowledge.errors import BusError, DuraError, NoAnswer
 
 if TYPE_CHECKING:
     import logging
@@ -131,6 +131,9 @@ def session_config(
     config.insert_json5("mode", json.dumps("router" if listen else "client"))
     if listen:
         config.insert_json5("listen/endpoints", json.dumps(list(listen)))
+        # a router waits this long for scouting answers before it opens (500 ms by
+        # default); without scouting nothing answers, and the executive starts later
+        config.insert_json5("scouting/delay", "0")
     if connect:
         config.insert_json5("connect/endpoints", json.dumps(list(connect)))
     config.insert_json5("scouting/multicast/enabled", "false")
@@ -349,7 +352,8 @@ class Bus:
         """Send a request and return the first reply.
 
         Raises:
-            BusError: nobody answered in time, or the answer is an error (its message).
+            NoAnswer: nobody answered in time (or no service serves the key).
+            BusError: the answer is an error (its message).
         """
         replies = self._session.get(
             self.key(key),
@@ -362,7 +366,7 @@ class Bus:
                 return decode(reply.ok.payload.to_bytes(), key)
             if reply.err is not None:
                 raise BusError(reply.err.payload.to_bytes().decode(errors="replace"))
-        raise BusError(
+        raise NoAnswer(
             f"no answer on {self.key(key)} within {timeout:g} s (is the executive running?)"
         )
 

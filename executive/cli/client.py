@@ -12,6 +12,7 @@ import argparse
 import contextlib
 import json
 import os
+import time
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -19,7 +20,7 @@ from executive.bus import security
 from executive.bus.security import Login
 from executive.bus.session import Bus
 from executive.bus.verb import Codec, Verb
-from knowledge.errors import DuraError
+from knowledge.errors import DuraError, NoAnswer
 
 RUN_FILE = Path(".dura") / "executive.json"
 
@@ -126,8 +127,23 @@ def ask(
     """Call one verb of the executive the command line names: every command's one way
     to ask (see :mod:`executive.bus.api`).
 
+    A verb nobody serves yet is asked again until the timeout: an executive that has
+    just started answers ``status`` and the goal verbs first, its other services' verbs
+    a moment later.
+
     Raises:
         DuraError: no executive answers, or it refused the request (its reason).
     """
+    limit = verb.timeout if timeout is None else timeout
+    deadline = time.monotonic() + limit
+    first: NoAnswer | None = None
     with connect(args) as bus:
-        return verb.call(bus, request, timeout=timeout)
+        while True:
+            try:
+                return verb.call(bus, request, timeout=limit)
+            except NoAnswer as e:
+                first = first or e
+                limit = deadline - time.monotonic()
+                if limit <= 0.1:
+                    raise first from None
+                time.sleep(0.1)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -98,7 +99,10 @@ def run_show(args: argparse.Namespace) -> int:
     section("plans")
     table(
         ["id", "state", "engine", "goals", "steps"],
-        [[p["id"], p["state"], p["engine"], p["goal_ids"], len(p["steps"])] for p in data["plans"]],
+        [
+            [p["id"], p["state"], p["engine"], p["goal_ids"], _steps(p["steps"])]
+            for p in data["plans"]
+        ],
     )
     section("tasks")
     table(
@@ -163,3 +167,13 @@ def run_repair(args: argparse.Namespace) -> int:
     print(f"{shown(done.path)}: repaired: kept {plural(kept, 'row')}, could not read {lost}")
     print(f"the damaged file is kept as {shown(done.kept_aside)}")
     return 0
+
+
+def _steps(steps: list[dict[str, Any]]) -> str:
+    """``3: 1 ended, 1 cancelled, 1 pending``: how many steps, and what happened to them."""
+    counts = Counter(s.get("state", "pending") for s in steps)
+    return (
+        f"{len(steps)}: " + ", ".join(f"{n} {state}" for state, n in counts.items())
+        if steps
+        else "0"
+    )

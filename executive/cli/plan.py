@@ -16,6 +16,7 @@ from executive.bus.wording import plural
 from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, bar, print_json, shown, table
+from executive.cli.progress import LiveLine
 from executive.dashboard import gantt
 from executive.planning.expression import TRUE
 from executive.planning.goals import GoalSpec
@@ -83,13 +84,20 @@ def run(args: argparse.Namespace) -> int:
     if args.dry_run:
         return run_dry_run(args)
     domain, problem = args.offline
-    world, goal = read_world(domain, problem)
-    if goal == TRUE and not args.json:
-        print(f"dura: warning: {shown(problem)} has an empty goal, so any plan is empty: "
-              "write one in its (:goal ...)", file=sys.stderr)  # fmt: skip
-    task = PlanningTask(domain.resolve(), world, (GoalSpec(0, goal),))
-    with Planner(args.engine, args.timeout or 30.0) as planner:
-        result = planner.solve(task)
+    with LiveLine(shown=not args.json) as line:
+        line.doing(f"reading {shown(domain)} and {shown(problem)}")
+        world, goal = read_world(domain, problem)
+        line.clear()
+        if goal == TRUE and not args.json:
+            print(f"dura: warning: {shown(problem)} has an empty goal, so any plan is empty: "
+                  "write one in its (:goal ...)", file=sys.stderr)  # fmt: skip
+        task = PlanningTask(domain.resolve(), world, (GoalSpec(0, goal),))
+        line.doing(f"starting the planner ({args.engine}) and reading the domain")
+        with Planner(args.engine, args.timeout or 30.0) as planner:
+            planner.start(domain.resolve())
+            line.doing(f"planning with {args.engine} (at most {args.timeout or 30.0:g} s)")
+            result = planner.solve(task)
+            line.doing("stopping the planner")
     if args.svg is not None and result.plan is not None:
         title = f"{problem.name}: {plural(len(result.plan.steps), 'step')}, makespan {result.plan.makespan:g} s, by {result.engine}"
         if write_svg(args.svg, gantt.render(gantt.offline_gantt(result.plan, title))):
@@ -125,7 +133,7 @@ def run_show(args: argparse.Namespace) -> int:
     if plan is None:
         print("no plan yet")
         return 0
-    states = {s["index"]: s["state"] for s in reply.execution.get("steps", [])}
+    states = step_states(plan, reply.execution)
     steps = plan["steps"]
     span = max((s["start"] + (s["duration"] or 0.0) for s in steps), default=0.0)
     goals = ", ".join(str(g) for g in plan["goal_ids"]) or "-"
@@ -172,6 +180,14 @@ def run_dry_run(args: argparse.Namespace) -> int:
     ]  # fmt: skip
     table(["#", "start", "duration", "step", "after", "timeline"], rows)
     return 0
+
+
+def step_states(plan: dict[str, Any], execution: dict[str, Any]) -> dict[int, str]:
+    """Each step's state: live while the plan executes (``paused`` too), else as stored."""
+    states = {s["index"]: s.get("state", "-") for s in plan["steps"]}
+    if execution.get("plan") == plan["id"]:
+        states.update({s["index"]: s["state"] for s in execution.get("steps", [])})
+    return states
 
 
 def write_svg(target: str, picture: str) -> bool:

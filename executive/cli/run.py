@@ -15,6 +15,7 @@ from executive.cli.arguments import megabytes, rate, seconds
 from executive.cli.client import remove_run_file, write_run_file
 from executive.cli.dashboard import add_dashboard_address, port
 from executive.cli.output import add_json_flag, print_json, shown
+from executive.cli.progress import LiveLine
 from executive.executive import SEPARABLE, Executive, ServiceProcess
 from executive.runtime.launcher import local_endpoint
 from knowledge.description import RobotDescription
@@ -109,8 +110,14 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    robot = load_robot(args.robot)
+    robot = load_robot(args.robot, domain=False)  # the planner worker checks the domain
     stop = threading.Event()
+    failure: list[str] = []
+
+    def failed(reason: str) -> None:
+        failure.append(reason)
+        stop.set()
+
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())
     if args.only is not None:
@@ -126,33 +133,40 @@ def run(args: argparse.Namespace) -> int:
         sequential_starts=args.starts == "sequential",
         record=args.record.resolve() if args.record is not None else None,
         record_max_size=args.record_max_size,
+        on_failure=failed,
         without=args.without,
     )
-    with executive, contextlib.ExitStack() as dashboard:
-        endpoint = local_endpoint(executive.endpoint)
-        write_run_file(robot.name, endpoint, robot.path, executive.credentials_path)
-        try:
-            url = None
-            if args.dashboard is not None:
-                from executive.dashboard.server import Dashboard
+    endpoint = local_endpoint(executive.endpoint)
+    executive.on_open = lambda: write_run_file(
+        robot.name, endpoint, robot.path, executive.credentials_path
+    )
+    with contextlib.ExitStack() as running:
+        running.callback(remove_run_file)  # last, also when the executive fails to start
+        with LiveLine(shown=not args.json) as line:
+            executive.progress = line.doing
+            running.enter_context(executive)
+        url = None
+        if args.dashboard is not None:
+            from executive.dashboard.server import Dashboard
 
-                page = Dashboard.connect(robot, endpoint, host=args.dashboard_host,
-                                         port=args.dashboard)  # fmt: skip
-                url = dashboard.enter_context(page).url
-            if args.json:
-                print_json({"robot": robot.name, "endpoint": endpoint, "pid": os.getpid(),
-                            **({"dashboard": url} if url else {})})  # fmt: skip
-            else:
-                print(
-                    f"dura: executive of robot '{robot.name}' runs on {endpoint} (pid "
-                    f"{os.getpid()}, knowledge base {shown(executive.kb_path)}); Ctrl-C stops it"
-                )
-                if url:
-                    print(f"dura: dashboard on {url}")
-            sys.stdout.flush()
-            stop.wait()
-        finally:
-            remove_run_file()
+            page = Dashboard.connect(robot, endpoint, host=args.dashboard_host,
+                                     port=args.dashboard)  # fmt: skip
+            url = running.enter_context(page).url
+        if args.json:
+            print_json({"robot": robot.name, "endpoint": endpoint, "pid": os.getpid(),
+                        **({"dashboard": url} if url else {})})  # fmt: skip
+        else:
+            print(
+                f"dura: executive of robot '{robot.name}' runs on {endpoint} (pid "
+                f"{os.getpid()}, knowledge base {shown(executive.kb_path)}); Ctrl-C stops it"
+            )
+            if url:
+                print(f"dura: dashboard on {url}")
+        sys.stdout.flush()
+        stop.wait()
+    if failure:
+        print(f"dura: {failure[0]}", file=sys.stderr)
+        return 1
     if not args.json:
         print(f"dura: executive of robot '{robot.name}' stopped")
     return 0

@@ -167,7 +167,9 @@ def print_status(status: dict[str, Any], out: Any = None) -> None:
     plan, execution = status.get("plan"), status.get("execution") or {}
     if plan is not None:
         section(f"plan {plan['id']} ({plan['state']}, by {plan['engine']})", out)
-        states = {s["index"]: s["state"] for s in execution.get("steps", [])}
+        states = {s["index"]: s.get("state", "-") for s in plan["steps"]}
+        if execution.get("plan") == plan["id"]:  # live, paused steps too
+            states.update({s["index"]: s["state"] for s in execution.get("steps", [])})
         table(
             ["#", "start", "duration", "step", "state"],
             [

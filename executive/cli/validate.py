@@ -10,6 +10,7 @@ from typing import Any
 from executive.bus.wording import plural
 from executive.cli import exits_at_once
 from executive.cli.output import add_json_flag, print_json, shown
+from executive.cli.progress import LiveLine
 from executive.cli.reader_environment import use_reader_environment
 from executive.planning.integrity import read_rules as read_integrity_rules
 from executive.planning.problem import read_world
@@ -66,14 +67,18 @@ def run(args: argparse.Namespace) -> int:
         specs, findings = observers
         summary = f"{plural(len(specs), 'observer')} ({', '.join(s.type for s in specs) or 'none'})"
         return _report(args, findings, True, summary)
-    result = validate(args.robot)
-    robot = result.robot
-    findings = list(result.findings)
-    if robot is not None:
-        findings += check_observers(robot)
-        if result.domain is not None and not any(f.is_error for f in findings):
-            findings += check_rule_files(robot, result.domain)
-        findings = sorted(findings, key=_order)
+    with LiveLine(shown=not args.json) as line:
+        line.doing(f"checking {shown(args.robot)} and its PDDL domain")
+        result = validate(args.robot)
+        robot = result.robot
+        findings = list(result.findings)
+        if robot is not None:
+            line.doing("checking the observers")
+            findings += check_observers(robot)
+            if result.domain is not None and not any(f.is_error for f in findings):
+                line.doing("checking the rule files")
+                findings += check_rule_files(robot, result.domain)
+            findings = sorted(findings, key=_order)
     summary = ""
     if robot is not None:
         summary = (

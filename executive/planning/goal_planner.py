@@ -22,7 +22,10 @@ long: pausing the executer (which waits for critical tasks) and the search for a
 run on a second thread, whose results come back to it as jobs. So a cancel takes
 effect at once, also while a plan is being computed, and a search that included a goal
 cancelled meanwhile is thrown away and done again without it: a cancelled goal is never
-planned or executed afterwards. :meth:`GoalPlanner.status` answers from a snapshot.
+planned or executed afterwards. A plan none of whose goals is open any more (its last
+goal cancelled), or for which a round finds no successor, is cancelled at once and its
+steps under way with it (critical ones too: nobody wants what they do any more).
+:meth:`GoalPlanner.status` answers from a snapshot.
 """
 
 from __future__ import annotations
@@ -48,7 +51,7 @@ from executive.planning.state_change import Change, apply_change
 from knowledge.domain import DomainInfo
 from knowledge.errors import DuraError, KnowledgeError
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.records import Fact, Goal, GoalState, to_plain
+from knowledge.records import Fact, Goal, GoalState, PlanState, to_plain
 
 log = logging.getLogger("dura.goal_planner")
 
@@ -73,6 +76,7 @@ class PlannerStatus:
     goals: tuple[int, ...] = ()  # the goals open when it began
     since: float | None = None  # when it began (seconds since the epoch)
     planned: tuple[int, ...] = ()  # the goals of the plan handed to the executer
+    starting: bool = False  # the planner is still loading the domain (at the start)
 
 
 @dataclass
@@ -234,6 +238,14 @@ class GoalPlanner:
             raise KnowledgeError(f"goal {goal.id} is {goal.state.value} already")
         was_open = goal.state.is_open
         goal = self.kb.set_goal_state(goal_id, GoalState.CANCELLED)
+        plan = self.kb.latest_plan()
+        if (
+            was_open
+            and plan is not None
+            and goal_id in plan.goal_ids
+            and not any(self.kb.goal(g).state.is_open for g in plan.goal_ids)
+        ):
+            self._end_plan(f"goal {goal_id} cancelled: no goal of the plan is open")
         if self._round is None and was_open:
             self._want(f"goal {goal_id} cancelled", replan=True)
         # else the round under way reads the goals after its pause and looks at them
@@ -360,10 +372,18 @@ class GoalPlanner:
         if plan_id is not None and result is not None and result.plan is not None:
             self.executer.execute(result.plan, plan_id, planned)
         else:
-            self.executer.abandon()
+            self._end_plan("no plan for the open goals" if open_now else "no goal is open")
         self._planned = frozenset(g.id for g in planned)
         self._round = None
         self._begin()  # what was asked while the round was under way
+
+    def _end_plan(self, reason: str) -> None:
+        """End the plan being executed at once: cancelled (unless it ended already), its
+        steps under way cancelled and their at-start effects taken back."""
+        plan = self.kb.latest_plan()
+        if plan is not None and plan.state in (PlanState.PENDING, PlanState.EXECUTING):
+            self.kb.set_plan_state(plan.id, PlanState.CANCELLED, reason)
+        self.executer.abandon(reason)
 
     def _step(self, round_: _Round, step: Callable[[], None]) -> Callable[[], None]:
         """A job of a round, on either thread: a round that fails is over (logged), and

@@ -9,8 +9,17 @@ also published on the bus key ``events``. ``status`` and ``plan/show`` answer fr
 snapshots the plan executer and the goal planner keep: they never wait behind a step
 being dispatched or a plan being computed.
 
-On start it loads the robot's initial world into an empty knowledge base and plans for
-the goals still open there: an executive restarted after a crash carries on with them.
+On start it first takes back what a killed executive's unfinished steps did
+(:mod:`executive.planning.recovery`) and answers on the bus; then, in the background, its
+planner worker loads unified-planning and parses the domain (the executive process
+itself never imports unified-planning): the robot's tasks are checked against the
+domain, the robot's initial world is loaded into an empty knowledge base, and the goal
+planner begins with the goals still open there: an executive restarted after a crash
+carries on with them. Until then ``status``, ``goal/list``, ``events`` and the other
+readers answer at once (``state/get`` of a new robot waits for its world); a request
+that needs the domain (a goal, a fact, an object) waits for it. A domain that does not
+fit the robot ends the executive (``on_failure``) with the one-line reason.
+
 The robot's sensing rules (:mod:`executive.planning.sensing`) read their topics through
 the topic sources it is given (ROS 2) or the bus. A change of the world from outside the
 plan (a fact or object set, a component reset or repaired) reaches the plan executer,
@@ -38,16 +47,21 @@ from executive.bus.verb import Empty
 from executive.planning.domain_description import describe
 from executive.planning.dry_run import dry_run
 from executive.planning.expression import Signature, parse_fact
-from executive.planning.goal_planner import GoalPlanner
+from executive.planning.goal_planner import GoalPlanner, PlannerStatus
 from executive.planning.goals import submit
 from executive.planning.integrity import IntegrityGoals, IntegrityRule, Trigger, read_rules
-from executive.planning.plan_executer import ExecutionLimits, PlanExecuter, TaskRunner, recover
+from executive.planning.plan_executer import (
+    ExecutionLimits,
+    ExecutionStatus,
+    PlanExecuter,
+    TaskRunner,
+)
 from executive.planning.planner import Planner
-from executive.planning.problem import seed_world
+from executive.planning.problem import seed
+from executive.planning.recovery import recover
 from executive.planning.sensing import Sensing
 from knowledge.availability import blocked_tasks
-from knowledge.domain import read_domain
-from knowledge.errors import DuraError, KnowledgeError
+from knowledge.errors import ConfigError, DuraError, KnowledgeError
 from knowledge.lifecycle import PlanState
 from knowledge.records import Event, Fact, to_plain
 from knowledge.yamlsource import did_you_mean
@@ -60,6 +74,7 @@ PLAN_CHANGES = ("START", "END", "FAIL", "CANCEL")
 SECTIONS = ("tasks", "components")  # what other services add to ``status``
 
 MAX_EVENTS = 10_000  # the most events one request returns
+WARM_UP_WAIT = 25.0  # seconds a request waits for the planner at start (callers wait 30)
 
 
 class HighLevel(Service):
@@ -67,12 +82,19 @@ class HighLevel(Service):
 
     Args:
         context: the robot, bus and knowledge base.
-        runner: carries out plan steps (the task executor's adapter).
+        runner: carries out plan steps (the task executor's adapter), or how to get it
+            once :meth:`start` is called (the composition root serves the API before it
+            starts the task executor).
         status: the sections other services add to ``status`` (``tasks`` from the task
             executor, ``components`` from the launcher), by name.
         limits: when a running step times out.
+        on_failure: called (from a thread of its own) with the reason when the high level
+            cannot start (the domain does not fit the robot, the planner does not start);
+            without it the reason is logged. Requests that need the planner then fail
+            with it.
         clock: robot time (default: this process's, from ``DURA_TIME_SCALE``).
-        sources: topics not on the bus (ROS 2) that sensing rules may read.
+        sources: topics not on the bus (ROS 2) that sensing rules may read; the
+            composition root may set ``sources`` until :meth:`start`.
     """
 
     name = "high-level"
@@ -80,10 +102,11 @@ class HighLevel(Service):
     def __init__(
         self,
         context: Context,
-        runner: TaskRunner,
+        runner: TaskRunner | Callable[[], TaskRunner],
         *,
         status: dict[str, Callable[[], Any]] | None = None,
         limits: ExecutionLimits | None = None,
+        on_failure: Callable[[str], None] | None = None,
         clock: Clock | None = None,
         sources: Sequence[TopicSource] = (),
     ) -> None:
@@ -104,34 +127,94 @@ class HighLevel(Service):
         self._relaying = False
         self._blocked: dict[str, str] = {}
         self._faults_changed = threading.Event()  # a permanent fault came or went
+        self.on_failure = on_failure
+        self._ready = threading.Event()  # the planner parsed the domain; goals are planned
+        self._failure: str | None = None  # why the high level could not start
+        self._warm_up: threading.Thread | None = None
+        self._begin = threading.Event()  # start() was called: the other services run
+        self._seeded = threading.Event()  # the knowledge base holds the robot's world
+        self._lock = threading.Lock()  # the diagnoses and the integrity goals' start
+        self._running: list[Callable[[], None]] = []  # how to stop what started, in order
 
     # --- lifecycle -----------------------------------------------------------------------
 
     def start(self) -> None:
+        """Open (if not yet), and begin planning as soon as the planner is warm."""
+        self.open()
+        self._begin.set()
+
+    def open(self) -> None:
+        """Recover, answer on the bus, and warm the planner up in the background; plan
+        only after :meth:`start`. Idempotent."""
+        if self._warm_up is not None:
+            return
         robot, kb, bus = self.context.robot, self.context.kb, self.context.bus
-        self.domain = read_domain(robot.domain)
-        seed_world(kb, robot)
-        recover(kb)
-        rules: list[IntegrityRule] = []
-        for path in robot.integrity:
-            rules.extend(read_rules(path, robot, self.domain, kb.objects()))
-        self.integrity = IntegrityGoals(kb, self.domain, rules, clock=self.clock)
+        recover(kb)  # before anything executes: the knowledge base only, fast
+        if robot.problem is None or kb.objects() or kb.facts():
+            self._seeded.set()
         self.planner = Planner(robot.planner.engine, robot.planner.timeout)
-        self.planner.start(robot.domain)
-        self.executer = PlanExecuter(
-            kb, self.runner, robot.tasks, self._replan, self.limits, clock=self.clock
-        )
-        self._blocked = self.blocked()
-        self.goals = GoalPlanner(kb, self.domain, self.planner, self.executer, blocked=self.blocked)
         self._relaying = True
         kb.add_listener(self._on_event)
         self._declared = [bus.subscribe(DIAGNOSES, self._on_diagnoses)]
         self._declared.extend(self._serve())
         self._stopping.clear()
-        self._integrity_thread = threading.Thread(
-            target=self._integrity_loop, name="integrity-goals", daemon=True
+        self._warm_up = threading.Thread(target=self._warm, name="high-level warm-up", daemon=True)
+        self._warm_up.start()
+
+    def _warm(self) -> None:
+        """Load the domain in the planner worker, check the robot against it, seed the
+        world, and start planning; or report why not."""
+        from knowledge.validation import check_domain
+
+        robot, kb = self.context.robot, self.context.kb
+        try:
+            self.planner.start()
+            domain = self.planner.describe(robot.domain)
+            world = None
+            if robot.problem is not None:
+                world = self.planner.read_world(robot.domain, robot.problem)
+            objects = world.objects if world is not None else {}
+            errors = [f for f in check_domain(robot, domain, objects) if f.is_error]
+            if errors:
+                raise ConfigError(str(errors[0]))
+            if world is not None and robot.problem is not None:
+                if not (kb.objects() or kb.facts()):
+                    seed(kb, world, robot.problem)
+                self._seeded.set()
+            rules: list[IntegrityRule] = []
+            for path in robot.integrity:
+                rules.extend(read_rules(path, robot, domain, kb.objects()))
+        except DuraError as e:
+            if not self._stopping.is_set():
+                self._fail(str(e))
+            return
+        except Exception as e:  # a bug: say so, rather than leave goals waiting
+            if not self._stopping.is_set():
+                log.exception("the high level's warm-up failed")
+                self._fail(f"the planner's start failed: {type(e).__name__}: {e}")
+            return
+        while not self._begin.wait(0.1):  # the task executor starts meanwhile
+            if self._stopping.is_set():
+                return
+        if self._stopping.is_set():
+            return
+        self.domain = domain
+        runner = self.runner if isinstance(self.runner, TaskRunner) else self.runner()
+        self.executer = PlanExecuter(
+            kb, runner, robot.tasks, self._replan, self.limits, clock=self.clock
         )
-        self._integrity_thread.start()
+        self._blocked = self.blocked()
+        self.goals = GoalPlanner(kb, self.domain, self.planner, self.executer, blocked=self.blocked)
+        with self._lock:  # the diagnoses that came meanwhile, then each as it comes
+            self.integrity = IntegrityGoals(kb, self.domain, rules, clock=self.clock)
+            if self._diagnoses:
+                self.integrity.diagnosed(self._diagnoses)
+            integrity = self._integrity_thread = threading.Thread(
+                target=self._integrity_loop, name="integrity-goals", daemon=True
+            )
+        # started outside the lock: starting subscribes on the bus, whose callback
+        # threads may be waiting for the lock (a diagnosis)
+        integrity.start()
         self.executer.start()
         self.goals.start()
         self.sensing = Sensing(
@@ -143,21 +226,58 @@ class HighLevel(Service):
             clock=self.clock,
         )
         self.sensing.start()
+        self._running = [self.sensing.stop, self.goals.stop, self.executer.stop]
+        self._ready.set()
+
+    def wait_ready(self, timeout: float | None = None) -> bool:
+        """Wait until the high level plans (the planner parsed the domain and
+        :meth:`start` was called); whether it does. False also when it failed."""
+        return self._ready.wait(timeout) and self._failure is None
+
+    def _fail(self, reason: str) -> None:
+        self._failure = reason
+        self._ready.set()
+        self._seeded.set()
+        if self.on_failure is not None:
+            self.on_failure(reason)
+        else:
+            log.error("the high level cannot start: %s", reason)
+
+    def _planning(self) -> None:
+        """Wait until goals can be planned (the planner parsed the domain).
+
+        Raises:
+            DuraError: the planner is not ready within WARM_UP_WAIT, or could not start.
+        """
+        if not self._ready.wait(WARM_UP_WAIT):
+            raise DuraError(
+                "the executive is still starting: its planner has not loaded the domain "
+                f"within {WARM_UP_WAIT:g} s; try again"
+            )
+        if self._failure is not None:
+            raise DuraError(f"the executive cannot plan: {self._failure}")
 
     def stop(self) -> None:
-        if self._integrity_thread is None:
+        if self._warm_up is None:
             return
-        self.sensing.stop()
         self._stopping.set()
         self._check.set()
-        self._integrity_thread.join()
-        self._integrity_thread = None
+        if self._warm_up.is_alive():
+            self.planner.interrupt()  # the warm-up waits for the worker: end it now
+        self._warm_up.join()
+        self._warm_up = None
+        self._begin.clear()
+        with self._lock:
+            thread, self._integrity_thread = self._integrity_thread, None
+        if thread is not None and thread.ident is not None:  # it had started
+            thread.join()
         for entity in self._declared:
             with contextlib.suppress(Exception):
                 entity.undeclare()
         self._declared = []
-        self.goals.stop()
-        self.executer.stop()
+        for stop in self._running:
+            stop()
+        self._running = []
         self.planner.close()
         self._relaying = False
 
@@ -185,10 +305,11 @@ class HighLevel(Service):
         self.context.bus.publish(EVENTS, to_plain(event))
         if event.kind in FAULT_CHANGES:
             self._faults_changed.set()
-        if event.kind in OUTSIDE_CHANGES:
-            self.goals.world_changed(f"{event.kind} {event.subject}")
-        elif event.kind in PLAN_CHANGES:
-            self.goals.facts_changed(f"{event.kind} {event.subject}")
+        if self._started():  # until then, the goal planner's first round sees it all
+            if event.kind in OUTSIDE_CHANGES:
+                self.goals.world_changed(f"{event.kind} {event.subject}")
+            elif event.kind in PLAN_CHANGES:
+                self.goals.facts_changed(f"{event.kind} {event.subject}")
         if not event.kind.startswith("INTEGRITY_"):
             self._check.set()
 
@@ -198,8 +319,10 @@ class HighLevel(Service):
         except (KeyError, ValueError, TypeError) as e:
             log.warning("ignored a malformed diagnosis on %s: %s", message.key, e)
             return
-        self._diagnoses = payload
-        self.integrity.diagnosed(payload)
+        with self._lock:
+            self._diagnoses = payload
+            if self._integrity_thread is not None:
+                self.integrity.diagnosed(payload)
         self._check.set()
 
     def _integrity_loop(self) -> None:
@@ -263,6 +386,7 @@ class HighLevel(Service):
         ]
 
     def _goal_add(self, request: api.GoalAdd) -> api.GoalReply:
+        self._planning()
         goal = submit(
             self.context.kb,
             self.domain,
@@ -288,14 +412,16 @@ class HighLevel(Service):
     def _goal_cancel(self, request: api.GoalId) -> api.GoalReply:
         """Cancelled by the goal planner's thread, which owns goal states; the reply is
         the goal as it left that thread (or the reason it could not be cancelled)."""
+        self._planning()
         return api.GoalReply(to_plain(self.goals.cancel(request.id)))
 
     def _plan_show(self, request: Empty) -> api.PlanReply:
         plan = self.context.kb.latest_plan()
-        return api.PlanReply(None if plan is None else to_plain(plan), self.executer.status())
+        return api.PlanReply(None if plan is None else to_plain(plan), self._execution())
 
     def _plan_dry_run(self, request: api.DryRun) -> api.DryRunReply:
         """Plan for the open goals on the live state; nothing changes."""
+        self._planning()
         return dry_run(
             self.context.kb,
             self.domain,
@@ -307,12 +433,14 @@ class HighLevel(Service):
         )
 
     def _state_get(self, request: api.StateQuery) -> api.StateReply:
+        self._seeded.wait(WARM_UP_WAIT)  # a new robot's world comes with its domain
         kb = self.context.kb
         words = request.pattern.strip("() ").split()
         facts = [f for f in kb.facts() if _matches(words, f.name, f.args)]
         return api.StateReply([_fact(f) for f in facts], kb.objects())
 
     def _state_change(self, request: api.FactChange, *, unset: bool) -> api.FactReply:
+        self._planning()
         kb = self.context.kb
         fact = parse_fact(request.fact, Signature.of(self.domain, kb.objects()))
         with kb.transaction():
@@ -328,6 +456,7 @@ class HighLevel(Service):
         return api.FactReply(_fact(fact))
 
     def _object_add(self, request: api.ObjectAdd) -> api.ObjectAdd:
+        self._planning()
         name, type_name = request.name, request.type
         kb = self.context.kb
         if type_name not in self.domain.types and type_name != "object":
@@ -347,6 +476,7 @@ class HighLevel(Service):
         """Remove an object and every fact that names it (as PlanSys2 removes an
         instance); refused, with who names it, while an open goal, the current plan or an
         integrity rule does."""
+        self._planning()
         name, kb = request.name, self.context.kb
         with kb.transaction():
             objects = kb.objects()
@@ -387,6 +517,7 @@ class HighLevel(Service):
         return users
 
     def _domain_show(self, request: Empty) -> api.DomainReply:
+        self._planning()
         return describe(self.domain, self.context.robot, self.blocked())
 
     def _events(self, request: api.EventQuery) -> api.EventsReply:
@@ -405,13 +536,19 @@ class HighLevel(Service):
             robot=self.context.robot.name,
             goals=to_plain(kb.goals()),
             plan=None if plan is None else to_plain(plan),
-            execution=self.executer.status(),
+            execution=self._execution(),
             diagnoses=self._diagnoses,
             faults=to_plain([c for c in kb.components() if c.fault_count or c.permanent_fault]),
             tasks=self._section("tasks"),
             components=self._section("components"),
-            planning=self.goals.status(),
+            planning=self.goals.status() if self._started() else _STARTING,
         )
+
+    def _started(self) -> bool:
+        return self._ready.is_set() and self._failure is None
+
+    def _execution(self) -> dict[str, Any]:
+        return self.executer.status() if self._started() else dict(to_plain(ExecutionStatus()))
 
     def _section(self, name: str) -> Any:
         """A section another service adds to ``status``; its error if it did not answer."""
@@ -422,6 +559,9 @@ class HighLevel(Service):
             return section()
         except DuraError as e:
             return {"error": str(e)}
+
+
+_STARTING = to_plain(PlannerStatus(starting=True))  # the planner is warming up
 
 
 def _names_goal(event: Event, goal_id: int) -> bool:

@@ -19,8 +19,12 @@ others finish first (thesis Figures 5.7, 5.8). A new plan adopts a paused or run
 step that is one of its first steps (same action and objects); the others are cancelled
 and their at-start effects undone, as the planner assumed when it planned.
 
-Every step is an event in the KB log: PLAN_START, DISPATCH, START, END, FAIL, CANCEL,
-REPLAN. Goal and plan states are not the executer's to write: it reports each change
+Every step is an event in the KB log: PLAN_START, DISPATCH, START, ADOPT (a new plan
+continues it), END, FAIL, CANCEL, REPLAN. A step's events name its plan and index and
+its run (the id of its DISPATCH event, kept by the plan that adopts it); each change a
+step makes to the facts is one transaction with its event, and the old plan's steps
+end as its own before the new plan takes over: crash recovery relies on both
+(:mod:`executive.planning.recovery`). Each stored plan step keeps what happened to it. Goal and plan states are not the executer's to write: it reports each change
 (a plan executing, succeeded or failed; a goal executing, achieved, or past its
 deadline) to their owner, the goal planner, which applies them on its own thread
 (:meth:`PlanExecuter.report_to`, :mod:`executive.planning.state_change`); an executer
@@ -244,10 +248,10 @@ class PlanExecuter:
         """Continue the current plan after a pause that brought no new plan."""
         self._call(self._resume)
 
-    def abandon(self) -> None:
-        """Drop the current plan (no plan for any goal): cancel its tasks, undo the
-        at-start effects of those under way, and end the pause."""
-        self._call(self._abandon)
+    def abandon(self, reason: str = "no plan") -> None:
+        """Drop the current plan (no plan for any goal, or no goal for the plan): cancel
+        its tasks, undo the at-start effects of those under way, and end the pause."""
+        self._call(lambda: self._abandon(reason))
 
     def facts_changed(self, changed: Collection[Key] = ()) -> None:
         """Facts changed outside the executer: check the running steps' conditions, and
@@ -272,13 +276,18 @@ class PlanExecuter:
     # --- work on the executer's thread --------------------------------------------------
 
     def _execute(self, plan: PartialOrderPlan, plan_id: int, goals: Sequence[GoalSpec]) -> None:
-        old = [] if self._run is None else [r for r in self._run.runs.values() if r.state.active]
+        old = self._run
         for g in self._goals:
             cancel_timer(g.timer)
-        previous = None if self._run is None else self._run.plan_id
-        run = self._run = PlanRun(plan, plan_id, self._context)
-        for left in run.adopt(old):
-            run.cancel(left, "not in the new plan", undo=True, plan=previous)
+        run = PlanRun(plan, plan_id, self._context)
+        pairs: list[tuple[StepRun, StepRun]] = []
+        if old is not None:
+            # the old plan's steps end as its own (their events name the old plan),
+            # before the new plan takes over the ones it continues
+            pairs, left = run.continuing([r for r in old.runs.values() if r.state.active])
+            for step in left:
+                old.cancel(step, "not in the new plan", undo=True)
+        self._run = run
         self._tell(PlanChange(plan_id, PlanState.EXECUTING))
         self._goals = []
         for spec in goals:
@@ -292,6 +301,7 @@ class PlanExecuter:
             self._goals.append(goal)
             self._tell(GoalChange(spec.id, GoalState.EXECUTING))
         run.event("PLAN_START", steps=len(plan.steps), goals=[g.id for g in goals])
+        run.adopt(pairs, None if old is None else old.plan_id)
         self._paused = False
         self._resume_steps()
         self._react()
@@ -323,9 +333,9 @@ class PlanExecuter:
             self._run.undone(values)
         return [Fact(name, args, v) for (name, args), v in sorted(values.items())]
 
-    def _abandon(self) -> None:
+    def _abandon(self, reason: str) -> None:
         if self._run is not None:
-            self._run.cancel_active("no plan")
+            self._run.cancel_active(reason)
         for g in self._goals:
             cancel_timer(g.timer)
         self._run, self._goals = None, []

@@ -68,14 +68,19 @@ class PlanRun:
 
     # --- what the plan looks like -----------------------------------------------------
 
-    def event(self, kind: str, run: StepRun | None = None, **data: Any) -> None:
+    def event(self, kind: str, run: StepRun | None = None, *, state: str = "", **data: Any) -> int:
+        """Log an event of the plan, or of one of its steps (with its run, and ``state``
+        as the stored step's new state, in the same transaction); returns its id."""
         kb = self._c.kb
-        if run is not None:
-            data = {"plan": self.plan_id, "step": run.step.index, "action": run.step.action,
-                    "args": list(run.step.args), **data}  # fmt: skip
-            kb.log_event(kind, run.step.label, data)
-        else:
-            kb.log_event(kind, f"plan {self.plan_id}", data)
+        if run is None:
+            return kb.log_event(kind, f"plan {self.plan_id}", data)
+        data = {"plan": self.plan_id, "step": run.step.index, "action": run.step.action,
+                "args": list(run.step.args), **({} if run.id is None else {"run": run.id}),
+                **data}  # fmt: skip
+        with kb.transaction():
+            if state and self.plan_id is not None:
+                kb.set_step_state(self.plan_id, run.step.index, state)
+            return kb.log_event(kind, run.step.label, data)
 
     def state(self) -> WorldState:
         return WorldState(self._c.kb.facts())
@@ -110,10 +115,13 @@ class PlanRun:
 
     # --- a new plan, pauses ----------------------------------------------------------
 
-    def adopt(self, old: Sequence[StepRun]) -> list[StepRun]:
-        """Let first steps continue the tasks of an earlier plan's steps with the same
-        action and objects; returns the earlier steps no first step continues."""
+    def continuing(
+        self, old: Sequence[StepRun]
+    ) -> tuple[list[tuple[StepRun, StepRun]], list[StepRun]]:
+        """Which first steps continue which of an earlier plan's steps under way (same
+        action and objects), and the earlier steps no first step continues."""
         left = list(old)
+        pairs = []
         for run in self.runs.values():
             if run.step.after:
                 continue
@@ -125,16 +133,29 @@ class PlanRun:
                 ),
                 None,
             )
-            if match is None:
-                continue
-            left.remove(match)
-            run.take_over(match)
+            if match is not None:
+                left.remove(match)
+                pairs.append((run, match))
+        return pairs, left
+
+    def adopt(self, pairs: Sequence[tuple[StepRun, StepRun]], old_plan: int | None) -> None:
+        """Let first steps continue the runs of an earlier plan's steps (see
+        :meth:`continuing`): the run keeps its identity, its task reports to this plan."""
+        kb = self._c.kb
+        for run, old in pairs:
+            run.take_over(old)
             run.token = next(self._c.tokens)
             if run.report is not None:  # the task's further reports go to this plan's step
                 run.report.route = (self.plan_id, run.step.index, run.token)
+            with kb.transaction():
+                if old_plan is not None:
+                    kb.set_step_state(old_plan, old.step.index, "adopted")
+                self.event(
+                    "ADOPT", run, state="running" if run.started else "dispatched",
+                    from_plan=old_plan, from_step=old.step.index,
+                )  # fmt: skip
             if run.state is StepState.RUNNING:
                 self.arm(run)
-        return left
 
     def pause(self) -> None:
         """Pause the interruptible tasks under way; the others go on."""
@@ -160,8 +181,7 @@ class PlanRun:
             if run.state.active:
                 self.cancel(run, reason, undo=True)
 
-    def cancel(self, run: StepRun, reason: str, *, undo: bool, plan: int | None = None) -> None:
-        """Cancel a step; ``plan``: the plan it belongs to, if an earlier one's."""
+    def cancel(self, run: StepRun, reason: str, *, undo: bool) -> None:
         if run.held is not None and run.held[0] is Progress.SUCCEEDED:
             # it ended while paused: its effects are real, whatever the new plan assumed
             run.state = StepState.RUNNING
@@ -171,16 +191,17 @@ class PlanRun:
             run.task.cancel()
         run.stop_clock()
         run.token = -1
-        if undo:
-            self.undo(run)
+        with self._c.kb.transaction():  # a crash leaves both or neither: see recovery.py
+            if undo:
+                self.undo(run)
+            self.event("CANCEL", run, state="cancelled", reason=reason)
         run.state = StepState.CANCELLED
-        self.event("CANCEL", run, reason=reason, **({} if plan is None else {"plan": plan}))
 
     # --- a step's life ----------------------------------------------------------------
 
     def dispatch(self, run: StepRun) -> None:
         step = run.step
-        self.event("DISPATCH", run)
+        run.id = self.event("DISPATCH", run, state="dispatched")  # the run's identity
         if step.action not in self._c.tasks:
             run.state = StepState.DISPATCHED
             self.start(run)
@@ -224,7 +245,7 @@ class PlanRun:
         with self._c.kb.transaction():  # a crash leaves both or neither: see recovery.py
             self.apply(run, run.step.start_effects, remember=True)
             undo = [[name, list(args), before] for (name, args), before in run.undo.items()]
-            self.event("START", run, undo=undo)
+            self.event("START", run, state="running", undo=undo)
         run.started = True
         if run.state is not StepState.PAUSED:
             run.state = StepState.RUNNING
@@ -244,9 +265,11 @@ class PlanRun:
                 )
                 return
         run.stop_clock()
-        self.apply(run, run.step.end_effects, remember=False)
+        with self._c.kb.transaction():  # a crash leaves both or neither: see recovery.py
+            self.apply(run, run.step.end_effects, remember=False)
+            outcome = {"result": result} if result is not None else {}
+            self.event("END", run, state="ended", **outcome)
         run.state = StepState.ENDED
-        self.event("END", run, **({"result": result} if result is not None else {}))
 
     def undo(self, run: StepRun) -> None:
         """Take back a started step's at-start effects: as far as the executive knows,
@@ -262,9 +285,10 @@ class PlanRun:
             run.task.cancel()
         run.stop_clock()
         run.token = -1
-        self.undo(run)
+        with self._c.kb.transaction():  # a crash leaves both or neither: see recovery.py
+            self.undo(run)
+            self.event("FAIL", run, state="failed", reason=reason)
         run.state = StepState.FAILED
-        self.event("FAIL", run, reason=reason)
         self.fail_plan(reason)
 
     def fail_plan(self, reason: str) -> None:

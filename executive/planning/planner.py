@@ -34,7 +34,7 @@ import time
 from dataclasses import dataclass, replace
 from importlib import metadata
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 import psutil
 
@@ -42,7 +42,10 @@ from executive.planning.goals import GoalSpec
 from executive.planning.partial_order import PartialOrderPlan
 from executive.planning.problem import World
 from knowledge.description import DEFAULT_ENGINE
-from knowledge.errors import PlanningError
+from knowledge.errors import DuraError, PlanningError
+
+if TYPE_CHECKING:
+    from knowledge.domain import DomainInfo
 
 log = logging.getLogger("dura.planner")
 
@@ -165,11 +168,46 @@ class Planner:
     # --- the worker ---------------------------------------------------------------------
 
     def start(self, domain: Path | None = None) -> None:
-        """Start the worker now (and parse ``domain`` in it), so the first job is fast."""
+        """Start the worker now (and wait until it parsed ``domain``), so the first job
+        is fast; without a domain it returns at once while the worker loads."""
         with self._lock:
             self._spawn()
             if domain is not None:
                 self._call(("prepare", self.engine, Path(domain)), STARTUP_TIMEOUT)
+
+    def describe(self, domain: Path) -> DomainInfo:
+        """Parse a domain in the worker (and load the engine there): its signatures.
+
+        Raises:
+            DomainError: the domain is not valid PDDL (``file:line``).
+            PlanningError: the worker failed, or the engine is not installed.
+        """
+        info: DomainInfo = self._job(("describe", self.engine, Path(domain)))
+        return info
+
+    def read_world(self, domain: Path, problem: Path) -> World:
+        """The objects and facts of a problem file, read in the worker.
+
+        Raises:
+            DomainError: the problem cannot be read or does not fit the domain.
+            PlanningError: the worker failed.
+        """
+        world: World = self._job(("world", self.engine, Path(domain), Path(problem)))
+        return world
+
+    def _job(self, message: tuple[Any, ...]) -> Any:
+        """Send a job that is not planning; its answer, or the error it raised."""
+        with self._lock:
+            try:
+                self._spawn()
+                answer = self._call(message, STARTUP_TIMEOUT)
+            except TimeoutError as e:
+                raise PlanningError(
+                    f"the planner worker did not answer within {STARTUP_TIMEOUT:g} s"
+                ) from e
+        if isinstance(answer, DuraError):
+            raise answer
+        return answer
 
     def _spawn(self) -> None:
         if self._process is not None and self._process.poll() is None:
@@ -205,6 +243,14 @@ class Planner:
         if self._tmp is not None:
             shutil.rmtree(self._tmp, ignore_errors=True)
             self._tmp = None
+
+    def interrupt(self) -> None:
+        """Kill the worker's process group now, from any thread, also while a job waits
+        for it (that job fails; the next one starts a new worker)."""
+        process = self._process
+        if process is not None:
+            with _suppress_lookup():
+                os.killpg(process.pid, signal.SIGKILL)
 
     def close(self) -> None:
         """Stop the worker (it exits when its input closes; killed if it does not)."""

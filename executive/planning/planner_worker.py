@@ -18,10 +18,10 @@ import os
 import shutil
 import sys
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from executive.planning.planner import (
     TMP_PREFIX,
@@ -33,6 +33,10 @@ from executive.planning.planner import (
     send_frame,
 )
 from knowledge.errors import DuraError, PlanningError
+
+if TYPE_CHECKING:
+    from executive.planning.problem import World
+    from knowledge.domain import DomainInfo
 
 _LOG_TAIL = 40  # lines of engine output kept in a result
 
@@ -75,6 +79,7 @@ class _Worker:
 
     output: Path
     engines: dict[str, Any] = field(default_factory=dict)
+    validators: dict[str, Any] = field(default_factory=dict)
     domains: dict[Path, tuple[float, Any]] = field(default_factory=dict)
     env: Any = None
 
@@ -118,21 +123,43 @@ class _Worker:
             self.engines[name] = OneshotPlanner(name=name)
         return self.engines[name]
 
+    def validator(self, name: str) -> Any:
+        """A plan validator by name, kept (UP's factory looks up credits on every call)."""
+        if name not in self.validators:
+            from unified_planning.shortcuts import PlanValidator
+
+            self.validators[name] = PlanValidator(name=name)
+        return self.validators[name]
+
     def prepare(self, engine: str, domain: Path) -> bool:
         self.domain(domain)
         self.engine(engine)
         return True
 
+    def describe(self, engine: str, domain: Path) -> DomainInfo:
+        """Parse a domain (and load the engine): the signatures the executive checks
+        goals, facts and tasks against, so that it needs no unified-planning itself."""
+        from knowledge.domain import describe
+
+        self.prepare(engine, domain)
+        return describe(self.domain(domain), domain)
+
+    def world(self, engine: str, domain: Path, problem: Path) -> World:
+        """The objects and facts of a problem file of the domain."""
+        from executive.planning.problem import read_world
+
+        return read_world(domain, problem, self.domain(domain))[0]
+
     @_capturing_output
     def solve(self, engine_name: str, task: PlanningTask, timeout: float) -> PlanResult:
-        from executive.planning.problem import build
+        from executive.planning.problem import build, frozen
 
         def result(status: PlanStatus, *lines: str, **more: Any) -> PlanResult:
             return PlanResult(status, more.get("plan"), engine_name, tuple(lines), 0.0,
                               more.get("validator", ""), more.get("missing", ()))  # fmt: skip
 
         try:
-            problem = build(self.domain(task.domain), task.world, task.goals, task.blocked)
+            problem = frozen(build(self.domain(task.domain), task.world, task.goals, task.blocked))
             engine = self.engine(engine_name)
         except DuraError as e:
             return result(PlanStatus.ERROR, str(e))
@@ -149,7 +176,7 @@ class _Worker:
             why = _missing(problem, task) if status in _EXPLAINED else ()
             status = PlanStatus.ERROR if status is PlanStatus.SOLVED else status
             return result(status, *lines, missing=why)
-        valid, validator, reason = _validate(problem, answer.plan)
+        valid, validator, reason = _validate(problem, answer.plan, self.validator)
         if not valid:
             return result(PlanStatus.INVALID_PLAN, *lines, reason, validator=validator)
         from executive.planning.stn import partial_order
@@ -199,21 +226,19 @@ _VALIDATORS = {
 }
 
 
-def _validate(problem: Any, plan: Any) -> tuple[bool, str, str]:
+def _validate(problem: Any, plan: Any, validator: Callable[[str], Any]) -> tuple[bool, str, str]:
     """Check a plan with the first UP validator that supports the problem (UP's own
     before Kairos', so that a Kairos plan gets an independent check).
 
     Returns (valid, validator name, reason if invalid).
     """
     from unified_planning.engines import ValidationResultStatus
-    from unified_planning.shortcuts import PlanValidator
 
     names = _VALIDATORS.get(type(plan).__name__, ())
     if not names:
         return False, "", f"no validator for a {type(plan).__name__}"
-    chosen = next((n for n in names if PlanValidator(name=n).supports(problem.kind)), names[0])
-    with PlanValidator(name=chosen) as validator:
-        answer = validator.validate(problem, plan)
+    chosen = next((n for n in names if validator(n).supports(problem.kind)), names[0])
+    answer = validator(chosen).validate(problem, plan)
     if answer.status == ValidationResultStatus.VALID:
         return True, chosen, ""
     messages = [str(m.message).splitlines()[0] for m in answer.log_messages or ()]
@@ -244,8 +269,10 @@ def serve() -> None:
             kind, engine, *args = message
             try:
                 answer = getattr(worker, kind)(engine, *args)
-            except DuraError as e:
-                answer = PlanResult(PlanStatus.ERROR, None, engine, (str(e),))
+            except DuraError as e:  # a planning job's failure is a result; others raise it
+                answer = (
+                    PlanResult(PlanStatus.ERROR, None, engine, (str(e),)) if kind == "solve" else e
+                )
             send_frame(protocol_out, answer)
     # the input closed: dura is done with this worker, or died without cleaning up
     # (SIGKILL); either way the engines' temporary files go with it

@@ -15,6 +15,7 @@ The goal must also hold at the end, like every goal.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -235,6 +236,41 @@ def build(
     return problem
 
 
+def frozen(problem: Problem) -> Problem:
+    """The same problem, computing its kind only once.
+
+    unified-planning recomputes ``Problem.kind`` at every look (walking every action and
+    expression), and one solve, validation and conversion looks 17 times: a third of the
+    worker's time. A frozen problem keeps the kind it computed first (its clones do not:
+    they are new problems); change nothing in it afterwards. The problem stays a UP
+    ``Problem`` (engines dispatch on its type): ``Problem.kind`` learns to look for the
+    kept kind, once per process.
+    """
+    _keep_kinds()
+    problem.__dict__[_KIND] = None  # computed at the first look
+    return problem
+
+
+_KIND = "_dura_kind"
+
+
+@functools.cache
+def _keep_kinds() -> None:
+    from unified_planning.model import Problem
+
+    computed = Problem.kind
+
+    def kind(self: Problem) -> Any:
+        kept = self.__dict__
+        if _KIND not in kept:
+            return computed.fget(self)
+        if kept[_KIND] is None:
+            kept[_KIND] = computed.fget(self)
+        return kept[_KIND]
+
+    Problem.kind = property(kind, doc=computed.__doc__)
+
+
 def world_of(problem: Problem, domain: Problem | None = None) -> World:
     """The objects and explicit initial facts of a parsed problem (domain constants left out)."""
     constants = {o.name for o in domain.all_objects} if domain is not None else set()
@@ -250,8 +286,11 @@ def world_of(problem: Problem, domain: Problem | None = None) -> World:
     return World(objects, tuple(sorted(facts, key=lambda f: (f.name, f.args))))
 
 
-def read_world(domain: Path, problem_file: Path) -> tuple[World, Expression]:
-    """The world and the goal of a PDDL problem file.
+def read_world(
+    domain: Path, problem_file: Path, parsed: Problem | None = None
+) -> tuple[World, Expression]:
+    """The world and the goal of a PDDL problem file (``parsed``: the domain, parsed
+    already).
 
     Raises:
         DomainError: the file cannot be read or does not fit the domain (``file:line``).
@@ -262,9 +301,9 @@ def read_world(domain: Path, problem_file: Path) -> tuple[World, Expression]:
         text = problem_file.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as e:
         raise DomainError(located(problem_file, None, f"cannot read: {e}")) from e
-    problem = parse_problem(domain, text, str(problem_file))
+    problem = parse_problem(domain, text, str(problem_file), domain_checked=parsed is not None)
     goal = conjunction(from_fnode(g, problem) for g in problem.goals)
-    return world_of(problem, parse(domain)), goal
+    return world_of(problem, parsed if parsed is not None else parse(domain)), goal
 
 
 def seed_world(kb: KnowledgeBase, robot: RobotDescription) -> bool:
@@ -275,9 +314,17 @@ def seed_world(kb: KnowledgeBase, robot: RobotDescription) -> bool:
     if robot.problem is None or kb.objects() or kb.facts():
         return False
     world, _ = read_world(robot.domain, robot.problem)
+    return seed(kb, world, robot.problem)
+
+
+def seed(kb: KnowledgeBase, world: World, source: Path) -> bool:
+    """Load a world (read from ``source``) into a knowledge base that has none yet;
+    whether it did."""
     with kb.transaction():
+        if kb.objects() or kb.facts():
+            return False
         for name, type_name in world.objects.items():
             kb.add_object(name, type_name)
         kb.update_facts(add=world.facts)
-        kb.log_event("WORLD_SEEDED", str(robot.problem), {"objects": len(world.objects)})
+        kb.log_event("WORLD_SEEDED", str(source), {"objects": len(world.objects)})
     return True

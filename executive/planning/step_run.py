@@ -55,9 +55,16 @@ class ExecutionLimits:
 
 @dataclass
 class StepRun:
-    """What the executer knows about one step of the current plan."""
+    """What the executer knows about one step of the current plan.
+
+    ``id`` is the identity of the step's run: the id of the DISPATCH event that began
+    it. Every later event of the run (START, ADOPT, END, FAIL, CANCEL) names it as
+    ``run``, also when a later plan continues the run as a step of its own; crash
+    recovery matches a START with its end by it (:mod:`executive.planning.recovery`).
+    """
 
     step: Step
+    id: int | None = None
     state: StepState = StepState.PENDING
     task: StepTask | None = None
     report: StepReport | None = None
@@ -72,7 +79,7 @@ class StepRun:
 
     def take_over(self, old: StepRun) -> None:
         """Continue the task of an earlier plan's step (same action and objects)."""
-        self.state, self.task, self.report = old.state, old.task, old.report
+        self.id, self.state, self.task, self.report = old.id, old.state, old.task, old.report
         self.started, self.undo, self.was = old.started, old.undo, old.was
         self.elapsed, self.since, self.held = old.elapsed, old.since, old.held
         cancel_timer(old.timer)

@@ -26,7 +26,13 @@ from pathlib import Path
 from typing import Any
 
 from executive.bus import keys, security
-from executive.bus.api.components import COMMANDS, ComponentCommand, Configure, Start, Stop
+from executive.bus.api.component_commands import (
+    COMMANDS,
+    ComponentCommand,
+    Configure,
+    Start,
+    Stop,
+)
 from executive.bus.payloads import Command, ComponentState, Lifecycle
 from executive.bus.security import Credentials
 from executive.bus.session import Bus

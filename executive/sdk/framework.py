@@ -21,7 +21,7 @@ from concurrent.futures import Future
 from typing import TYPE_CHECKING, Any
 
 from executive.bus import keys
-from executive.bus.api.components import (
+from executive.bus.api.component_commands import (
     CancelGoal,
     CommandReply,
     ComponentCommand,

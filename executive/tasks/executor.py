@@ -71,6 +71,7 @@ T = TypeVar("T")
 CALL_TIMEOUT = 30.0  # seconds a command waits for the worker (it may be starting components)
 STOP_TIMEOUT = 60.0  # seconds the worker gets to cancel every task and stop their components
 HAND_TIMEOUT = 60.0  # seconds a start or stop by hand waits (the worker may be starting others)
+WORLD_WAIT = 25.0  # seconds a task asked for by hand waits for a new robot's world (callers: 30)
 
 __all__ = ["Listener", "TaskEnd", "TaskExecutor", "TaskHandle", "TaskPhase"]
 
@@ -351,6 +352,7 @@ class TaskExecutor(Service):
         spec = self.robot.tasks.get(request.task)
         behavior = spec.behavior if spec is not None else request.task
         if spec is not None:  # the objects it names must be in the world, of their types
+            self._wait_for_world()
             check_objects(spec, request.goal, self._domain(), self.kb.objects())
         handle = self.start_task(
             behavior, request.goal, name=request.label, duration=request.duration,
@@ -358,6 +360,17 @@ class TaskExecutor(Service):
             together=tuple(request.together),
         )  # fmt: skip
         return TaskStarted(handle.id, behavior)
+
+    def _wait_for_world(self) -> None:
+        """Wait (bounded) until the knowledge base holds the robot's world: a new robot's
+        objects come from its problem file, which the high level loads while the planner
+        warms up, a moment after the executive started."""
+        deadline = time.monotonic() + WORLD_WAIT
+        while self.robot.problem is not None and time.monotonic() < deadline:
+            kb = self.kb
+            if kb.objects() or kb.facts() or kb.events(kind="WORLD_SEEDED", limit=1):
+                return
+            time.sleep(0.05)
 
     def _domain(self) -> DomainInfo:
         """The domain's signatures, read at the first task asked for by hand (reading

@@ -18,6 +18,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -29,7 +30,7 @@ from executive.bus import security
 from executive.bus.api import planning
 from executive.bus.api.components import COMPONENT_INJECT, COMPONENT_LIST, Injection
 from executive.bus.clock import SCALE_VARIABLE, Clock
-from executive.bus.keys import api
+from executive.bus.keys import EXECUTIVE_ALIVE, api
 from executive.bus.payloads import Lifecycle
 from executive.bus.security import Login
 from executive.bus.session import Bus
@@ -123,6 +124,7 @@ class RobotProcess:
         self.output = self.folder / "executive.log"
         self._process: subprocess.Popen[bytes] | None = None
         self._bus: Bus | None = None
+        self._running = threading.Event()  # the executive's liveliness token is there
 
     # --- lifecycle -----------------------------------------------------------------------
 
@@ -134,7 +136,8 @@ class RobotProcess:
         self.stop()
 
     def start(self, timeout: float = START_TIMEOUT, *, tries: int = 3) -> None:
-        """Start the executive and wait until its bus API answers."""
+        """Start the executive and wait until every service of it runs (its liveliness
+        token is there: the bus API answers a little earlier)."""
         if self._process is not None:
             raise DuraError(f"the executive of '{self.robot.name}' runs already")
         argv = [sys.executable, "-m", "executive.cli", "run", str(self.description)]
@@ -163,8 +166,11 @@ class RobotProcess:
                     self._bus = Bus(
                         self.robot.name, name="harness", endpoint=self.endpoint, login=self.login()
                     )
+                    self._bus.watch_alive(EXECUTIVE_ALIVE, self._on_alive)
                 self.request("status", timeout=2.0)
-                return
+                if self._running.wait(0.1):  # every service started, not only the API
+                    return
+                raise BusError("the executive is starting")
             except BusError:
                 if time.monotonic() > deadline:
                     self.stop()
@@ -172,6 +178,12 @@ class RobotProcess:
                         f"the executive did not answer within {timeout:g} s:\n{self.log_tail()}"
                     ) from None
                 time.sleep(0.1)
+
+    def _on_alive(self, key: str, alive: bool) -> None:
+        if alive:
+            self._running.set()
+        else:
+            self._running.clear()
 
     def stop(self, timeout: float = 30.0) -> int | None:
         """Stop the executive as Ctrl-C does (SIGTERM); returns its exit code."""
@@ -214,6 +226,7 @@ class RobotProcess:
         if self._bus is not None:
             self._bus.close()
         self._bus, self._process = None, None
+        self._running.clear()
 
     @property
     def running(self) -> bool:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from typing import Any
 
 from knowledge.records import Event
@@ -35,14 +35,17 @@ class EventLog(Database):
         kind: str | None = None,
         limit: int | None = None,
         oldest: bool = False,
+        kinds: Collection[str] = (),
     ) -> list[Event]:
         """Events with an id above ``after``, oldest first: the newest ``limit`` ones, or
-        with ``oldest`` the oldest ``limit`` ones (to page forward through the log)."""
+        with ``oldest`` the oldest ``limit`` ones (to page forward through the log);
+        only those of ``kind``, or of one of ``kinds``, if given."""
         sql = "SELECT * FROM events WHERE id > ?"
         params: list[Any] = [after]
-        if kind is not None:
-            sql += " AND kind = ?"
-            params.append(kind)
+        wanted = [*([kind] if kind is not None else []), *kinds]
+        if wanted:
+            sql += f" AND kind IN ({','.join('?' * len(wanted))})"
+            params.extend(wanted)
         if limit is not None and not oldest:
             sql = f"SELECT * FROM ({sql} ORDER BY id DESC LIMIT ?) ORDER BY id"
             params.append(limit)

@@ -14,7 +14,7 @@ from collections.abc import Iterable
 from typing import Any
 
 from knowledge.errors import KnowledgeError
-from knowledge.records import Goal, GoalState, Plan, PlanState, PlanStep
+from knowledge.records import STEP_STATES, Goal, GoalState, Plan, PlanState, PlanStep
 from knowledge.tables.database import dump, load
 from knowledge.tables.events import EventLog
 
@@ -150,11 +150,12 @@ class GoalTables(EventLog):
         if not rows:
             raise KnowledgeError(f"no plan {plan_id}")
         r = rows[0]
+        rows = self._query("SELECT * FROM plan_steps WHERE plan_id = ? ORDER BY idx", (plan_id,))
         steps = tuple(
-            PlanStep(s["idx"], s["action"], tuple(load(s["args"])), s["start"], s["duration"])
-            for s in self._query(
-                "SELECT * FROM plan_steps WHERE plan_id = ? ORDER BY idx", (plan_id,)
+            PlanStep(
+                s["idx"], s["action"], tuple(load(s["args"])), s["start"], s["duration"], s["state"]
             )
+            for s in rows
         )
         return Plan(
             r["id"], PlanState(r["state"]), steps, r["engine"], tuple(load(r["goal_ids"])),
@@ -188,3 +189,19 @@ class GoalTables(EventLog):
                 (state.value, reason, time.time(), plan_id),
             )
         return self.plan(plan_id)
+
+    def set_step_state(self, plan_id: int, index: int, state: str) -> None:
+        """Record what happened to a plan's step (the plan executer's thread writes it).
+
+        Raises:
+            KnowledgeError: an unknown state, or no such step.
+        """
+        if state not in STEP_STATES:
+            raise KnowledgeError(f"plan {plan_id} step {index}: unknown step state '{state}'")
+        with self.transaction() as db:
+            changed = db.execute(
+                "UPDATE plan_steps SET state = ? WHERE plan_id = ? AND idx = ?",
+                (state, plan_id, index),
+            ).rowcount
+            if not changed:
+                raise KnowledgeError(f"plan {plan_id} has no step {index}")

@@ -62,10 +62,8 @@ class Row:
 
 def executive_kills(rounds: int) -> Row:
     """Kills of the executive across replans, checked against the event log's replay."""
-    try:
-        from tests.benchmarks import recovery
-    except ImportError:
-        return Row("executive kills (facts correct / rounds)", 0, rounds, "no recovery rounds")
+    from tests.benchmarks import recovery
+
     correct, total, detail = recovery.rounds(rounds)
     return Row("executive kills (facts correct / rounds)", correct, total, detail)
 

@@ -122,7 +122,7 @@ def test_components_are_started_listed_logged_stopped_and_restarted_through_the_
         assert [c["component"] for c in listed] == list(COMPONENTS)
         assert {c["component"]: c["state"] for c in listed}["lidar"] == "ready"
         table = dura("component", "list").stdout.splitlines()
-        assert table[0].split() == ["NAME", "KIND", "STATE", "PID", "SINCE", "REASON"]
+        assert table[0].split() == ["NAME", "KIND", "HOST", "STATE", "PID", "SINCE", "REASON"]
 
         logs = dura("component", "logs", "lidar", "--json")
         assert json.loads(logs.stdout)["lines"][0].startswith("--- dura: started lidar")

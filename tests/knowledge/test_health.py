@@ -77,7 +77,9 @@ def test_a_damaged_knowledge_base_is_refused_with_one_line_naming_it(
 def test_dura_run_refuses_a_damaged_knowledge_base_and_exits_1(tmp_path: Path) -> None:
     path = written(tmp_path / "usecase.db")
     emptied(path)
-    done = run_dura("run", str(USECASE), "--db", str(path), "--endpoint", "tcp/127.0.0.1:0")
+    done = run_dura(
+        "run", str(USECASE), "--db", str(path), "--endpoint", "tcp/127.0.0.1:0", cwd=tmp_path
+    )
     assert done.returncode == 1
     assert done.stderr.strip().splitlines() == [done.stderr.strip()]
     assert f"{path}: the file is empty (0 bytes)" in done.stderr

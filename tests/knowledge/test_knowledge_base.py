@@ -199,6 +199,41 @@ def test_a_new_plan_supersedes_the_open_one(kb: KnowledgeBase) -> None:
     assert second.steps[1].args == ("lab", "dock") and second.goal_ids == (7,)
 
 
+def test_a_plan_step_keeps_what_happened_to_it_and_refuses_an_unknown_state(
+    kb: KnowledgeBase,
+) -> None:
+    plan = kb.store_plan([PlanStep(0, "move_to", ("dock", "lab"), 0.0, 4.0)])
+    assert plan.steps[0].state == "pending"
+    kb.set_step_state(plan.id, 0, "running")
+    kb.set_step_state(plan.id, 0, "cancelled")
+    assert kb.plan(plan.id).steps[0].state == "cancelled"
+    with pytest.raises(KnowledgeError, match="unknown step state 'lost'"):
+        kb.set_step_state(plan.id, 0, "lost")
+    with pytest.raises(KnowledgeError, match="plan 1 has no step 3"):
+        kb.set_step_state(plan.id, 3, "ended")
+
+
+def test_a_plan_whose_goals_are_gone_is_cancelled_for_good(kb: KnowledgeBase) -> None:
+    plan = kb.store_plan([])
+    kb.set_plan_state(plan.id, PlanState.EXECUTING)
+    assert kb.set_plan_state(plan.id, PlanState.CANCELLED, "goal 1 cancelled").reason
+    with pytest.raises(KnowledgeError, match="cannot go from cancelled to executing"):
+        kb.set_plan_state(plan.id, PlanState.EXECUTING)
+    kb.store_plan([])
+    assert kb.plan(plan.id).state is PlanState.CANCELLED  # not superseded afterwards
+
+
+def test_events_are_read_by_one_kind_or_several(kb: KnowledgeBase) -> None:
+    for kind in ("START", "TICK", "END", "TICK", "CANCEL"):
+        kb.log_event(kind)
+    assert [e.kind for e in kb.events(kinds=("START", "END", "CANCEL"))] == [
+        "START",
+        "END",
+        "CANCEL",
+    ]
+    assert [e.id for e in kb.events(kind="TICK", after=2)] == [4]
+
+
 def test_tasks_keep_their_arguments_state_and_result(kb: KnowledgeBase) -> None:
     task = kb.add_task("move_to", "move_to", {"start": "dock", "target": "lab"})
     kb.set_task_state(task.id, TaskState.RUNNING)

@@ -6,6 +6,8 @@
   executor);
 - :mod:`.components` — component processes: list, start, stop, logs, achievements (the
   launcher);
+- :mod:`.component_commands` — the lifecycle commands each component process serves
+  (the launcher sends them, the SDK answers);
 - :mod:`.monitoring` — observers at run time and the diagnosis model.
 
 A declaration is a :class:`~executive.bus.verb.Verb`: its key, its request and reply

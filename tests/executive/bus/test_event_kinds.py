@@ -74,16 +74,20 @@ def calls(
         yield from calls(child, inner)
 
 
-def assigned(scope: ast.AST, name: str) -> list[ast.expr]:
-    """The values assigned to a local name in a scope (``kind = "A" if x else "B"``); the
-    name itself if nothing is (it cannot be read then)."""
-    values = [
-        node.value
-        for node in ast.walk(scope)
-        if isinstance(node, ast.Assign)
-        and any(isinstance(t, ast.Name) and t.id == name for t in node.targets)
-    ]
-    return values or [ast.Name(name)]
+def assigned(scopes: list[ast.AST], name: str) -> list[ast.expr]:
+    """The values assigned to a name in the first scope that assigns it (the function,
+    then the module: ``kind = "A" if x else "B"``, ``RECOVERED = "RECOVERED"``); the name
+    itself if none does (it cannot be read then)."""
+    for scope in scopes:
+        values = [
+            node.value
+            for node in ast.walk(scope)
+            if isinstance(node, ast.Assign)
+            and any(isinstance(t, ast.Name) and t.id == name for t in node.targets)
+        ]
+        if values:
+            return values
+    return [ast.Name(name)]
 
 
 def logged_kinds() -> Iterator[tuple[str, ast.expr, bool]]:
@@ -102,7 +106,8 @@ def logged_kinds() -> Iterator[tuple[str, ast.expr, bool]]:
                 )
                 if isinstance(kind, ast.Name) and kind.id not in own:
                     # a local name: the values assigned to it in the function
-                    for value in assigned(function or tree, kind.id):
+                    scopes = [tree] if function is None else [function, tree]
+                    for value in assigned(scopes, kind.id):
                         yield where, value, False
                 elif kind is not None:
                     yield where, kind, isinstance(kind, ast.Name)

@@ -27,7 +27,7 @@ from executive.planning.high_level import HighLevel
 from executive.testing.harness import robot_variant
 from knowledge.errors import DuraError
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.records import Fact, GoalState
+from knowledge.records import Fact, GoalState, PlanState
 from knowledge.robot import load_robot
 from tests.conftest import ROOT, USECASE, run_dura, wait_for
 from tests.executive.planning import slow_engine
@@ -55,6 +55,7 @@ def robot(tmp_path: Path, endpoint: str) -> Iterator[Robot]:
     ):
         high = HighLevel(Context(description, bus, kb), runner)
         high.start()
+        assert high.wait_ready(60)
         try:
 
             def dura(*args: str) -> subprocess.CompletedProcess[str]:
@@ -120,6 +121,38 @@ def test_the_plan_is_shown_as_a_timeline_with_the_state_of_each_step(robot: Robo
     assert status["plan"]["id"] == 1
     robot.dura("goal", "cancel", str(goal["id"]))
     assert state_of(robot, goal["id"]) is GoalState.CANCELLED
+
+
+def test_cancelling_the_only_goal_of_a_plan_ends_the_plan_and_its_steps_show_it(
+    robot: Robot,
+) -> None:
+    robot.runner.held.add("move_to")
+    goal = json.loads(robot.dura("goal", "add", "(picture_taken lab)", "--json").stdout)
+    move = robot.runner.wait_for("move_to(dock, lab)")
+    assert wait_for(lambda: robot.kb.plan(1).steps[0].state == "running", 10)
+
+    assert robot.dura("goal", "cancel", str(goal["id"])).returncode == 0
+
+    plan = robot.kb.plan(1)  # ended before the cancel was answered
+    assert (plan.state, plan.reason) == (
+        PlanState.CANCELLED,
+        "goal 1 cancelled: no goal of the plan is open",
+    )
+    assert [s.state for s in plan.steps] == ["cancelled", "pending"]
+    assert move.calls[-1] == "cancel"
+    assert robot.kb.facts("robot_at") == [Fact("robot_at", ("dock",))]  # taken back
+    shown = robot.dura("plan", "show").stdout.splitlines()
+    assert shown[0].startswith("plan 1: cancelled")
+    assert "cancelled" in next(line for line in shown if "move_to(dock, lab)" in line)
+    assert "pending" in next(line for line in shown if "take_picture(lab)" in line)
+    status = json.loads(robot.dura("status", "--json").stdout)
+    assert status["plan"]["state"] == "cancelled"
+    assert [s["state"] for s in status["plan"]["steps"]] == ["cancelled", "pending"]
+    text = robot.dura("status").stdout.splitlines()
+    assert "cancelled" in next(line for line in text if "move_to(dock, lab)" in line)
+    kb = run_dura("kb", "show", "--db", str(robot.kb.path)).stdout
+    plans = kb.split("plans")[1].split("tasks")[0]
+    assert "cancelled" in plans and "2: 1 cancelled, 1 pending" in plans
 
 
 def test_facts_and_objects_are_read_and_changed_through_the_cli(robot: Robot) -> None:
@@ -217,6 +250,7 @@ def slow_robot(tmp_path: Path, endpoint: str, monkeypatch: pytest.MonkeyPatch) -
     ):
         high = HighLevel(Context(description, bus, kb), runner)
         high.start()
+        assert high.wait_ready(60)
         try:
 
             def dura(*args: str) -> subprocess.CompletedProcess[str]:
@@ -318,6 +352,8 @@ def test_a_dry_run_plans_on_the_live_state_and_changes_nothing(robot: Robot) -> 
     robot.runner.held.add("take_picture")
     goal = json.loads(robot.dura("goal", "add", "(picture_taken office)", "--json").stdout)
     robot.runner.wait_for("take_picture(office)")  # the robot is at the office, taking it
+    started = [("START", "take_picture(office)")]  # logged once the runner's report is in
+    assert wait_for(lambda: [(e.kind, e.subject) for e in robot.kb.events()[-1:]] == started, 10)
     plans, events = len(robot.kb.plans()), len(robot.kb.events())
     dry = robot.dura("plan", "--dry-run", "--json")
     assert dry.returncode == 0, dry.stderr

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from executive.planning.goals import GoalSpec, Refusal, RefusalCause, remaining, specs, submit
-from executive.planning.problem import build, read_world, seed_world
+from executive.planning.problem import build, frozen, read_world, seed_world
 from knowledge.domain import parse
 from knowledge.errors import DomainError
 from knowledge.knowledge_base import KnowledgeBase
@@ -22,6 +22,7 @@ from tests.executive.planning.planning_cases import (
     signature,
     usecase_domain,
     usecase_kb_fixture,  # noqa: F401 (a fixture)
+    usecase_task,
     world,
 )
 
@@ -124,3 +125,17 @@ def test_a_problem_file_that_does_not_fit_the_domain_names_file_and_line(tmp_pat
 
 def test_a_signature_knows_the_problem_objects() -> None:
     assert signature().objects_of("place") == ["dock", "lab", "office"]
+
+
+def test_a_frozen_problem_computes_its_kind_once_and_its_clone_afresh() -> None:
+    from unified_planning.model.metrics import MinimizeMakespan
+
+    task = usecase_task("(picture_taken lab)")
+    problem = build(parse(USECASE_DOMAIN), task.world, task.goals)
+    assert problem.kind is not problem.kind  # unified-planning computes it at every look
+    kept = frozen(problem)
+    assert kept is problem and kept.kind is kept.kind
+    assert kept.kind == build(parse(USECASE_DOMAIN), task.world, task.goals).kind
+    clone = kept.clone()
+    clone.add_quality_metric(MinimizeMakespan())
+    assert clone.kind.has_quality_metrics() and not kept.kind.has_quality_metrics()

@@ -175,7 +175,7 @@ def executive(endpoint: str) -> Iterator[tuple[Bus, list[tuple[str, dict[str, An
         (
             "{type: goal, expression: '(at robot base)', goal_priority: 5}",
             "goal/add",
-            {"expression": "(at robot base)", "priority": 5, "source": "rule"},
+            {"expression": "(at robot base)", "priority": 5, "source": "rule", "keep": False},
         ),
         (
             "{type: parameter, component: lidar, key: rate, value: 5.0}",

@@ -1,0 +1,129 @@
+"""The lifecycle commands every component process serves on ``component/<name>/cmd``:
+one payload type per verb (the launcher sends them, the SDK's framework answers)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from executive.bus.payloads import Command, ComponentPhase
+from executive.bus.schema import Payload, PayloadError, Text
+
+
+class ComponentCommand(Payload):
+    """A lifecycle command, ``{"cmd": verb, **fields}``: one type per verb (below).
+
+    The component answers with a :class:`CommandReply`, or refuses with the reason.
+    The key is the component's own, so these are not :class:`Verb` constants.
+    """
+
+    verb: ClassVar[Command]
+
+    def to_request(self) -> dict[str, Any]:
+        return {"cmd": self.verb.value, **self.to_payload()}
+
+    @staticmethod
+    def from_request(request: Mapping[str, Any]) -> ComponentCommand:
+        """The command a request names, its fields checked by the verb's type.
+
+        Raises:
+            PayloadError: an unknown verb, or a field that does not fit.
+        """
+        verb = request.get("cmd")
+        command = next((c for c in COMMANDS if c.verb.value == verb), None)
+        if command is None:
+            verbs = ", ".join(c.value for c in Command)
+            raise PayloadError(f"unknown command {verb!r} (choose from {verbs})")
+        return command.from_payload(request)
+
+
+@dataclass(frozen=True)
+class Configure(ComponentCommand):
+    """Parameters, and the achievements kept for a warm start."""
+
+    verb = Command.CONFIGURE
+    params: dict[str, Any] = field(default_factory=dict)
+    achievements: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Start(ComponentCommand):
+    """Start running (after configure)."""
+
+    verb = Command.START
+
+
+@dataclass(frozen=True)
+class Pause(ComponentCommand):
+    """Pause until resumed."""
+
+    verb = Command.PAUSE
+
+
+@dataclass(frozen=True)
+class Resume(ComponentCommand):
+    """Resume after a pause."""
+
+    verb = Command.RESUME
+
+
+@dataclass(frozen=True)
+class Reconfigure(ComponentCommand):
+    """Changed parameters only."""
+
+    verb = Command.RECONFIGURE
+    params: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Stop(ComponentCommand):
+    """Stop and exit."""
+
+    verb = Command.STOP
+
+
+@dataclass(frozen=True)
+class TakeGoal(ComponentCommand):
+    """A behavior's goal: the reply comes at once, the result later on
+    ``component/<name>/result``."""
+
+    verb = Command.GOAL
+    goal_id: Text
+    goal: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class CancelGoal(ComponentCommand):
+    """Cancel the goal the behavior is carrying out."""
+
+    verb = Command.CANCEL
+    goal_id: Text
+
+
+@dataclass(frozen=True)
+class InjectFault(ComponentCommand):
+    """``"crash"`` or ``{"mode": "crash", ...}`` (see :mod:`executive.sdk.fault_injection`)."""
+
+    verb = Command.INJECT_FAULT
+    fault: Any
+
+
+COMMANDS: tuple[type[ComponentCommand], ...] = (
+    Configure,
+    Start,
+    Pause,
+    Resume,
+    Reconfigure,
+    Stop,
+    TakeGoal,
+    CancelGoal,
+    InjectFault,
+)
+
+
+@dataclass(frozen=True)
+class CommandReply(Payload):
+    """Where the component is after the command."""
+
+    phase: ComponentPhase
