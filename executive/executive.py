@@ -8,32 +8,70 @@ imported and the services started, in order (and stopped in reverse). The high l
 begins planning once all of them run. The launcher stops every component when the
 executive closes. While it runs, the executive holds the liveliness token
 ``alive/executive``: components end themselves when it vanishes.
+
+The monitoring services (observers, diagnosis, repair rules) talk to the rest only over
+the bus, so they can also run in a process of their own (``dura run --only
+monitoring``, :class:`ServiceProcess`), beside an executive that runs without them
+(``dura run --without monitoring``).
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Callable
+import threading
+from collections.abc import Callable, Collection, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from executive.bus import security
 from executive.bus.clock import system_clock
-from executive.bus.keys import EXECUTIVE_ALIVE
+from executive.bus.keys import EXECUTIVE_ALIVE, service_alive
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus
 from executive.planning.high_level import HighLevel
 from executive.runtime.run_lock import RunLock, end_leftovers
 from knowledge.description import RobotDescription
-from knowledge.errors import DuraError
+from knowledge.errors import BusError, ConfigError, DuraError
 from knowledge.knowledge_base import KnowledgeBase
 
 if TYPE_CHECKING:
+    from executive.bus.topic_source import TopicSource
     from executive.ros2.link import Ros2Link
     from executive.runtime.launcher import Launcher
     from executive.tasks.executor import TaskExecutor
     from executive.tasks.plan_tasks import PlanTasks
+
+
+MONITORING = "monitoring"
+SEPARABLE = (MONITORING,)
+"""The groups of services that can run in a process of their own."""
+
+RETRY = 1.0  # seconds between attempts to reach the executive
+
+
+def separable(group: str) -> str:
+    """``group`` if it names a group of services that can run apart.
+
+    Raises:
+        ConfigError: it does not.
+    """
+    if group not in SEPARABLE:
+        raise ConfigError(f"no group of services {group!r} (groups: {', '.join(SEPARABLE)})")
+    return group
+
+
+def monitoring_services(context: Context, sources: Sequence[TopicSource] = ()) -> list[Service]:
+    """The observers, the diagnosis engine and the repair rules, in the order they start."""
+    from monitoring.diagnosis.service import DiagnosisService
+    from monitoring.observer_manager import ObserverManager
+    from monitoring.repair.service import RuleService
+
+    return [
+        ObserverManager(context, sources=list(sources)),
+        DiagnosisService(context, learn=True),
+        RuleService(context),
+    ]
 
 
 class Executive:
@@ -61,6 +99,7 @@ class Executive:
             (``dura run`` writes its run file then, for the commands run beside it).
         progress: told what the executive does now while it starts (``dura run``'s
             live line on a terminal).
+        without: groups of services (:data:`SEPARABLE`) another process runs.
     """
 
     def __init__(
@@ -80,8 +119,12 @@ class Executive:
         on_failure: Callable[[str], None] | None = None,
         on_open: Callable[[], None] | None = None,
         progress: Callable[[str], None] | None = None,
+        without: Collection[str] = (),
     ) -> None:
+        for group in without:
+            separable(group)
         self.robot = robot
+        self.without = frozenset(without)
         self.endpoint = endpoint or robot.endpoint
         self.kb_path = kb_path or robot.kb_path()
         self.folder = folder or Path.cwd()
@@ -108,7 +151,10 @@ class Executive:
             if lock.predecessor is not None:
                 end_leftovers(lock.predecessor)
             robot, components = self.robot, list(self.robot.components)
-            credentials = security.ensure_credentials(self.credentials_path, robot.name, components)
+            credentials = security.ensure_credentials(
+                self.credentials_path, robot.name, components, robot.hosts
+            )
+            security.write_host_credentials(credentials, self.folder, robot.hosts)
             users = self.credentials_path.with_suffix(".users")
             self.progress(f"opening the bus on {self.endpoint}")
             self.bus = stack.enter_context(
@@ -119,7 +165,7 @@ class Executive:
                     listen=True,
                     login=credentials.login(security.EXECUTIVE),
                     dictionary=security.dictionary(credentials, users),
-                    access=security.access_control(robot.name, components),
+                    access=security.access_control(robot.name, components, robot.hosts),
                 )
             )
             self.progress(f"opening the knowledge base {self.kb_path}")
@@ -179,9 +225,6 @@ class Executive:
         high level last (its API answers already: it begins planning)."""
         from executive.runtime.component_api import ComponentApi
         from executive.tasks.executor import TaskExecutor
-        from monitoring.diagnosis.service import DiagnosisService
-        from monitoring.observer_manager import ObserverManager
-        from monitoring.repair.service import RuleService
         from monitoring.resource_monitor import ResourceMonitor
 
         launcher = self.launcher
@@ -210,10 +253,14 @@ class Executive:
         return [
             *recording,
             ComponentApi(context, launcher, by_hand=self.tasks),
-            ResourceMonitor(context, rate=self.resource_rate),
-            ObserverManager(context, sources=[ros2.topics] if ros2 is not None else []),
-            DiagnosisService(context, learn=True),
-            RuleService(context),
+            ResourceMonitor(  # host agents measure the components they run themselves
+                context, rate=self.resource_rate, components=self.robot.placed_on(None)
+            ),
+            *(
+                monitoring_services(context, [ros2.topics] if ros2 is not None else [])
+                if MONITORING not in self.without
+                else []
+            ),
             *extra,
             self.tasks,
             self.high_level,
@@ -242,3 +289,64 @@ class Executive:
 
     def __exit__(self, *exc: object) -> None:
         self._stack.close()
+
+
+class ServiceProcess:
+    """A group of the executive's services in a process of their own (``dura run --only
+    GROUP``): connected to the executive's bus as the trusted user ``service``, with the
+    robot's knowledge base (which the executive holds the lock of).
+
+    Args:
+        robot: the robot.
+        group: which services (:data:`SEPARABLE`).
+        endpoint: the executive's endpoint (default: the robot's).
+        kb_path: the knowledge base (default: the robot's).
+        folder: the working folder whose ``.dura/`` holds the bus credentials.
+        say: told one line at each change, for the operator.
+    """
+
+    def __init__(
+        self,
+        robot: RobotDescription,
+        group: str,
+        *,
+        endpoint: str | None = None,
+        kb_path: Path | None = None,
+        folder: Path | None = None,
+        say: Callable[[str], None] = lambda line: None,
+    ) -> None:
+        self.robot = robot
+        self.group = separable(group)
+        self.endpoint = endpoint or robot.endpoint
+        self.kb_path = kb_path or robot.kb_path()
+        self.folder = folder or Path.cwd()
+        self._say = say
+
+    def run(self, stop: threading.Event) -> None:
+        """Serve until ``stop`` is set (waiting first, if need be, for the executive).
+
+        Raises:
+            BusError: the credentials are there but unusable.
+        """
+        login = security.find_login(self.robot.name, security.SERVICE, [self.folder])
+        bus = None
+        said = False
+        while bus is None and not stop.is_set():
+            try:
+                bus = Bus(self.robot.name, name=self.group, endpoint=self.endpoint, login=login)
+            except BusError as e:
+                if not said:
+                    self._say(f"waiting for the executive at {self.endpoint} ({e})")
+                    said = True
+                stop.wait(RETRY)
+        if bus is None:
+            return
+        with contextlib.ExitStack() as stack:
+            stack.callback(bus.close)
+            kb = stack.enter_context(KnowledgeBase(self.kb_path))
+            for service in monitoring_services(Context(self.robot, bus, kb)):
+                service.start()
+                stack.callback(service.stop)
+            bus.declare_alive(service_alive(self.group))  # who runs the group, for all to see
+            self._say("runs")
+            stop.wait()

@@ -77,6 +77,7 @@ class ComponentSpec:
     line: int = 0
     lines: Mapping[str, int] = field(default_factory=dict, compare=False, repr=False)
     ros2: Ros2ComponentSpec | None = None  # a ROS 2 program, or a ROS 2 action or service
+    host: str | None = None  # the computer whose host agent runs it (None: the executive's)
 
     @property
     def kind(self) -> Kind:
@@ -194,6 +195,16 @@ class RobotDescription:
 
     def component(self, name: str) -> ComponentSpec:
         return self.components[name]
+
+    @property
+    def hosts(self) -> list[str]:
+        """Every host a component is placed on (``host:``), sorted; the executive's own
+        computer is not one of them."""
+        return sorted({c.host for c in self.components.values() if c.host is not None})
+
+    def placed_on(self, host: str | None) -> list[str]:
+        """The components placed on a host (``None``: the executive's computer)."""
+        return [name for name, c in self.components.items() if c.host == host]
 
     @property
     def capabilities(self) -> list[str]:

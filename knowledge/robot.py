@@ -85,6 +85,7 @@ def _common(s: Section, report: Report, kind: Kind) -> dict[str, Any]:
         "params": s.plain("params"),
         "observers": _observers(s, "observers", report),
         "startup_timeout": s.number("startup_timeout", 10.0, minimum=0.0),
+        "host": s.text("host"),
         "line": s.line,
         "lines": {k: s.key_line(k) for k in s.written()},
     }

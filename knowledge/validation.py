@@ -72,6 +72,10 @@ def check_names(robot: RobotDescription, report: Report) -> None:
             report.error(c.line, f"{c.kind.value} name '{c.name}' {SAFE_NAME_RULE}")
         elif _reserved(c.name):
             report.error(c.line, f"{c.kind.value} name '{c.name}' must not start with 'AB'")
+        if c.host is not None and not SAFE_NAME.fullmatch(c.host):
+            report.error(
+                c.line_of("host"), f"host '{c.host}' of {c.kind.value} '{c.name}' {SAFE_NAME_RULE}"
+            )
         for key in ("publishes", "subscribes"):
             for topic in getattr(c, key):
                 if not SAFE_TOPIC.fullmatch(topic):

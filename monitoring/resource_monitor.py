@@ -1,7 +1,7 @@
 """The resource monitor (thesis 6.2.4): CPU and memory of each component's process tree.
 
 It learns the components' processes from the launcher's reports on
-``component/*/state`` and publishes a :class:`~executive.bus.payloads.ResourceInfo` on
+``component/*/state`` (a host agent tells it of the processes it starts) and publishes a :class:`~executive.bus.payloads.ResourceInfo` on
 ``resources`` at its rate (default 1 Hz). A component whose process vanished (or is a
 zombie) while it should be alive is reported with an ``error``. CPU is measured between
 two samples, so a process's first report shows 0 %.
@@ -14,6 +14,7 @@ import logging
 import socket
 import threading
 import time
+from collections.abc import Collection
 from typing import Any
 
 import psutil
@@ -21,42 +22,55 @@ import psutil
 from executive.bus.keys import RESOURCES, component
 from executive.bus.payloads import ComponentState, NodeInfo, ResourceInfo
 from executive.bus.service import Context, Service
-from executive.bus.session import Message
+from executive.bus.session import Bus, Message
 from knowledge.errors import ConfigError, DuraError
 
 log = logging.getLogger("dura.resources")
 
 
 class ResourceMonitor(Service):
-    """Publishes the resource use of every running component."""
+    """Publishes the resource use of every running component (of this computer's, when
+    ``components`` names them: the others run on host agents, which measure their own).
+
+    Args:
+        rate: samples per second.
+        components: the components to measure (default: all).
+        hostname: the name in each report (default: this computer's).
+    """
 
     name = "resource-monitor"
 
-    def __init__(self, context: Context, *, rate: float = 1.0) -> None:
+    def __init__(
+        self,
+        context: Context,
+        *,
+        rate: float = 1.0,
+        components: Collection[str] | None = None,
+        hostname: str | None = None,
+    ) -> None:
         super().__init__(context)
-        if rate <= 0:
-            raise ConfigError(f"the resource monitor's rate must be positive, not {rate:g}")
-        self.rate = rate
-        self.hostname = socket.gethostname()
-        self._pids: dict[str, int] = {}
-        self._processes: dict[int, psutil.Process] = {}
-        self._lock = threading.Lock()
-        self._stopped = threading.Event()
-        self._thread = threading.Thread(target=self._loop, name="resource-monitor", daemon=True)
+        self.sampler = ResourceSampler(context.bus, rate=rate, hostname=hostname)
+        self.components = None if components is None else frozenset(components)
         self._subscriber: Any = None
+
+    @property
+    def hostname(self) -> str:
+        return self.sampler.hostname
 
     def start(self) -> None:
         self._subscriber = self.context.bus.subscribe(component("*", "state"), self._on_state)
-        self._thread.start()
+        self.sampler.start()
 
     def stop(self) -> None:
-        self._stopped.set()
-        if self._thread.is_alive():
-            self._thread.join()
+        self.sampler.stop()
         if self._subscriber is not None:
             with contextlib.suppress(Exception):
                 self._subscriber.undeclare()
             self._subscriber = None
+
+    def measure(self) -> ResourceInfo:
+        """One sample of every tracked component."""
+        return self.sampler.measure()
 
     def _on_state(self, message: Message) -> None:
         try:
@@ -64,11 +78,52 @@ class ResourceMonitor(Service):
         except (KeyError, ValueError, TypeError) as e:
             log.warning("malformed state on %s: %s", message.key, e)
             return
+        if self.components is not None and state.component not in self.components:
+            return  # measured where it runs
+        if state.state.is_alive and isinstance(state.pid, int):
+            self.sampler.track(state.component, state.pid)
+        else:
+            self.sampler.untrack(state.component)
+
+
+class ResourceSampler:
+    """Samples the process trees it is told of and publishes them on ``resources`` at
+    its rate (a host agent tells it of the processes it starts itself).
+
+    Args:
+        bus: where to publish.
+        rate: samples per second.
+        hostname: the name in each report (default: this computer's).
+    """
+
+    def __init__(self, bus: Bus, *, rate: float = 1.0, hostname: str | None = None) -> None:
+        if rate <= 0:
+            raise ConfigError(f"the resource monitor's rate must be positive, not {rate:g}")
+        self.bus = bus
+        self.rate = rate
+        self.hostname = hostname or socket.gethostname()
+        self._pids: dict[str, int] = {}
+        self._processes: dict[int, psutil.Process] = {}
+        self._lock = threading.Lock()
+        self._stopped = threading.Event()
+        self._thread = threading.Thread(target=self._loop, name="resource-monitor", daemon=True)
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stopped.set()
+        if self._thread.is_alive():
+            self._thread.join()
+
+    def track(self, name: str, pid: int) -> None:
+        """Measure a component's process tree from now on."""
         with self._lock:
-            if state.state.is_alive and isinstance(state.pid, int):
-                self._pids[state.component] = state.pid
-            else:
-                self._pids.pop(state.component, None)
+            self._pids[name] = pid
+
+    def untrack(self, name: str) -> None:
+        with self._lock:
+            self._pids.pop(name, None)
 
     def _loop(self) -> None:
         period = 1.0 / self.rate
@@ -76,7 +131,7 @@ class ResourceMonitor(Service):
         while not self._stopped.wait(max(0.0, due - time.monotonic())):
             due = max(due + period, time.monotonic() - period)
             try:
-                self.context.bus.publish(RESOURCES, self.measure().to_payload())
+                self.bus.publish(RESOURCES, self.measure().to_payload())
             except DuraError as e:
                 log.warning("cannot publish resources: %s", e)
 

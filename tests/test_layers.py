@@ -61,6 +61,8 @@ ALLOWED: dict[str, set[str]] = {
         "monitoring",
         "knowledge",
     },
+    # the host agent's process: its launcher and the resource monitor of its processes
+    "executive.host": {"executive.bus", "executive.runtime", "monitoring", "knowledge"},
     "executive.cli": {
         "executive.bus",
         "executive.runtime",
@@ -72,6 +74,7 @@ ALLOWED: dict[str, set[str]] = {
         "executive.testing",
         "executive.dashboard",
         "executive.executive",
+        "executive.host",
         "monitoring",
         "knowledge",
     },

@@ -36,7 +36,8 @@ this file. The rules:
   the output may go on after the last line shown (the README may stop early); runs of
   spaces are one (column widths follow the content); what depends on the moment or
   the machine is not compared: clock times, pids (``pid 4242``, a ``PID`` column),
-  loopback ports, durations and ages (``0.09 s``, ``1.9 ms``, ``0.3s``), rates
+  loopback ports, the computer's name (a ``HOST`` column), durations and ages
+  (``0.09 s``, ``1.9 ms``, ``0.3s``), rates
   (``9.998 Hz``), signed offsets (``+4.2``) and timeline bars (``|██  |``); a shown
   JSON line means the printed JSON holds at least its keys with their values.
 - **A live robot moves on.** A command that changes nothing (``show``, ``list``,
@@ -161,15 +162,19 @@ NOTE = re.compile(r"\s{2,}#\s.*$")
 
 def normalised(lines: list[str]) -> list[str]:
     """Lines as compared (see the module docstring)."""
-    out, pid_column = [], None
+    out, pid_column, host_column = [], None, None
     for raw in lines:
         cells = re.split(r" {2,}", raw.strip())
         if cells and all(re.fullmatch(r"[A-Z#][A-Z_ ]*", c) for c in cells) and len(cells) > 1:
             pid_column = cells.index("PID") if "PID" in cells else None
-        elif pid_column is not None and len(cells) > pid_column and cells[pid_column].isdigit():
-            cells[pid_column] = "<pid>"
+            host_column = cells.index("HOST") if "HOST" in cells else None
         elif not raw.strip():
-            pid_column = None
+            pid_column = host_column = None
+        else:
+            if pid_column is not None and len(cells) > pid_column and cells[pid_column].isdigit():
+                cells[pid_column] = "<pid>"
+            if host_column is not None and len(cells) > host_column:
+                cells[host_column] = "<host>"
         line = " ".join(cells)
         for pattern, placeholder in MOMENTARY:
             line = pattern.sub(placeholder, line)
@@ -437,4 +442,10 @@ def test_the_rules_of_comparison_hold() -> None:
     assert not matches(printed[1:], shown)
     assert not matches(["1   b     17   11:12:13  |   █|"], shown[1:2])
     assert matches(["took 0.31 s, 9.98 Hz, -0.8"], ["took 0.3s, 10 Hz, +4.2  # a note"])
+    assert matches(
+        ["NAME   HOST  STATE", "lidar  vm    ready"], ["NAME  HOST  STATE", "lidar  main  ready"]
+    )
+    assert not matches(
+        ["NAME   HOST  STATE", "lidar  vm    ready"], ["NAME  HOST  STATE", "lidar  main  stopped"]
+    )
     assert json_fits('{\n  "status": "OK",\n  "more": 1\n}', ['{"status": "OK"}  # indented'])

@@ -27,6 +27,8 @@ NAMED = frozenset(
         "TASK_REQUESTED", "TASK_SCHEDULED", "TASK_RECONFIGURED", "TASK_STARTED",
         "TASK_PAUSED", "TASK_RESUMED", "TASK_RESTARTED", "CONFIGURATION", "REPAIR", "FAULT",
         "PERMANENT_FAULT", "COMPONENT_RESET",
+        # the computers of a robot (host agents)
+        "HOST_JOINED", "HOST_LOST",
         # monitoring
         "RULE_FIRED", "RULE_FAILED", "EXONERATION",
     }

@@ -36,6 +36,23 @@ def component_alive(name: str, instance: str = "*") -> str:
     return f"alive/component/{name}/{instance}"
 
 
+def host(name: str, leaf: str) -> str:
+    """``host/<name>/<leaf>``: a host agent's requests (spawn, signal, logs) and the
+    exits of its processes (exit)."""
+    return f"host/{name}/{leaf}"
+
+
+def host_alive(name: str = "*") -> str:
+    """The liveliness token of a host agent that serves the executive."""
+    return f"alive/host/{name}"
+
+
+def service_alive(group: str = "*") -> str:
+    """The liveliness token of a group of the executive's services (``tasks``,
+    ``monitoring``, ``planning``), declared by the process that runs it."""
+    return f"alive/service/{group}"
+
+
 # The environment of every component process, set by the launcher and read by the SDK.
 ENV_ROBOT = "DURA_ROBOT"  # the robot's name
 ENV_COMPONENT = "DURA_COMPONENT"  # the component's name

@@ -5,8 +5,12 @@ without the robot's credentials cannot even connect. Every user has a role, and 
 access control (default deny) lets each role do only what its part needs, checked by the
 router on every message that reaches it from a client:
 
-- ``executive`` and ``service`` (the executive's own services in other processes, host
-  agents): everything under ``dura/<robot>/``;
+- ``executive`` and ``service`` (the executive's own services in other processes):
+  everything under ``dura/<robot>/``;
+- ``host.<name>`` (one user per host agent, ``dura host``): serve its own requests
+  (``host/<name>/...``: spawn, signal, logs), publish the exits of its processes and the
+  resources of its components, declare its own liveliness token, and listen — nothing
+  else, so a host cannot command components, forge a state or call the API;
 - ``operator`` (the CLI, the dashboard, the test harness, scripts): call the services'
   APIs, command components (fault injection), subscribe and watch liveliness — but
   publish nothing, so no operator can forge a diagnosis, an observation or a state;
@@ -17,7 +21,10 @@ router on every message that reaches it from a client:
 Credentials are generated on the executive's first run into ``.dura/<robot>.bus.json``
 (user-only permissions, 0600) and kept; components get theirs from the launcher in their
 environment, the command line reads the file. For a client on another machine, copy the
-file (it is the robot's key: treat it like an SSH key).
+file (it is the robot's key: treat it like an SSH key). A host agent needs only its own
+login: the executive writes it alone into ``.dura/<robot>.<host>.bus.json`` (also
+user-only), the file to copy to that host; the launcher hands each component started
+there its login in the start request.
 """
 
 from __future__ import annotations
@@ -37,6 +44,7 @@ EXECUTIVE = "executive"
 SERVICE = "service"
 OPERATOR = "operator"
 COMPONENT = "component."
+HOST = "host."
 
 ENV_USER = "DURA_BUS_USER"  # a component's user and password, set by the launcher
 ENV_PASSWORD = "DURA_BUS_PASSWORD"  # noqa: S105 - the name of a variable, not a password
@@ -89,9 +97,27 @@ def component_user(name: str) -> str:
     return COMPONENT + name
 
 
+def host_user(name: str) -> str:
+    return HOST + name
+
+
 def credentials_file(folder: Path, robot: str) -> Path:
     """Where a robot's credentials live in a working folder's ``.dura/``."""
     return folder / ".dura" / f"{robot}.bus.json"
+
+
+def host_credentials_file(folder: Path, robot: str, host: str) -> Path:
+    """Where the login of one host agent lives (the file to copy to that host)."""
+    return folder / ".dura" / f"{robot}.{host}.bus.json"
+
+
+def write_host_credentials(credentials: Credentials, folder: Path, hosts: Iterable[str]) -> None:
+    """Write each host agent's own login into its file (user-only), the file to copy."""
+    for host in hosts:
+        login = credentials.login(host_user(host))
+        only = Credentials(credentials.robot, {login.user: login.password})
+        path = host_credentials_file(folder, credentials.robot, host)
+        _write_private(path, json.dumps(only.to_payload(), indent=2) + "\n")
 
 
 def read_credentials(path: Path) -> Credentials:
@@ -120,14 +146,17 @@ def read_credentials(path: Path) -> Credentials:
     return Credentials(robot, users)
 
 
-def ensure_credentials(path: Path, robot: str, components: Iterable[str]) -> Credentials:
+def ensure_credentials(
+    path: Path, robot: str, components: Iterable[str], hosts: Iterable[str] = ()
+) -> Credentials:
     """The robot's credentials, created with user-only permissions if missing; a user for
-    every component that lacks one is added (a robot description may grow).
+    every component and host that lacks one is added (a robot description may grow).
 
     Raises:
         BusError: an existing file is unreadable, or belongs to another robot.
     """
-    wanted = [EXECUTIVE, SERVICE, OPERATOR, *(component_user(c) for c in components)]
+    wanted = [EXECUTIVE, SERVICE, OPERATOR, *(component_user(c) for c in components),
+              *(host_user(h) for h in hosts)]  # fmt: skip
     existing: dict[str, str] = {}
     if path.exists():
         known = read_credentials(path)
@@ -168,7 +197,9 @@ def dictionary(credentials: Credentials, path: Path) -> Path:
     return path
 
 
-def access_control(robot: str, components: Iterable[str]) -> dict[str, Any]:
+def access_control(
+    robot: str, components: Iterable[str], hosts: Iterable[str] = ()
+) -> dict[str, Any]:
     """Zenoh's access control configuration for a robot's bus (see the module doc)."""
     root = f"dura/{robot}"
     rules: list[dict[str, Any]] = [
@@ -213,6 +244,20 @@ def access_control(robot: str, components: Iterable[str]) -> dict[str, Any]:
                 "subjects": [subject],
             }
         )  # fmt: skip
+    for name in hosts:
+        own = f"host {name}"
+        rules.append(_rule(f"{own} serves", ["declare_queryable", "reply"],
+                           [f"{root}/host/{name}/*"]))  # fmt: skip
+        rules.append(_rule(f"{own} reports", ["put"],
+                           [f"{root}/host/{name}/exit", f"{root}/resources"]))  # fmt: skip
+        rules.append(_rule(f"{own} token", ["liveliness_token"], [f"{root}/alive/host/{name}"]))
+        subjects.append({"id": own, "usernames": [host_user(name)]})
+        policies.append(
+            {
+                "rules": ["deliver", "listen", f"{own} serves", f"{own} reports", f"{own} token"],
+                "subjects": [own],
+            }
+        )
     return {
         "enabled": True,
         "default_permission": "deny",
@@ -254,3 +299,30 @@ def find_login(robot: str, user: str, folders: Iterable[Path]) -> Login | None:
                 )
             return credentials.login(user)
     return None
+
+
+def find_host_login(robot: str, host: str, folder: Path, named: Path | None = None) -> Login:
+    """A host agent's login: from ``named``, else the file ``DURA_BUS_CREDENTIALS`` names,
+    else ``.dura/<robot>.<host>.bus.json``, else ``.dura/<robot>.bus.json`` in ``folder``.
+
+    Raises:
+        BusError: none of them is there, or the one there is unusable.
+    """
+    env = os.environ.get(ENV_CREDENTIALS)
+    if named is not None or env:
+        candidates = [named or Path(str(env))]
+    else:
+        candidates = [host_credentials_file(folder, robot, host), credentials_file(folder, robot)]
+    for path in candidates:
+        if path.exists() or len(candidates) == 1:
+            credentials = read_credentials(path)
+            if credentials.robot != robot:
+                raise BusError(
+                    f"{path}: bus credentials of robot '{credentials.robot}', not '{robot}'"
+                )
+            return credentials.login(host_user(host))
+    wanted = host_credentials_file(Path("."), robot, host)
+    raise BusError(
+        f"no bus credentials for host '{host}': copy {wanted} from the executive's folder "
+        f"into {folder / '.dura'} (chmod 600), or name it with --credentials"
+    )

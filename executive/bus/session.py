@@ -119,6 +119,7 @@ def session_config(
     login: Login | None = None,
     dictionary: Path | None = None,
     access: Mapping[str, Any] | None = None,
+    lease: float | None = None,
 ) -> zenoh.Config:
     """A zenoh configuration: router if it listens, else client; no multicast scouting.
 
@@ -146,6 +147,8 @@ def session_config(
         config.insert_json5("transport/auth/usrpwd", json.dumps(auth))
     if access is not None:
         config.insert_json5("access_control", json.dumps(access))
+    if lease is not None:  # a lost link is noticed within this time (Zenoh's default: 10 s)
+        config.insert_json5("transport/link/tx/lease", str(int(lease * 1000)))
     return config
 
 
@@ -161,6 +164,8 @@ class Bus:
         connect: further endpoints to connect to (other machines).
         login: the user and password this session authenticates with.
         dictionary, access: (the executive) the users it accepts and what each may do.
+        lease: seconds of silence after which a link counts as lost (and the tokens
+            declared over it vanish), instead of Zenoh's default of 10.
 
     Raises:
         BusError: the endpoint is unusable: in use (listen) or nobody listens (connect).
@@ -177,6 +182,7 @@ class Bus:
         login: Login | None = None,
         dictionary: Path | None = None,
         access: Mapping[str, Any] | None = None,
+        lease: float | None = None,
     ) -> None:
         if endpoint is None:  # the robot description's module: only when needed
             from knowledge.description import DEFAULT_ENDPOINT
@@ -197,6 +203,7 @@ class Bus:
             login=login,
             dictionary=dictionary,
             access=access,
+            lease=lease,
         )
         try:
             self._session = zenoh.open(config)
@@ -371,6 +378,12 @@ class Bus:
         with self._lock:
             self._declared.append(token)
         return token
+
+    def alive(self, key: str, *, timeout: float = 2.0) -> list[str]:
+        """The liveliness tokens under ``key`` there are now (relative keys)."""
+        prefix_len = len(self.prefix)
+        replies = self._session.liveliness().get(self.key(key), timeout=timeout)
+        return sorted(str(r.ok.key_expr)[prefix_len:] for r in replies if r.ok is not None)
 
     def watch_alive(self, key: str, on_change: Callable[[str, bool], None]) -> Any:
         """Call ``on_change(relative_key, alive)`` when tokens under ``key`` appear or vanish."""

@@ -25,6 +25,7 @@ COMMANDS: dict[str, str] = {
     "demo": "demo",
     "validate": "validate",
     "run": "run",
+    "host": "host",
     "goal": "goal",
     "plan": "plan",
     "domain": "domain",

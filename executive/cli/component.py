@@ -94,12 +94,13 @@ def run_list(args: argparse.Namespace) -> int:
         print_json(reply.to_payload())
         return 0
     table(
-        ["name", "kind", "state", "pid", "since", "reason"],
+        ["name", "kind", "host", "state", "pid", "since", "reason"],
         [
-            [c["component"], c["kind"], c["state"], c["pid"], _since(c["stamp"]), c["reason"]]
+            [c["component"], c["kind"], c.get("host") or "-", c["state"], c["pid"],
+             _since(c["stamp"]), c["reason"]]
             for c in reply.components
         ],
-    )
+    )  # fmt: skip
     return 0
 
 

@@ -16,8 +16,9 @@ from executive.cli.client import remove_run_file, write_run_file
 from executive.cli.dashboard import add_dashboard_address, port
 from executive.cli.output import add_json_flag, print_json, shown
 from executive.cli.progress import LiveLine
-from executive.executive import Executive
+from executive.executive import SEPARABLE, Executive, ServiceProcess
 from executive.runtime.launcher import local_endpoint
+from knowledge.description import RobotDescription
 from knowledge.robot import load_robot
 
 
@@ -89,6 +90,21 @@ def register(sub: Any) -> None:
         metavar="MB",
         help="rotate the recording at this size (default 100)",
     )
+    split = p.add_mutually_exclusive_group()
+    split.add_argument(
+        "--only",
+        choices=SEPARABLE,
+        help="run only this group of services, in this process, connected to the executive "
+        "at --endpoint (which runs with --without GROUP); it waits for the executive",
+    )
+    split.add_argument(
+        "--without",
+        choices=SEPARABLE,
+        action="append",
+        default=[],
+        help="run the executive without this group of services (another process runs them "
+        "with --only GROUP); may be given more than once",
+    )
     add_json_flag(p)
     p.set_defaults(run=run)
 
@@ -104,6 +120,8 @@ def run(args: argparse.Namespace) -> int:
 
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())
+    if args.only is not None:
+        return run_only(args, robot, stop)
     executive = Executive(
         robot,
         endpoint=args.endpoint,
@@ -116,6 +134,7 @@ def run(args: argparse.Namespace) -> int:
         record=args.record.resolve() if args.record is not None else None,
         record_max_size=args.record_max_size,
         on_failure=failed,
+        without=args.without,
     )
     endpoint = local_endpoint(executive.endpoint)
     executive.on_open = lambda: write_run_file(
@@ -150,4 +169,22 @@ def run(args: argparse.Namespace) -> int:
         return 1
     if not args.json:
         print(f"dura: executive of robot '{robot.name}' stopped")
+    return 0
+
+
+def run_only(args: argparse.Namespace, robot: RobotDescription, stop: threading.Event) -> int:
+    """``--only GROUP``: those services in this process, until Ctrl-C or SIGTERM."""
+    endpoint = local_endpoint(args.endpoint or robot.endpoint)
+
+    def say(line: str) -> None:
+        if args.json:
+            print_json({"robot": robot.name, "only": args.only, "event": line})
+        else:
+            print(f"dura: {args.only} of robot '{robot.name}': {line}")
+        sys.stdout.flush()
+
+    services = ServiceProcess(robot, args.only, endpoint=endpoint, kb_path=args.db, say=say)
+    say(f"connects to {endpoint}; Ctrl-C stops it")
+    services.run(stop)
+    say("stopped")
     return 0

@@ -88,7 +88,7 @@ class ComponentApi(Service):
         launcher = self.launcher
         return ComponentsReply(
             [
-                {**listed(launcher, state), "log": str(launcher.log_path(state.component))}
+                {**listed(launcher, state), "log": launcher.log_path(state.component)}
                 for state in launcher.states()
             ]
         )
@@ -107,15 +107,25 @@ class ComponentApi(Service):
 
     def _logs(self, request: LogQuery) -> LogReply:
         name = request.name
-        return LogReply(
-            name, str(self.launcher.log_path(name)), self.launcher.logs(name, request.lines)
-        )
+        return LogReply(name, self.launcher.log_path(name), self.launcher.logs(name, request.lines))
 
 
 def listed(launcher: Launcher, state: ComponentState) -> dict[str, Any]:
-    """A component as lists show it: its kind and state, and a pid only while it runs
-    (a stopped component's last pid may belong to another process by now)."""
-    payload = {"kind": launcher.kind(state.component).value, **state.to_payload()}
+    """A component as lists show it: its kind, host and state, and a pid only while it
+    runs (a stopped component's last pid may belong to another process by now). The
+    host is its agent's name, or the executive's computer's (``hostname``)."""
+    host = launcher.host(state.component)
+    payload = {
+        "kind": launcher.kind(state.component).value,
+        "host": host if host is not None else _hostname(),
+        **state.to_payload(),
+    }
     if not state.state.is_alive:
         payload["pid"] = None
     return payload
+
+
+def _hostname() -> str:
+    import socket
+
+    return socket.gethostname()

@@ -5,7 +5,9 @@ One facade over three concerns, each in a module of its own:
 - :mod:`executive.runtime.processes` — the launcher thread that forks every component
   process, pumps its output into its log file and reaps it;
 - :mod:`executive.runtime.lifecycle` — starting, stopping and commanding components,
-  and their states (recorded by :mod:`executive.runtime.states`);
+  and their states (recorded by :mod:`executive.runtime.states`), on this computer or
+  through the host agents of others (:mod:`executive.runtime.process_host`,
+  :mod:`executive.runtime.remote_host`), alike;
 - :mod:`executive.runtime.behavior_goals` — goals sent to behaviors, their results,
   return values and achievements in the KB.
 
@@ -23,12 +25,13 @@ from executive.bus.security import Credentials
 from executive.bus.session import Bus
 from executive.runtime.behavior_goals import BehaviorGoals, GoalHandle
 from executive.runtime.lifecycle import LifecycleControl, local_endpoint
-from executive.runtime.logfile import tail
+from executive.runtime.process_host import ProcessHost
+from executive.runtime.remote_host import HostListener
 from executive.runtime.states import Listener
 from knowledge.description import Kind, RobotDescription
 from knowledge.knowledge_base import KnowledgeBase
 
-__all__ = ["GoalHandle", "Launcher", "Listener", "local_endpoint"]
+__all__ = ["GoalHandle", "HostListener", "Launcher", "Listener", "local_endpoint"]
 
 
 class Launcher:
@@ -116,13 +119,41 @@ class Launcher:
         """The state of every component, in the robot description's order."""
         return self._control.states()
 
-    def log_path(self, name: str) -> Path:
-        self._control.spec(name)  # refuses an unknown name
-        return self._control.processes.log_path(name)
+    def log_path(self, name: str) -> str:
+        """Where a component's log is (``host:path`` on another computer)."""
+        return self._host(name).log_path(name)
 
     def logs(self, name: str, lines: int = 50) -> list[str]:
-        """The last lines of a component's log."""
-        return tail(self.log_path(name), lines)
+        """The last lines of a component's log (from its host, for a remote one).
+
+        Raises:
+            ComponentError: no such component, or its host did not answer.
+        """
+        return self._host(name).logs(name, lines)
+
+    def host(self, name: str) -> str | None:
+        """The host a component is placed on (``None``: the executive's computer)."""
+        return self._control.spec(name).host
+
+    def hosts(self) -> dict[str, bool]:
+        """Each host agent's host, and whether it is connected."""
+        return self._control.hosts.connected()
+
+    def unavailable(self) -> frozenset[str]:
+        """The components placed on hosts whose agents are not there: none of them can
+        start until the agent is back."""
+        return self._control.hosts.unavailable()
+
+    def add_host_listener(self, listener: HostListener) -> None:
+        """Call ``listener(host, connected)`` when a host agent joins or is lost (after the
+        components it ran have ended)."""
+        self._control.hosts.add_listener(listener)
+
+    def remove_host_listener(self, listener: HostListener) -> None:
+        self._control.hosts.remove_listener(listener)
+
+    def _host(self, name: str) -> ProcessHost:
+        return self._control.hosts.of(self._control.spec(name))  # refuses an unknown name
 
     def add_listener(self, listener: Listener) -> None:
         """Call ``listener(state)`` at every state change of every component.

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import os
 import signal
 import threading
 import time
@@ -37,9 +36,9 @@ from executive.bus.api.component_commands import (
 from executive.bus.payloads import Command, ComponentState, Lifecycle
 from executive.bus.security import Credentials
 from executive.bus.session import Bus
-from executive.runtime.processes import ComponentProcess, ProcessThread
-from executive.runtime.ros2_launch import launch_program
-from executive.runtime.run_lock import ENV_RUN
+from executive.runtime.process_host import Launch, LocalHost, ProcessHandle, ProcessHost
+from executive.runtime.processes import ProcessThread
+from executive.runtime.remote_host import Hosts
 from executive.runtime.spawn import command, describe_exit
 from executive.runtime.states import StateRecords
 from knowledge.description import ComponentSpec, RobotDescription
@@ -61,7 +60,8 @@ def local_endpoint(endpoint: str) -> str:
 class _Run:
     """One started process, as its lifecycle sees it."""
 
-    process: ComponentProcess
+    process: ProcessHandle
+    host: ProcessHost
     instance: str  # names its liveliness token
     woken: threading.Event = field(default_factory=threading.Event)  # token seen, or exited
     exited: threading.Event = field(default_factory=threading.Event)
@@ -125,16 +125,18 @@ class LifecycleControl:
         self._closing = False
         self._watch: Any = None
         self.records = StateRecords(bus, kb)
-        self.processes = ProcessThread(
+        processes = ProcessThread(
             log_dir,
             log_max_bytes=log_max_bytes,
             log_backups=log_backups,
-            on_exit=self._exited,
+            on_exit=lambda process, code, signum: self._exited(process, code, signum, ""),
             grace=grace,
         )
+        local = LocalHost(robot, local_endpoint(bus.endpoint), processes)
+        self.hosts = Hosts(robot, bus, kb, local, self._exited)
 
     def open(self) -> None:
-        self.processes.open()
+        self.hosts.open()
         self.records.open()
         self._watch = self.bus.watch_alive(keys.component_alive("*", "*"), self._on_token)
 
@@ -155,7 +157,7 @@ class LifecycleControl:
         """End the threads (after :meth:`stop_all`)."""
         with contextlib.suppress(Exception):
             self._watch.undeclare()
-        self.processes.close()
+        self.hosts.close()
         self.records.close()
 
     # --- queries ----------------------------------------------------------------------
@@ -194,10 +196,14 @@ class LifecycleControl:
                 raise ComponentError(f"cannot start '{name}': the launcher is closing")
             deadline = time.monotonic() + slot.spec.startup_timeout
             try:
-                run = self.processes.call(lambda: self._spawn(slot))
-            except OSError as e:
-                program = command(slot.spec.command)[0]
-                reason = f"cannot run {program!r}: {e.strerror or e}"
+                run = self._spawn(slot)
+            except (OSError, ComponentError) as e:
+                program = command(slot.spec.command)[0] if slot.spec.command else slot.spec.name
+                reason = (
+                    f"cannot run {program!r}: {e.strerror or e}"
+                    if isinstance(e, OSError)
+                    else f"cannot start: {e}"
+                )
                 with self._lock:
                     return self._set(slot, Lifecycle.FAILED, reason=reason)
             failure = self._bring_up(slot, run, deadline)
@@ -208,7 +214,7 @@ class LifecycleControl:
                     run.ready = True
                     state = self._set(slot, Lifecycle.READY, pid=pid)
             if ready:
-                self._note(run.process, f"{name} ready (pid {pid})")
+                run.host.note(run.process, f"{name} ready (pid {pid})")
                 return state
             if failure:
                 run.failure = failure
@@ -216,44 +222,27 @@ class LifecycleControl:
             run.exited.wait()
             return slot.state
 
-    def _note(self, process: ComponentProcess, text: str) -> None:
-        """A line of dura's own in the process's log (on the launcher thread, which
-        writes the log)."""
-
-        def note() -> None:
-            if not process.reaped:
-                process.note(text)
-
-        with contextlib.suppress(ComponentError):  # the launcher closes
-            self.processes.call(note)
-
     def _spawn(self, slot: _Slot) -> _Run:
-        """Fork the process and record it STARTING (on the launcher thread, so that its
-        exit cannot be handled before)."""
+        """Start the process on its host and record it STARTING (before its end can be
+        handled)."""
         spec = slot.spec
         instance = uuid.uuid4().hex[:12]
-        env = {
-            **os.environ,
-            keys.ENV_ROBOT: self.robot.name,
-            keys.ENV_COMPONENT: spec.name,
-            keys.ENV_ENDPOINT: local_endpoint(self.bus.endpoint),
-            keys.ENV_KIND: spec.kind.value,
-            keys.ENV_INSTANCE: instance,
-        }
-        if self.run_id is not None:  # marks the tree as this executive's (see run_lock)
-            env[ENV_RUN] = self.run_id
+        login = None
         if self.credentials is not None:  # its own user: it may do only a component's part
             login = self.credentials.login(security.component_user(spec.name))
-            env[security.ENV_USER], env[security.ENV_PASSWORD] = login.user, login.password
-        argv, extra = launch_program(self.robot, spec)  # a ROS 2 program runs under its host
-        env.update(extra)
-        process = self.processes.fork(spec.name, argv, cwd=self.robot.path.parent, env=env)
-        run = _Run(process, instance)
-        with self._lock:
-            slot.run = run
-            self._set(slot, Lifecycle.STARTING, pid=process.pid)
-            self._announce(run)  # in case its token came first
-        return run
+        host = self.hosts.of(spec)
+        runs: list[_Run] = []
+
+        def started(process: ProcessHandle) -> None:
+            run = _Run(process, host, instance)
+            runs.append(run)
+            with self._lock:
+                slot.run = run
+                self._set(slot, Lifecycle.STARTING, pid=process.pid)
+                self._announce(run)  # in case its token came first
+
+        host.spawn(Launch(spec, instance, login, self.run_id), started)
+        return runs[0]
 
     def _bring_up(self, slot: _Slot, run: _Run, deadline: float) -> str:
         """Wait for the process's token, configure and start it; the failure, if any."""
@@ -341,22 +330,26 @@ class LifecycleControl:
         """SIGTERM to the process group; after the grace period its supervisor kills
         the whole tree, and after another the group is killed (returns at once once it
         is gone)."""
-        processes, process = self.processes, run.process
-        processes.signal(process, signal.SIGTERM)
+        host, process = run.host, run.process
+        host.signal(process, signal.SIGTERM)
         if run.exited.wait(self.grace):
             return
         log.warning("'%s' ignored SIGTERM: SIGKILL to its process tree", process.name)
-        processes.signal(process, signal.SIGUSR1, group=False)
+        host.signal(process, signal.SIGUSR1, group=False)
         if not run.exited.wait(self.grace):
-            processes.signal(process, signal.SIGKILL)
+            host.signal(process, signal.SIGKILL)
 
-    def _exited(self, process: ComponentProcess, exit_code: int | None, signum: int | None) -> None:
-        """A process was reaped: record what its end means (on the launcher thread)."""
+    def _exited(
+        self, process: ProcessHandle, exit_code: int | None, signum: int | None, how: str
+    ) -> None:
+        """A process ended: record what its end means (on the thread that learnt of it:
+        the launcher thread, or the bus's for a remote one). ``how``: why, when no exit
+        code or signal says it (its host was lost)."""
         slot = self._slots[process.name]
         run = slot.run
         if run is None or run.process is not process:
             raise ComponentError(f"'{process.name}' (pid {process.pid}) was not started here")
-        how = describe_exit(exit_code, signum)
+        how = how or describe_exit(exit_code, signum)
         with self._lock:
             if run.failure:
                 state, reason = Lifecycle.FAILED, run.failure
@@ -370,7 +363,7 @@ class LifecycleControl:
             self._set(
                 slot,
                 state,
-                pid=process.program_pid or process.pid,
+                pid=process.program(),
                 exit_code=exit_code,
                 signum=signum,
                 reason=reason,

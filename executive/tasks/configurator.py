@@ -136,7 +136,7 @@ class Configurator:
         stopping = [n for n in names if n not in self._by_hand]
         for name in stopping:
             self._expected.discard(name)
-            self.model.remove(name)
+            self._unmodel(name)
         with ThreadPoolExecutor(max(1, len(stopping)), thread_name_prefix="stop") as pool:
             list(pool.map(lambda n: self.launcher.stop(n, "no task needs it"), stopping))
 
@@ -152,7 +152,7 @@ class Configurator:
         """Stop a component; ``wait=False``: return at once, the stop goes on meanwhile
         (a start of the same component waits for it)."""
         self._expected.discard(name)
-        self.model.remove(name)
+        self._unmodel(name)
         if wait:
             self.launcher.stop(name, reason)
         else:
@@ -162,6 +162,19 @@ class Configurator:
         """No task needs it any more: stop it, unless it was started by hand."""
         if name not in self._by_hand:
             self.stop(name, reason, wait=wait)
+
+    def _unmodel(self, name: str) -> None:
+        """It stops: it leaves the diagnosis model, unless its host is lost (it stays
+        there, reported unavailable, until the host is back)."""
+        if name not in self.launcher.unavailable():
+            self.model.remove(name)
+
+    def host_back(self, names: Iterable[str]) -> None:
+        """A lost host is back: those of its components that do not run leave the
+        diagnosis model."""
+        for name in names:
+            if not self.alive(name):
+                self.model.remove(name)
 
     def start_by_hand(self, name: str) -> ComponentState:
         """Start a component for a user, kept running until the user stops it."""

@@ -75,7 +75,7 @@ class Dispatcher:
         self._timer: threading.Timer | None = None
         self.upcoming: tuple[str, ...] = ()  # behaviors of the plan's steps to come
         self._lingering: dict[str, float] = {}  # functionality -> until (epoch seconds)
-        self.faults = Faults(context.robot, context.kb)
+        self.faults = Faults(context.robot, context.kb, launcher.unavailable)
         self.ledger = TaskLedger(context.kb, control)
         self.configurator = Configurator(
             context.kb,
@@ -107,7 +107,7 @@ class Dispatcher:
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
-        now, running, faulty = time.time(), self.configurator.configuration, self.faults.faulty()
+        now, running, faulty = time.time(), self.configurator.configuration, self.faults.unusable()
         decision = decide(
             self.ledger.views(),
             running,
@@ -128,7 +128,7 @@ class Dispatcher:
         running = self.configurator.configuration
         if not running.reserved:
             return  # nothing reserved: the next schedule takes them into account
-        now, faulty = time.time(), self.faults.faulty()
+        now, faulty = time.time(), self.faults.unusable()
         kept = self._keep(Decision(configuration=SystemConfiguration(running.tasks)), running,
                           faulty, now)  # fmt: skip
         self._apply(kept.configuration, kept.transition, "the plan's upcoming steps changed")

@@ -137,6 +137,7 @@ class TaskExecutor(Service):
                     self.kb.set_task_state(task.id, TaskState.FAILED, reason=reason)
         self._snapshot = Snapshot(faulty=dispatcher.faults.faulty())
         self.launcher.add_listener(dispatcher.repairs.on_component_state)
+        self.launcher.add_host_listener(dispatcher.repairs.on_host)
         self._worker.start()
         if any(f.standby for f in self.robot.functionalities.values()):
             self._worker.post(lambda: dispatcher.reschedule("warm spares start"))
@@ -151,6 +152,7 @@ class TaskExecutor(Service):
         self._declared = []
         dispatcher = self._running
         self.launcher.remove_listener(dispatcher.repairs.on_component_state)
+        self.launcher.remove_host_listener(dispatcher.repairs.on_host)
         self._call(dispatcher.shutdown, timeout=STOP_TIMEOUT)
         self._worker.stop()
 

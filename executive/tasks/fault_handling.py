@@ -8,7 +8,9 @@ is permanently faulty, stopped, and the tasks are scheduled again on what is lef
 behavior's fault is its task's: restarted up to ``max_restarts``, then the task fails.
 A component started by hand is supervised the same way: its exit is a fault, and it is
 restarted (a behavior without a task up to its ``max_restarts``) until it is
-permanently faulty.
+permanently faulty. A component whose host is lost ends with a fault too, but is not
+restarted: it is unavailable until its host agent is back, and its tasks move to the
+alternatives on other hosts (or fail, and the planner plans again).
 """
 
 from __future__ import annotations
@@ -85,7 +87,8 @@ class FaultHandler:
             "REPAIR",
             name,
             {"restart": decision.restart, "unusable": dict(decision.unusable),
-             "tasks": {t: a.value for t, a in decision.tasks.items()}},
+             "tasks": {t: a.value for t, a in decision.tasks.items()},
+             **({"unavailable": True} if decision.unavailable else {})},
         )  # fmt: skip
         for task_id, action in decision.tasks.items():
             self.supervisor.interrupt(self.ledger.get(task_id), action, name)
@@ -100,10 +103,30 @@ class FaultHandler:
                 self.supervisor.go_on(self.ledger.get(task_id))
         else:
             self.configurator.forget_by_hand(name)
+            gone = "permanently faulty" if decision.permanent else f"unavailable ({reason})"
             if self.configurator.alive(name):
-                self.configurator.stop(name, "permanently faulty")
-            self._reschedule(f"{name} is permanently faulty")
+                self.configurator.stop(name, gone)
+            self._reschedule(f"{name} is {gone}")
         return self.reply(name)
+
+    def on_host(self, host: str, connected: bool) -> None:
+        """The launcher's host listener: a host agent joined or was lost (its components'
+        ends come as their own faults); schedule again on the worker."""
+
+        def changed() -> None:
+            placed = self.robot.placed_on(host)
+            if connected:  # no longer reported unavailable to the diagnosis engine
+                self.configurator.host_back(placed)
+            else:  # every functionality we kept there is a fault, counted here at once
+                kept = [n for n in placed if n in self.robot.functionalities
+                        and self.configurator.expects(n)]  # fmt: skip
+                for name in kept:  # before the first repair stops the others
+                    self.configurator.lost(name)
+                for name in kept:
+                    self.fault(name, f"its host '{host}' was lost")
+            self._reschedule(f"host '{host}' {'joined' if connected else 'was lost'}")
+
+        self._post(changed)
 
     def warm_restart(self, name: str, reason: str) -> ComponentState:
         """Restart a running component that is not faulty (new parameters): the tasks on
@@ -159,12 +182,15 @@ class FaultHandler:
         name = state.component
         if not self.configurator.expects(name):
             return  # not ours to keep running
+        kind = self.robot.components[name].kind
+        if kind is Kind.FUNCTIONALITY and name in self.launcher.unavailable():
+            return  # its host was lost: on_host counts the faults of all it ran
         why = state.reason or (
             f"exited with code {state.exit_code}"
             if state.signal is None
             else f"killed by signal {state.signal}"
         )
-        if self.robot.components[name].kind is Kind.BEHAVIOR:
+        if kind is Kind.BEHAVIOR:
             if self.configurator.by_hand(name) and not any(
                 t.behavior == name for t in self.ledger.holding()
             ):

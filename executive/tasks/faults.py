@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import enum
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 
 from knowledge.availability import Availability
@@ -64,11 +64,13 @@ class FaultDecision:
     permanent: bool
     unusable: Mapping[str, str] = field(default_factory=dict)
     tasks: Mapping[str, TaskAction] = field(default_factory=dict)
+    unavailable: bool = False  # its host is lost: it cannot run anywhere until it is back
 
     @property
     def restart(self) -> bool:
-        """Restart the component: a functionality that is not permanently faulty."""
-        return self.kind is Kind.FUNCTIONALITY and not self.permanent
+        """Restart the component: a functionality that is not permanently faulty, and
+        whose host is there."""
+        return self.kind is Kind.FUNCTIONALITY and not self.permanent and not self.unavailable
 
     @property
     def reschedule(self) -> bool:
@@ -81,11 +83,21 @@ class Faults:
 
     Registers every component in the knowledge base (one that is there already keeps
     its rating and fault history). Counts behavior restarts per task in memory.
+
+    Args:
+        unavailable: the components that cannot run now because their host is lost
+            (none by default); unusable like the permanently faulty ones while it lasts.
     """
 
-    def __init__(self, robot: RobotDescription, kb: KnowledgeBase) -> None:
+    def __init__(
+        self,
+        robot: RobotDescription,
+        kb: KnowledgeBase,
+        unavailable: Callable[[], frozenset[str]] = frozenset,
+    ) -> None:
         self.robot = robot
         self.kb = kb
+        self.unavailable = unavailable
         self._restarts: dict[str, int] = {}
         with kb.transaction():
             for f in robot.functionalities.values():
@@ -96,6 +108,11 @@ class Faults:
     def faulty(self) -> frozenset[str]:
         """The permanently faulty components."""
         return frozenset(c.name for c in self.kb.components() if c.permanent_fault)
+
+    def unusable(self) -> frozenset[str]:
+        """The components no configuration may use now: permanently faulty, or placed on
+        a host that is lost."""
+        return self.faulty() | self.unavailable()
 
     def ratings(self) -> dict[str, float]:
         """Each component's rating as the knowledge base holds it."""
@@ -109,8 +126,10 @@ class Faults:
             for f in self.robot.functionalities.values()
         ]
 
-    def availability(self) -> Availability:
-        return Availability.of(self.robot.functionalities.values(), self.faulty())
+    def availability(self, *, besides: str = "") -> Availability:
+        """What can run (``besides``: as if that component's host were there)."""
+        unusable = self.faulty() | (self.unavailable() - {besides})
+        return Availability.of(self.robot.functionalities.values(), unusable)
 
     def fault(
         self,
@@ -120,7 +139,8 @@ class Faults:
         *,
         permanent: bool = False,
     ) -> FaultDecision:
-        """Count a fault of a component and decide what it means.
+        """Count a fault of a component and decide what it means. A component whose host
+        is lost is not restarted: the tasks it hits move to what is left.
 
         Args:
             name: the component.
@@ -132,13 +152,14 @@ class Faults:
             KnowledgeError: the robot has no component of that name.
         """
         component = self._component(name)
-        before = self.availability()
+        before = self.availability(besides=name)
         with self.kb.transaction():
             limit = component.max_faults if isinstance(component, FunctionalitySpec) else None
             record = self.kb.record_fault(name, reason, max_faults=limit)
             if permanent and not record.permanent_fault:
                 record = self.kb.mark_permanent_fault(name, reason)
-        decision = FaultDecision(name, component.kind, record.fault_count, record.permanent_fault)
+        decision = FaultDecision(name, component.kind, record.fault_count, record.permanent_fault,
+                                 unavailable=name in self.unavailable())  # fmt: skip
         if isinstance(component, FunctionalitySpec):
             return self._functionality_fault(decision, before, running)
         return self._behavior_fault(decision, running)
@@ -185,7 +206,7 @@ class Faults:
             if t.behavior != behavior.name:
                 continue
             restarts = self._restarts.get(t.id, 0)
-            if decision.permanent or restarts >= behavior.max_restarts:
+            if decision.permanent or decision.unavailable or restarts >= behavior.max_restarts:
                 tasks[t.id] = TaskAction.FAIL
             else:
                 self._restarts[t.id] = restarts + 1

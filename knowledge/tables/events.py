@@ -14,10 +14,11 @@ class EventLog(Database):
     """The ``events`` table."""
 
     def log_event(self, kind: str, subject: str = "", data: Mapping[str, Any] | None = None) -> int:
-        """Append an event to the execution trace; returns its id."""
-        stamp = time.time()
+        """Append an event to the execution trace; returns its id. Stamped in its
+        transaction, so that the log's order is its stamps' order."""
         payload = dict(data or {})
         with self.transaction() as db:
+            stamp = time.time()
             cursor = db.execute(
                 "INSERT INTO events(stamp, kind, subject, data) VALUES (?, ?, ?, ?)",
                 (stamp, kind, subject, dump(payload)),

@@ -15,6 +15,12 @@ Configuration, per topic and caller-id group (see :mod:`monitoring.caller_groups
 The age of a message is its arrival time minus the ``stamp`` of its payload (seconds;
 the publisher's clock). A loop in which messages came but none had a numeric
 ``stamp`` reports ``GENERAL_ERROR``; before the first age nothing is reported.
+
+Clocks: the age compares the observer's clock with the publisher's, so it assumes they
+agree. On a robot that spans computers (host agents), an offset between the
+publisher's computer and the observer's adds to every age: keep the computers'
+clocks synchronised (chrony, NTP) to well below the smallest ``age`` bound. The other
+topic observers measure differences on one clock and do not care.
 """
 
 from __future__ import annotations

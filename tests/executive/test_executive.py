@@ -10,15 +10,17 @@ import subprocess
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import psutil
 import pytest
 
 from executive.bus import security
-from executive.bus.keys import component, topic
+from executive.bus.keys import DIAGNOSES, component, service_alive, topic
 from executive.bus.payloads import ComponentState, Lifecycle
 from executive.bus.security import Login
-from executive.bus.session import Bus
+from executive.bus.session import Bus, Message
+from executive.testing.harness import RobotProcess
 from tests.conftest import ROOT, USECASE, run_dura, wait_for
 from tests.executive.runtime.rig import Recorder
 
@@ -120,7 +122,7 @@ def test_components_are_started_listed_logged_stopped_and_restarted_through_the_
         assert [c["component"] for c in listed] == list(COMPONENTS)
         assert {c["component"]: c["state"] for c in listed}["lidar"] == "ready"
         table = dura("component", "list").stdout.splitlines()
-        assert table[0].split() == ["NAME", "KIND", "STATE", "PID", "SINCE", "REASON"]
+        assert table[0].split() == ["NAME", "KIND", "HOST", "STATE", "PID", "SINCE", "REASON"]
 
         logs = dura("component", "logs", "lidar", "--json")
         assert json.loads(logs.stdout)["lines"][0].startswith("--- dura: started lidar")
@@ -217,3 +219,49 @@ def test_faults_are_injected_through_the_cli_and_a_bad_one_is_refused_in_one_lin
         crashed = dura("component", "inject", "lidar", "crash", "--option", "exit_code=3")
         assert crashed.returncode == 0, crashed.stderr
         assert wait_for(lambda: "exited with code 3" in dura("component", "logs", "lidar").stdout)
+
+
+@pytest.mark.slow
+def test_monitoring_in_a_process_of_its_own_diagnoses_a_fault_of_the_main_processes_components(
+    tmp_path: Path,
+) -> None:
+    heard: list[dict[str, Any]] = []
+    diagnosers: set[str] = set()
+    with RobotProcess(USECASE, tmp_path, run_args=["--without", "monitoring"]) as robot:
+        argv = [sys.executable, "-m", "executive.cli", "run", str(USECASE), "--only",
+                "monitoring", "--endpoint", robot.endpoint, "--db", str(robot.kb_path)]  # fmt: skip
+        with subprocess.Popen(
+            argv, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
+        ) as monitoring:
+            try:
+                assert monitoring.stdout is not None
+                lines = [monitoring.stdout.readline() for _ in range(2)]
+                assert lines[0].startswith("dura: monitoring of robot 'usecase': connects to")
+                assert lines[1] == "dura: monitoring of robot 'usecase': runs\n", lines
+                assert wait_for(lambda: robot.bus.alive(service_alive("monitoring")), 10)
+
+                def diagnosis(message: Message) -> None:
+                    heard.append(message.payload)
+                    diagnosers.add(message.caller_id)
+
+                robot.bus.subscribe(DIAGNOSES, diagnosis)
+                assert robot.request("component/start", {"name": "lidar"})["state"] == "ready"
+                robot.request("component/inject", {"name": "lidar", "mode": "stop_publishing"})
+                assert wait_for(lambda: any(["lidar"] in d["diagnoses"] for d in heard), 30)
+                # the repair rules run there too: the use case's rule restarts lidar
+                assert wait_for(lambda: robot.events("RULE_FIRED"), 30)
+                assert diagnosers == {"monitoring"}  # none of the executive's own
+            finally:
+                monitoring.send_signal(signal.SIGTERM)
+                assert monitoring.wait(30) == 0
+    main = (tmp_path / "executive.log").read_text()
+    assert "dura: executive of robot 'usecase' runs on" in main
+
+
+def test_a_group_of_services_nobody_knows_is_refused_in_one_line(
+    dura: Callable[..., subprocess.CompletedProcess[str]],
+) -> None:
+    refused = dura("run", str(USECASE), "--only", "everything")
+    assert refused.returncode == 2 and "invalid choice: 'everything'" in refused.stderr
+    both = dura("run", str(USECASE), "--only", "monitoring", "--without", "monitoring")
+    assert both.returncode == 2 and "not allowed with argument" in both.stderr

@@ -342,3 +342,17 @@ def test_every_committed_change_survives_a_sigkill_of_the_writer(tmp_path: Path)
         assert len(kb.facts("visited")) == n
         assert kb.component("lidar").fault_count == n
         assert len(kb.events(kind="TICK")) == n
+
+
+def test_the_event_log_is_in_the_order_of_its_stamps_whoever_writes(kb: KnowledgeBase) -> None:
+    def write(name: str) -> None:
+        for i in range(200):
+            kb.log_event("TICK", name, {"i": i})
+
+    writers = [threading.Thread(target=write, args=(f"w{n}",)) for n in range(4)]
+    for writer in writers:
+        writer.start()
+    for writer in writers:
+        writer.join()
+    stamps = [e.stamp for e in kb.events(kind="TICK")]
+    assert len(stamps) == 800 and stamps == sorted(stamps)

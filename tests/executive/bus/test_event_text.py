@@ -108,6 +108,9 @@ LOGGED = [
     (event("COMPONENT_RESET", "lidar", usable=["lidar", "lidar_filter"]),
      "lidar: usable again: lidar, lidar_filter"),
     (event("EXONERATION", "diagnosis", on=True), "diagnosis: exoneration on"),
+    (event("HOST_JOINED", "front", components=["lidar", "lidar_filter"]),
+     "host front joined: serves lidar, lidar_filter"),
+    (event("HOST_LOST", "front", components=["lidar"]), "host front lost: ended lidar"),
 ]  # fmt: skip
 
 

@@ -203,7 +203,7 @@ def test_component_output_goes_to_its_log_file(endpoint: str, tmp_path: Path) ->
         assert any(line.startswith(f"--- dura: probe ready (pid {pid})") for line in lines)
         assert "hello from the probe" in lines
         assert lines[-1].startswith("--- dura: stopped: exited with code 0")
-        assert r.launcher.log_path("probe") == tmp_path / "logs" / "probe.log"
+        assert r.launcher.log_path("probe") == str(tmp_path / "logs" / "probe.log")
 
 
 def test_unknown_components_and_wrong_commands_are_refused(endpoint: str, tmp_path: Path) -> None:

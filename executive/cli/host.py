@@ -1,0 +1,106 @@
+"""``dura host ROBOT.yaml --name NAME``: the host agent of one of the robot's computers."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+from pathlib import Path
+from typing import Any
+
+from executive.cli.arguments import rate, seconds
+from executive.cli.output import add_json_flag, print_json
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser(
+        "host",
+        help="run the host agent of one of the robot's computers in the foreground",
+        description="Run the host agent of a computer of the robot: it connects to the "
+        "executive's bus with the host's credentials, starts, stops and reaps the components "
+        "the robot description places on this host (host: NAME), keeps their logs here and "
+        "measures their resources. When the executive is lost it ends them, and it joins "
+        "again when the executive is back. Ctrl-C or SIGTERM ends the components and the agent.",
+    )
+    p.add_argument("robot", metavar="ROBOT.yaml", type=Path, help="the robot description")
+    p.add_argument("--name", required=True, help="this host's name in the robot description")
+    p.add_argument(
+        "--connect",
+        metavar="ENDPOINT",
+        help="the executive's endpoint as this computer reaches it, e.g. "
+        "tcp/192.168.1.10:7447 (default: the robot's bus endpoint)",
+    )
+    p.add_argument(
+        "--credentials",
+        type=Path,
+        metavar="FILE",
+        help="the host's credentials file (default: .dura/ROBOT.NAME.bus.json, then "
+        ".dura/ROBOT.bus.json)",
+    )
+    p.add_argument(
+        "--log-dir",
+        type=Path,
+        default=Path(".dura") / "logs",
+        help="where component logs go (default .dura/logs)",
+    )
+    p.add_argument(
+        "--grace",
+        type=seconds(),
+        default=3.0,
+        metavar="SECONDS",
+        help="time a component gets to stop, before SIGTERM and again before SIGKILL (default 3)",
+    )
+    p.add_argument(
+        "--lease",
+        type=seconds(),
+        default=3.0,
+        metavar="SECONDS",
+        help="silence after which the link to the executive counts as lost (default 3)",
+    )
+    p.add_argument(
+        "--resource-rate",
+        type=rate,
+        default=1.0,
+        metavar="HZ",
+        help="how often the resources of this host's components are published (default 1)",
+    )
+    add_json_flag(p)
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from executive.host import run_host
+    from executive.runtime.launcher import local_endpoint
+    from knowledge.robot import load_robot
+
+    robot = load_robot(args.robot)
+    endpoint = args.connect or local_endpoint(robot.endpoint)
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+
+    def say(line: str) -> None:
+        if args.json:
+            print_json({"host": args.name, "event": line})
+        else:
+            print(f"dura: host '{args.name}': {line}")
+        sys.stdout.flush()
+
+    placed = ", ".join(robot.placed_on(args.name)) or "nothing"
+    say(f"agent of robot '{robot.name}' connects to {endpoint} for {placed}; Ctrl-C stops it")
+    run_host(
+        robot,
+        args.name,
+        endpoint=endpoint,
+        stop=stop,
+        folder=Path.cwd(),
+        credentials=args.credentials,
+        log_dir=args.log_dir.resolve(),
+        grace=args.grace,
+        resource_rate=args.resource_rate,
+        lease=args.lease,
+        say=say,
+    )
+    say("stopped")
+    return 0
