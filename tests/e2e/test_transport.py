@@ -55,7 +55,9 @@ def test_a_low_battery_sends_the_robot_to_charge_and_the_delivery_still_happens(
     recharge = [g for g in robot.goals() if g["source"] == "integrity"]
     assert [g["expression"] for g in recharge] == ["(and (not (battery_low)) (robot_at dock))"]
     robot.wait_for(recharge[0]["id"], "achieved", timeout=120)
-    assert any(s.startswith("charge") for s in steps(robot))
+    # the robot charged: the step started; it ends, or is cancelled once the sensing rule
+    # clears (battery_low) while it charges (its plan then serves no open goal)
+    assert any(s.startswith("charge") for s in started(robot))
     assert robot.facts("battery_low") == []
     assert "(crate_at parcel lab)" in robot.facts("crate_at")
 
