@@ -28,6 +28,7 @@ override instead. The helpers are final (for type checkers).
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import sys
@@ -249,8 +250,18 @@ class Component:
     @classmethod
     @final
     def main(cls) -> None:
-        """Run this component as its process's program; exits with its exit code."""
-        sys.exit(cls.run_process())
+        """Run this component as its process's program; exits with its exit code.
+
+        The bus is closed and the output flushed when it returns; the process then ends
+        at once, without Python's finalization: a rate loop's thread that is inside the
+        bus's native code at that moment would otherwise be ended mid-call, which aborts
+        the process (SIGABRT, "exception not rethrown") instead of a clean exit."""
+        code = cls.run_process()
+        logging.shutdown()
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(OSError, ValueError):
+                stream.flush()
+        os._exit(code)
 
     @classmethod
     @final
