@@ -61,8 +61,6 @@ ALLOWED: dict[str, set[str]] = {
         "monitoring",
         "knowledge",
     },
-    # the host agent's process: its launcher and the resource monitor of its processes
-    "executive.host": {"executive.bus", "executive.runtime", "monitoring", "knowledge"},
     "executive.cli": {
         "executive.bus",
         "executive.runtime",
@@ -74,7 +72,6 @@ ALLOWED: dict[str, set[str]] = {
         "executive.testing",
         "executive.dashboard",
         "executive.executive",
-        "executive.host",
         "monitoring",
         "knowledge",
     },

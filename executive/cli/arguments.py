@@ -102,3 +102,27 @@ def event_kind(text: str) -> str:
             f"no event is of kind '{text}'; the kinds are: {', '.join(sorted(KINDS))}"
         )
     return kind
+
+
+def add_launcher_options(parser: argparse.ArgumentParser, *, resources: str) -> None:
+    """The options of a process that launches components (``dura run``, ``dura host``):
+    where their logs go, how often their resources are published (``resources``: the
+    help), and how long each gets to stop."""
+    from pathlib import Path
+
+    parser.add_argument(
+        "--log-dir",
+        type=Path,
+        default=Path(".dura") / "logs",
+        help="where component logs go (default .dura/logs)",
+    )
+    parser.add_argument(
+        "--resource-rate", type=rate, default=1.0, metavar="HZ", help=f"{resources} (default 1)"
+    )
+    parser.add_argument(
+        "--grace",
+        type=seconds(),
+        default=3.0,
+        metavar="SECONDS",
+        help="time a component gets to stop, before SIGTERM and again before SIGKILL (default 3)",
+    )

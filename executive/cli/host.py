@@ -9,7 +9,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from executive.cli.arguments import rate, seconds
+from executive.cli.arguments import add_launcher_options, seconds
 from executive.cli.output import add_json_flag, print_json
 
 
@@ -38,18 +38,8 @@ def register(sub: Any) -> None:
         help="the host's credentials file (default: .dura/ROBOT.NAME.bus.json, then "
         ".dura/ROBOT.bus.json)",
     )
-    p.add_argument(
-        "--log-dir",
-        type=Path,
-        default=Path(".dura") / "logs",
-        help="where component logs go (default .dura/logs)",
-    )
-    p.add_argument(
-        "--grace",
-        type=seconds(),
-        default=3.0,
-        metavar="SECONDS",
-        help="time a component gets to stop, before SIGTERM and again before SIGKILL (default 3)",
+    add_launcher_options(
+        p, resources="how often the resources of this host's components are published"
     )
     p.add_argument(
         "--lease",
@@ -58,21 +48,20 @@ def register(sub: Any) -> None:
         metavar="SECONDS",
         help="silence after which the link to the executive counts as lost (default 3)",
     )
-    p.add_argument(
-        "--resource-rate",
-        type=rate,
-        default=1.0,
-        metavar="HZ",
-        help="how often the resources of this host's components are published (default 1)",
-    )
     add_json_flag(p)
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from executive.host import run_host
+    """The agent's process: its bus login, its launcher and the resource monitor of its
+    own processes, composed here (as :mod:`executive.executive` composes the
+    executive's)."""
+    from executive.bus import security
+    from executive.bus.session import Bus
+    from executive.runtime.host_agent import HostAgent
     from executive.runtime.launcher import local_endpoint
     from knowledge.robot import load_robot
+    from monitoring.resource_monitor import ResourceSampler
 
     robot = load_robot(args.robot)
     endpoint = args.connect or local_endpoint(robot.endpoint)
@@ -89,18 +78,23 @@ def run(args: argparse.Namespace) -> int:
 
     placed = ", ".join(robot.placed_on(args.name)) or "nothing"
     say(f"agent of robot '{robot.name}' connects to {endpoint} for {placed}; Ctrl-C stops it")
-    run_host(
+    # raises BusError without usable credentials for the host
+    login = security.find_host_login(robot.name, args.name, Path.cwd(), args.credentials)
+
+    def sampler(bus: Bus) -> ResourceSampler:
+        return ResourceSampler(bus, rate=args.resource_rate, hostname=args.name)
+
+    agent = HostAgent(
         robot,
         args.name,
         endpoint=endpoint,
-        stop=stop,
-        folder=Path.cwd(),
-        credentials=args.credentials,
+        login=login,
         log_dir=args.log_dir.resolve(),
         grace=args.grace,
-        resource_rate=args.resource_rate,
+        tracker=sampler,
         lease=args.lease,
         say=say,
     )
+    agent.run(stop)
     say("stopped")
     return 0

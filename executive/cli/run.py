@@ -11,7 +11,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from executive.cli.arguments import megabytes, rate, seconds
+from executive.cli.arguments import add_launcher_options, megabytes, seconds
 from executive.cli.client import remove_run_file, write_run_file
 from executive.cli.dashboard import add_dashboard_address, port
 from executive.cli.output import add_json_flag, print_json, shown
@@ -35,26 +35,7 @@ def register(sub: Any) -> None:
     p.add_argument("robot", metavar="ROBOT.yaml", type=Path, help="the robot description")
     p.add_argument("--endpoint", help="listen here instead of the robot's bus endpoint")
     p.add_argument("--db", type=Path, help="the knowledge base file (default: the robot's)")
-    p.add_argument(
-        "--log-dir",
-        type=Path,
-        default=Path(".dura") / "logs",
-        help="where component logs go (default .dura/logs)",
-    )
-    p.add_argument(
-        "--resource-rate",
-        type=rate,
-        default=1.0,
-        metavar="HZ",
-        help="how often the resource monitor publishes (default 1)",
-    )
-    p.add_argument(
-        "--grace",
-        type=seconds(),
-        default=3.0,
-        metavar="SECONDS",
-        help="time a component gets to stop, before SIGTERM and again before SIGKILL (default 3)",
-    )
+    add_launcher_options(p, resources="how often the resource monitor publishes")
     p.add_argument(
         "--linger",
         type=seconds(),

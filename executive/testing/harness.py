@@ -90,6 +90,18 @@ class WaitTimedOut(AssertionError):
     """What a test waited for did not happen in time (a test failure)."""
 
 
+def terminate(process: subprocess.Popen[Any], timeout: float) -> None:
+    """End a process as Ctrl-C does (SIGTERM), SIGKILL it if it is still there after
+    ``timeout`` seconds, and wait for it."""
+    if process.poll() is None:
+        process.send_signal(signal.SIGTERM)
+        try:
+            process.wait(timeout)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+
+
 class RobotProcess:
     """The executive of one robot, as a child process (see the module docstring).
 
@@ -190,13 +202,7 @@ class RobotProcess:
         process = self._process
         if process is None:
             return None
-        if process.poll() is None:
-            process.send_signal(signal.SIGTERM)
-            try:
-                process.wait(timeout)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
+        terminate(process, timeout)
         self._close()
         return process.returncode
 

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import signal
 import subprocess
 import sys
 import threading
@@ -25,6 +24,7 @@ from pathlib import Path
 
 import psutil
 
+from executive.testing.harness import terminate
 from knowledge.errors import DuraError
 
 JOIN_TIMEOUT = 60.0  # seconds for an agent to join the executive
@@ -141,13 +141,7 @@ class HostProcess:
         process = self._process
         if process is None:
             return None
-        if process.poll() is None:
-            process.send_signal(signal.SIGTERM)
-            try:
-                process.wait(timeout)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
+        terminate(process, timeout)
         if self._reader is not None:
             self._reader.join(5)
         return process.returncode
