@@ -86,8 +86,10 @@ def test_an_executive_ends_what_its_killed_predecessor_left(tmp_path: Path) -> N
         executive = psutil.Process(robot._process.pid if robot._process else 0)
         dura = [p for p in [executive, *executive.children(recursive=True)] if p not in sleeps]
         # the supervisors die first, then the executive and what they held: as if the
-        # supervision failed, only the program's children are left
+        # supervision failed, only the program's children are left. The executive is
+        # frozen first: it ends a component's group as soon as it sees its supervisor die
         dura.sort(key=lambda p: "supervisor.py" not in " ".join(p.cmdline()))
+        executive.send_signal(signal.SIGSTOP)
         for process in dura:
             with contextlib.suppress(psutil.NoSuchProcess):
                 process.send_signal(signal.SIGKILL)
