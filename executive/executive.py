@@ -48,6 +48,7 @@ SEPARABLE = (MONITORING,)
 """The groups of services that can run in a process of their own."""
 
 RETRY = 1.0  # seconds between attempts to reach the executive
+SIGNAL_POLL = 0.1  # seconds: the longest a pending Ctrl-C or SIGTERM waits for its handler
 
 
 def separable(group: str) -> str:
@@ -349,4 +350,5 @@ class ServiceProcess:
                 stack.callback(service.stop)
             bus.declare_alive(service_alive(self.group))  # who runs the group, for all to see
             self._say("runs")
-            stop.wait()
+            while not stop.wait(SIGNAL_POLL):  # in slices: see executive.cli.stopping
+                pass

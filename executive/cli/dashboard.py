@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import signal
-import threading
 from pathlib import Path
 from typing import Any
 
 from executive.cli.client import RUN_FILE
+from executive.cli.stopping import stop_on_signals, wait
 from executive.dashboard.access import DEFAULT_HOST, DEFAULT_PORT
 from knowledge.description import RobotDescription
 from knowledge.errors import DuraError
@@ -89,15 +88,13 @@ def run(args: argparse.Namespace) -> int:
     from executive.dashboard.server import Dashboard  # the web stack loads only when needed
 
     robot, endpoint = target(args)
-    stop = threading.Event()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda *_: stop.set())
+    stop = stop_on_signals()
     with Dashboard.connect(robot, endpoint, host=args.host, port=args.port) as dashboard:
         print(
             f"dura: dashboard of robot '{robot.name}' on {dashboard.url} (executive at "
             f"{endpoint}); Ctrl-C stops it",
             flush=True,
         )
-        stop.wait()
+        wait(stop)
     print("dura: dashboard stopped")
     return 0

@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
-import threading
 from pathlib import Path
 from typing import Any
 
 from executive.cli.arguments import add_launcher_options, seconds
 from executive.cli.output import add_json_flag, print_json
+from executive.cli.stopping import stop_on_signals
 
 
 def register(sub: Any) -> None:
@@ -65,9 +64,7 @@ def run(args: argparse.Namespace) -> int:
 
     robot = load_robot(args.robot)
     endpoint = args.connect or local_endpoint(robot.endpoint)
-    stop = threading.Event()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda *_: stop.set())
+    stop = stop_on_signals()
 
     def say(line: str) -> None:
         if args.json:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
 import threading
 from pathlib import Path
@@ -23,6 +22,7 @@ from executive.bus.wording import plural
 from executive.cli.arguments import count, megabytes
 from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json, shown
+from executive.cli.stopping import stop_on_signals, wait
 
 
 def register(sub: Any) -> None:
@@ -56,9 +56,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    stop = threading.Event()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda *_: stop.set())
+    stop = stop_on_signals()
     with connect(args) as bus:
         seen = threading.Event()
 
@@ -80,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
             )
             sys.stdout.flush()
         try:
-            stop.wait()
+            wait(stop)
         finally:
             recording.stop()
     if recording.failure is not None:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
-import signal
 import sys
 import threading
 from pathlib import Path
@@ -16,6 +15,7 @@ from executive.cli.client import remove_run_file, write_run_file
 from executive.cli.dashboard import add_dashboard_address, port
 from executive.cli.output import add_json_flag, print_json, shown
 from executive.cli.progress import LiveLine
+from executive.cli.stopping import stop_on_signals, wait
 from executive.executive import SEPARABLE, Executive, ServiceProcess
 from executive.runtime.launcher import local_endpoint
 from knowledge.description import RobotDescription
@@ -92,15 +92,13 @@ def register(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot, domain=False)  # the planner worker checks the domain
-    stop = threading.Event()
+    stop = stop_on_signals()
     failure: list[str] = []
 
     def failed(reason: str) -> None:
         failure.append(reason)
         stop.set()
 
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda *_: stop.set())
     if args.only is not None:
         return run_only(args, robot, stop)
     executive = Executive(
@@ -144,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
             if url:
                 print(f"dura: dashboard on {url}")
         sys.stdout.flush()
-        stop.wait()
+        wait(stop)
     if failure:
         print(f"dura: {failure[0]}", file=sys.stderr)
         return 1
