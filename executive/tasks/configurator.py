@@ -18,6 +18,7 @@ it) or a permanent fault does.
 from __future__ import annotations
 
 import logging
+import threading
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 
@@ -110,6 +111,33 @@ class Configurator:
         self._expected.add(name)
         self._before_start()
         return self._started(name, self.launcher.start(name))
+
+    def start_soon(self, name: str, post: Callable[[Callable[[], None]], None]) -> None:
+        """Start a component on a thread of its own and return at once; what follows its
+        start (the diagnosis model, or its failure) is posted. A start or a stop of the
+        same component meanwhile waits for this one."""
+        self._expected.add(name)
+        self._before_start()
+
+        def start() -> None:
+            try:
+                state = self.launcher.start(name)
+            except ComponentError as e:  # the launcher closes
+                log.warning("cannot start '%s': %s", name, e)
+                state = self.launcher.state(name)
+            post(lambda: self._started_soon(name, state))
+
+        threading.Thread(target=start, name=f"start {name}", daemon=True).start()
+
+    def _started_soon(self, name: str, state: ComponentState) -> None:
+        """A start begun by :meth:`start_soon` is over (a failed one is tried again when
+        a task needs the component, and is a fault then)."""
+        if state.state is not Lifecycle.READY:
+            log.warning("'%s' did not start ahead of its task: %s", name, state.reason)
+        if name in self._expected and self.launcher.state(name).state in RUNNING:
+            self._started(name, state)
+        elif self.launcher.state(name).state not in RUNNING:
+            self._expected.discard(name)
 
     def _started(self, name: str, state: ComponentState) -> ComponentState:
         if state.state is not Lifecycle.READY:

@@ -74,6 +74,7 @@ class Dispatcher:
         self._post = post
         self._timer: threading.Timer | None = None
         self.upcoming: tuple[str, ...] = ()  # behaviors of the plan's steps to come
+        self._warm: set[str] = set()  # behaviors running for steps to come, with no task
         self._lingering: dict[str, float] = {}  # functionality -> until (epoch seconds)
         self.faults = Faults(context.robot, context.kb, launcher.unavailable)
         self.ledger = TaskLedger(context.kb, control)
@@ -125,6 +126,7 @@ class Dispatcher:
         if behaviors == self.upcoming:
             return
         self.upcoming = behaviors
+        self._warm_up()
         running = self.configurator.configuration
         if not running.reserved:
             return  # nothing reserved: the next schedule takes them into account
@@ -132,6 +134,21 @@ class Dispatcher:
         kept = self._keep(Decision(configuration=SystemConfiguration(running.tasks)), running,
                           faulty, now)  # fmt: skip
         self._apply(kept.configuration, kept.transition, "the plan's upcoming steps changed")
+
+    def _warm_up(self) -> None:
+        """Behaviors for the plan's steps to come: the next step's starts now, while the
+        steps before it run (unless components start sequentially); one that runs with no
+        task keeps running while a step to come needs it, and stops once none does."""
+        held = {t.behavior for t in self.ledger.holding()}
+        kept = {b for b in self.upcoming if b in self._warm}
+        following = set() if self.configurator.sequential else set(self.upcoming[:1])
+        wanted = (kept | following) - self.faults.unusable()
+        for name in sorted(self._warm - wanted - held):
+            self._warm.discard(name)
+            self.configurator.release(name, "no step to come needs it", wait=False)
+        for name in sorted(wanted - held - self._warm):
+            self._warm.add(name)
+            self.configurator.start_soon(name, self._post)
 
     def _keep(
         self, decision: Decision, running: SystemConfiguration, faulty: frozenset[str], now: float
@@ -162,7 +179,11 @@ class Dispatcher:
         phase = end.phase
         task.reason, task.end = reason, end
         if task.phase.holds:
-            self.supervisor.stop(task, reason or phase.value)
+            # a behavior that achieved its goal and runs a step to come keeps running
+            keep = end is TaskEnd.SUCCEEDED and task.behavior in self.upcoming
+            self.supervisor.stop(task, reason or phase.value, keep=keep)
+            if keep:
+                self._warm.add(task.behavior)
         self.ledger.set_phase(task, phase, reason=reason, result=task.result)
         self.faults.finished(task.id)
         self.ledger.event(f"TASK_{phase.name}", task, **({"reason": reason} if reason else {}))
@@ -182,6 +203,7 @@ class Dispatcher:
             self.end(task, TaskEnd.SHUTDOWN, "the executive stops", reschedule=False)
         self.upcoming, self.linger, self.standby = (), 0.0, False  # keep nothing running
         self._lingering.clear()
+        self._warm_up()
         self.reschedule("the executive stops")  # no task left: everything stops, no timer
 
     def _carry_out(self, decision: Decision, why: str) -> None:

@@ -99,17 +99,19 @@ class Supervisor:
         else:
             self._end(task, TaskEnd.BEHAVIOR_FAILED, reason)
 
-    def stop(self, task: Task, reason: str, *, wait: bool = True) -> None:
+    def stop(self, task: Task, reason: str, *, wait: bool = True, keep: bool = False) -> None:
         """Stop the task's behavior; whatever its current goal reports is stale then.
 
         ``wait=False``: return once the goal is cancelled, the process stops meanwhile
-        (its next start waits for that)."""
+        (its next start waits for that). ``keep``: the process goes on running, for a
+        task to come."""
         task.attempt += 1
         if task.handle is not None and not task.handle.done():
             with contextlib.suppress(ComponentError, BusError):
                 task.handle.cancel()
         task.handle = None
-        self.configurator.release(task.behavior, reason, wait=wait)
+        if not keep:
+            self.configurator.release(task.behavior, reason, wait=wait)
 
     def pause(self, task: Task) -> None:
         """A user pauses the task (now, or as soon as its behavior runs).

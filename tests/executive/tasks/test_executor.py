@@ -138,3 +138,38 @@ def test_a_warm_spare_waits_paused_and_a_failover_resumes_it_without_a_start(
         seen = states_of(r)
         resumed = len(seen) - 1 - seen[::-1].index(("COMPONENT_READY", "cam_to_lidar"))
         assert resumed < seen.index(("COMPONENT_STOPPING", "lidar_filter"))
+
+
+def test_the_next_steps_behavior_starts_ahead_and_keeps_running_between_its_steps(
+    endpoint: str, tmp_path: Path
+) -> None:
+    robot = slow_camera_robot(delay=0.1, picture=0.5)
+    with executor(robot, endpoint, tmp_path) as (tasks, r):
+        tasks.expect(["take_picture", "take_picture"])  # a plan's steps to come
+        # started before its task, with no task: ready when the first step comes
+        assert wait_for(lambda: r.launcher.state("take_picture").state is Lifecycle.READY, 30)
+        pid = r.launcher.state("take_picture").pid
+        first = tasks.start_task("take_picture", {"place": "lab"})
+        tasks.expect(["take_picture"])  # the first step runs, one is to come
+        assert first.wait(30) and first.phase is TaskPhase.SUCCEEDED, first.reason
+        assert r.launcher.state("take_picture").pid == pid  # kept for the step to come
+        second = tasks.start_task("take_picture", {"place": "office"})
+        tasks.expect([])  # the last step runs
+        assert second.wait(30) and second.phase is TaskPhase.SUCCEEDED, second.reason
+        assert wait_for(lambda: r.launcher.state("take_picture").state is Lifecycle.STOPPED, 30)
+        starts = [e for e in r.kb.events(kind="COMPONENT_STARTING")
+                  if e.subject == "take_picture"]  # fmt: skip
+        assert len(starts) == 1  # one process for both steps
+        assert [e.data["attempt"] for e in r.kb.events(kind="TASK_STARTED")] == [1, 1]
+
+
+def test_a_behavior_started_ahead_stops_when_no_step_to_come_needs_it(
+    endpoint: str, tmp_path: Path
+) -> None:
+    robot = slow_camera_robot(delay=0.1, picture=0.5)
+    with executor(robot, endpoint, tmp_path) as (tasks, r):
+        tasks.expect(["take_picture"])
+        assert wait_for(lambda: r.launcher.state("take_picture").state is Lifecycle.READY, 30)
+        tasks.expect([])  # the plan was dropped
+        assert wait_for(lambda: r.launcher.state("take_picture").state is Lifecycle.STOPPED, 30)
+        assert r.kb.events(kind="TASK_STARTED") == []
