@@ -86,6 +86,9 @@ class _Worker:
     def setup(self) -> None:
         import warnings
 
+        from executive.planning import config_space
+
+        config_space.defer()  # before unified-planning loads
         from unified_planning.environment import get_environment
 
         warnings.simplefilter("ignore")  # UP warns about what it cannot establish; we check

@@ -6,10 +6,13 @@ keeps running what the plan's upcoming steps need and what lingers
 (:func:`~executive.tasks.decisions.keep_running`), and carries the decision out in this
 order: it ends the tasks the scheduler cancelled,
 gives running tasks their new providers, changes the system configuration (a start
-that fails is a fault of that component), starts the behaviors of the tasks due now,
-lets repaired tasks go on, and sets a timer for the next due start. Ending a task
+that fails is a fault of that component) while the behaviors of the tasks due now
+start beside it, sends those behaviors their goals once their configurations are
+ready, lets repaired tasks go on, and sets a timer for the next due start. Ending a task
 schedules the others before the configuration changes, so what they share keeps
-running.
+running. The behavior of the plan's next step starts ahead, and one that a step to come
+runs again keeps running (``--starts sequential``: a behavior starts only on its ready
+configuration, and none ahead).
 
 It composes the parts that act: the :class:`~executive.tasks.ledger.TaskLedger`, the
 :class:`~executive.tasks.configurator.Configurator`, the
@@ -225,6 +228,10 @@ class Dispatcher:
             task.providers, task.start_at = dict(providers), None
             self.ledger.set_phase(task, TaskPhase.STARTING)
             self.ledger.event("TASK_SCHEDULED", task, providers=task.providers)
+        if not self.configurator.sequential:  # a behavior starts with its configuration
+            for task in self.ledger.in_phase(TaskPhase.STARTING):
+                if not self.configurator.alive(task.behavior):
+                    self.configurator.start_soon(task.behavior, self._post)
         self._apply(decision.configuration, decision.transition, why)
         # what is due now, from the tasks as they are: a fault while the configuration
         # changed may have scheduled them again meanwhile

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -14,6 +15,7 @@ from executive.planning.goals import GoalSpec
 from executive.planning.planner import TMP_PREFIX, Planner, PlanningTask, PlanStatus, engine_names
 from executive.planning.problem import World
 from knowledge.errors import PlanningError
+from tests.conftest import ROOT
 from tests.executive.planning.planning_cases import (
     CLASSICAL_DOMAIN,
     CLASSICAL_PROBLEM,
@@ -230,3 +232,25 @@ def test_a_new_worker_removes_the_folders_of_workers_killed_without_cleaning_up(
         assert planner._tmp is not None and planner._tmp.parent == tmp_path
     assert not dead.exists() and not old.exists()
     assert alive.exists() and young.exists()
+
+
+WARM_WORKER = """
+import sys, tempfile
+from pathlib import Path
+from executive.planning.planner_worker import _Worker
+_Worker(Path(tempfile.mkdtemp()) / "out.txt").setup()
+print("scipy" in sys.modules, "numpy" in sys.modules)
+from unified_planning.engines import Engine
+space = Engine.get_configuration_space()
+print(type(space).__module__.split(".")[0], "scipy" in sys.modules)
+"""
+
+
+def test_a_warm_worker_has_not_loaded_configspace_but_gives_a_real_one_when_asked() -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", WARM_WORKER], capture_output=True, text=True, timeout=120,
+        env={**os.environ, "PYTHONPATH": str(ROOT)}, check=True,
+    )  # fmt: skip
+    warm, asked = done.stdout.splitlines()
+    assert warm == "False False"  # unified-planning and the engines, without numpy/scipy
+    assert asked == "ConfigSpace True"  # the real package, loaded on demand
