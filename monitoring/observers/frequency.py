@@ -25,8 +25,9 @@ fits a slow state or none (``NO_STATE_FITS``). A publisher is
 a loop passed without a message. A group whose publishers all stopped reports
 ``TIMEOUT``; the gap is not counted as a period when messages come back. Until a
 publisher has sent two messages its frequency is unknown and nothing is reported for
-it, unless it stays silent past ``timeout``; a group that hears nothing at all after
-the start is stopped after ``timeout``, or ``max(start_up_time, two loops)``.
+it, unless it stays silent past ``timeout`` (or ``max(start_up_time, two loops)``); a
+group that hears nothing at all after the start is stopped after ``timeout``, or
+``max(start_up_time, two loops)``.
 The legacy state key ``frequenzy`` (tug) is accepted.
 """
 
@@ -178,7 +179,7 @@ class FrequencyObserver(Observer):
                     group.tracks[caller] = _Track(settings.filter.make(), bound)
                 elif previous is not None:
                     period = sent - previous
-                    if period > track.bound:
+                    if period > track.bound and track.filter.state() is not None:
                         track.filter.reset()  # it had stopped: the gap is no period
                     else:
                         track.filter.update(period)
@@ -200,8 +201,8 @@ class FrequencyObserver(Observer):
         for caller, track in group.tracks.items():
             silence = now - feed.heard[caller]
             periods = track.filter.state()
-            if periods is None:
-                track.bound = settings.timeout or math.inf
+            if periods is None:  # one message so far: wait for a second, not forever
+                track.bound = settings.timeout or max(self.config.start_up_time, 2 * self.period)
                 waiting = waiting or silence <= track.bound
                 continue
             track.bound = settings.timeout or max(self.period, 2 * periods.value)

@@ -13,7 +13,9 @@ Each loop a group reports ``GENERAL_OK`` while its publishers' last message is a
 ``timeout`` seconds old (counted from the start when nothing came yet), else
 ``TIMEOUT``; a hang is therefore reported at the first loop after ``timeout``. With
 ``max_timeouts_in_a_row`` it reports a silence only that many timeouts long, then
-stays quiet until a message comes (the last report stands). The default loop rate is
+stays quiet until a message comes (the last report stands); a silence is reported at
+least once, also one that began during the start-up time and is longer than that by
+the first report. The default loop rate is
 ``max(1, 4 / shortest timeout)`` Hz, so a hang is seen within ``timeout * 1.25``.
 """
 
@@ -54,6 +56,8 @@ class TimeoutObserver(Observer):
     def __init__(self, config: TimeoutConfig, environment: Environment | None = None) -> None:
         super().__init__(config, environment)
         self._last: list[dict[str, float]] = [{} for _ in config.topics]  # caller -> last
+        # (topic, group) -> the last message before the silence reported as TIMEOUT
+        self._reported: dict[tuple[int, int], float | None] = {}
 
     @classmethod
     def read(cls, entry: Entry, common: ObserverConfig) -> TimeoutConfig | None:
@@ -79,25 +83,34 @@ class TimeoutObserver(Observer):
     def _reset(self, now: float) -> None:
         for last in self._last:
             last.clear()
+        self._reported.clear()
 
     def _observe(self, now: float) -> list[ObserverResult]:
         results: list[ObserverResult] = []
-        for config, last in zip(self.config.topics, self._last, strict=True):
+        for i, (config, last) in enumerate(zip(self.config.topics, self._last, strict=True)):
             heard = list(last.items())
-            for group in config.groups:
+            for j, group in enumerate(config.groups):
                 times = [t for caller, t in heard if group.includes(caller)]
-                verdict = self._verdict(group.settings, now, max(times) if times else None)
-                if verdict is not None:
-                    silence = {"silence": now - max(times, default=self.started)}
-                    results.append(
-                        self.result(
-                            (config.name,), verdict, now, values=silence, callerids=group.callerids
-                        )
+                latest = max(times) if times else None
+                reported = (i, j) in self._reported and self._reported[i, j] == latest
+                verdict = self._verdict(group.settings, now, latest, reported=reported)
+                if verdict is None:
+                    continue
+                if verdict.number == TIMEOUT:
+                    self._reported[i, j] = latest
+                silence = {"silence": now - max(times, default=self.started)}
+                results.append(
+                    self.result(
+                        (config.name,), verdict, now, values=silence, callerids=group.callerids
                     )
+                )
         return results
 
-    def _verdict(self, settings: TimeoutSettings, now: float, last: float | None) -> Verdict | None:
-        """OK or TIMEOUT; ``None`` once ``max_timeouts_in_a_row`` timeouts were reported."""
+    def _verdict(
+        self, settings: TimeoutSettings, now: float, last: float | None, *, reported: bool
+    ) -> Verdict | None:
+        """OK or TIMEOUT; ``None`` once ``max_timeouts_in_a_row`` timeouts were reported
+        (``reported``: this silence was reported already)."""
         silence = max(0.0, now - (last if last is not None else self.started))
         timeout = settings.timeout
         if silence <= timeout:
@@ -105,7 +118,7 @@ class TimeoutObserver(Observer):
                 GENERAL_OK, "ok", f"last message {silence:.3g} s ago (timeout {timeout:g} s)"
             )
         limit = settings.max_timeouts_in_a_row
-        if limit is not None and silence // timeout > limit:
+        if limit is not None and silence // timeout > limit and reported:
             return None
         what = "no message" if last is not None else "no message since the start"
         return Verdict(TIMEOUT, "timeout", f"{what} for {silence:.3g} s (timeout {timeout:g} s)")

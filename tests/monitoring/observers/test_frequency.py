@@ -121,6 +121,32 @@ def test_a_topic_that_never_publishes_is_stopped_after_the_start_up() -> None:
     assert "since the start" in stopped.info.verbose_observation_msg
 
 
+def test_a_publisher_that_stops_after_its_first_message_is_stopped_after_the_start_up() -> None:
+    config = config_of(frequency([group([], 9, 11)], rate=2.0, start_up=1.5))
+    observer = make_observer(config)
+    observer.start(100.0)
+    [(_, handler)] = observer.inputs()
+    handler(Message("topic/scan", b"{}", "lidar", None, 100.1))  # one message, no period
+    assert observer.observe(101.5) == []  # its rate is not known yet
+    [stopped] = observer.observe(101.7)
+    assert stopped.info.observation == TIMEOUT
+    assert stopped.info.verbose_observation_msg.startswith("stopped: no message for")
+
+
+def test_a_slow_publishers_first_period_counts_however_long() -> None:
+    config = config_of(frequency([group([], 0.15, 0.25)], rate=2.0, start_up=1.5))
+    observer = make_observer(config)
+    observer.start(0.0)
+    [(_, handler)] = observer.inputs()
+    first, second = arrivals("beacon", 0.0, 0.2, 2)  # every 5 s
+    handler(first)
+    assert observer.observe(1.0) == []  # its rate is not known yet
+    handler(second)
+    [slow] = observer.observe(5.1)
+    assert slow.info.observation == 1  # the first period is one, not a gap
+    assert slow.values["frequency"] == pytest.approx(0.2)
+
+
 def test_no_state_fits_a_frequency_between_the_states() -> None:
     config = config_of(
         frequency(

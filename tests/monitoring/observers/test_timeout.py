@@ -66,6 +66,21 @@ def test_after_max_timeouts_in_a_row_the_observer_is_quiet_until_a_message_comes
     assert [r.info.observation for r in observer.observe(3.7)] == [GENERAL_OK]
 
 
+def test_a_silence_longer_than_its_limit_by_the_first_report_is_reported_once() -> None:
+    # the publisher stopped during the start-up time; the first loop comes after
+    # max_timeouts_in_a_row timeouts: the silence is reported, then the observer is quiet
+    observer = started(timeout_observer(0.5, max_timeouts_in_a_row=2))
+    [(_, handler)] = observer.inputs()
+    handler(message(0.1))
+    [first] = observer.observe(2.0)
+    assert first.info.observation == TIMEOUT
+    assert observer.observe(2.125) == []
+    handler(message(3.0))
+    assert [r.info.observation for r in observer.observe(3.1)] == [GENERAL_OK]
+    [again] = observer.observe(5.0)  # a new silence: reported again
+    assert again.info.observation == TIMEOUT
+
+
 def test_silence_from_the_start_counts_as_a_timeout() -> None:
     observer = started(timeout_observer(1.0), now=10.0)
     assert [r.info.observation for r in observer.observe(10.9)] == [GENERAL_OK]
