@@ -84,7 +84,7 @@ class Dispatcher:
         self.configurator = Configurator(
             context.kb,
             launcher,
-            DiagnosisModelSync(context.bus, context.robot),
+            DiagnosisModelSync(context.bus, context.robot, post),
             before_start=publish,
             sequential=sequential,
         )
@@ -208,6 +208,7 @@ class Dispatcher:
         self._lingering.clear()
         self._warm_up()
         self.reschedule("the executive stops")  # no task left: everything stops, no timer
+        self.configurator.model.close()
 
     def _carry_out(self, decision: Decision, why: str) -> None:
         for task_id, why_not in decision.cancelled.items():

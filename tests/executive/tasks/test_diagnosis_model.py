@@ -11,12 +11,15 @@ from pathlib import Path
 import pytest
 
 from executive.bus.api.monitoring import DIAGNOSIS_MODEL_CHANGE, ModelChange
+from executive.bus.keys import service_alive
 from executive.bus.service import Context
 from executive.bus.session import Bus
+from executive.bus.worker import Worker
 from executive.tasks.diagnosis_model import DiagnosisModelSync
 from knowledge.description import RobotDescription
 from knowledge.knowledge_base import KnowledgeBase
 from monitoring.diagnosis.service import DiagnosisService
+from tests.conftest import wait_for
 from tests.executive.tasks.scheduling_cases import usecase_robot
 
 
@@ -31,6 +34,14 @@ def with_reserved_topic() -> RobotDescription:
 def bus(endpoint: str) -> Iterator[Bus]:
     with Bus("usecase", name="executive", endpoint=endpoint, listen=True) as bus:
         yield bus
+
+
+@pytest.fixture
+def worker() -> Iterator[Worker]:
+    worker = Worker("test worker")
+    worker.start()
+    yield worker
+    worker.stop()
 
 
 def model_nodes(bus: Bus) -> set[str]:
@@ -72,3 +83,49 @@ def test_a_model_update_nobody_answers_is_a_warning(
     (warning,) = caplog.records
     assert warning.levelno == logging.WARNING
     assert warning.getMessage().startswith("diagnosis model not updated (ADD cam): ")
+
+
+def test_changes_nobody_answered_reach_a_diagnosis_engine_that_comes_later(
+    bus: Bus, worker: Worker, tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    robot = usecase_robot()
+    with KnowledgeBase(tmp_path / "kb.db") as kb:
+        sync = DiagnosisModelSync(bus, robot, worker.post)
+        try:
+            with caplog.at_level(logging.WARNING, logger="dura.task_executor"):
+                worker.call(lambda: sync.add("lidar"))
+                worker.call(lambda: sync.add("cam"))
+                worker.call(lambda: sync.remove("cam"))  # never added: nothing to ask
+            assert caplog.records  # nobody answered: a warning
+            diagnosis = DiagnosisService(Context(robot, bus, kb))  # monitoring comes now
+            diagnosis.start()
+            try:
+                assert wait_for(lambda: model_nodes(bus) == {"lidar"}, 15)
+            finally:
+                diagnosis.stop()
+        finally:
+            worker.call(sync.close)
+
+
+def test_a_monitoring_process_that_joins_gets_the_nodes_of_what_runs(
+    bus: Bus, worker: Worker, tmp_path: Path
+) -> None:
+    robot = usecase_robot()
+    with KnowledgeBase(tmp_path / "kb.db") as kb:
+        first = DiagnosisService(Context(robot, bus, kb))
+        first.start()
+        sync = DiagnosisModelSync(bus, robot, worker.post)
+        try:
+            worker.call(lambda: sync.add("lidar"))
+            assert model_nodes(bus) == {"lidar"}
+            first.stop()  # the monitoring process ends, and another one starts
+            second = DiagnosisService(Context(robot, bus, kb))
+            second.start()
+            token = bus.declare_alive(service_alive("monitoring"))
+            try:
+                assert wait_for(lambda: model_nodes(bus) == {"lidar"}, 15)
+            finally:
+                token.undeclare()
+                second.stop()
+        finally:
+            worker.call(sync.close)
