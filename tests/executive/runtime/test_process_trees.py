@@ -82,20 +82,24 @@ def test_sigkill_of_the_executive_ends_the_grandchildren_of_its_components(
 
 def test_an_executive_ends_what_its_killed_predecessor_left(tmp_path: Path) -> None:
     with robot_in(tmp_path) as robot:
-        _, sleeps = start_sleeper(robot)
+        start_sleeper(robot)
         executive = psutil.Process(robot._process.pid if robot._process else 0)
-        dura = [p for p in [executive, *executive.children(recursive=True)] if p not in sleeps]
-        # the supervisors die first, then the executive and what they held: as if the
-        # supervision failed, only the program's children are left. The executive is
-        # frozen first: it ends a component's group as soon as it sees its supervisor die
-        dura.sort(key=lambda p: "supervisor.py" not in " ".join(p.cmdline()))
+        # the executive is frozen first: it ends a component's group as soon as it sees its
+        # supervisor die (and, on a busy machine, may have restarted the sleeper: its
+        # tree is taken now)
         executive.send_signal(signal.SIGSTOP)
+        tree = executive.children(recursive=True)
+        sleeps = sleeps_of(executive.pid)
+        dura = [p for p in [executive, *tree] if p not in sleeps]
+        # the supervisors die first, then the executive and what they held: as if the
+        # supervision failed, only the program's children are left
+        dura.sort(key=lambda p: "supervisor.py" not in " ".join(p.cmdline()))
         for process in dura:
             with contextlib.suppress(psutil.NoSuchProcess):
                 process.send_signal(signal.SIGKILL)
         robot.kill()
         left = [s for s in sleeps if not gone(s)]  # orphans under init
-        assert left
+        assert left, f"no orphan to end: {sleeps}"
         robot.start()
         assert wait_for(lambda: all(gone(s) for s in left), 10)
 
