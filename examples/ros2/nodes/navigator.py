@@ -5,7 +5,7 @@ It subscribes to ``/scan`` and ``/odom`` and drives (``/cmd_vel``) from where th
 odometry says the robot is straight to the goal's position at ``speed`` m/s, with
 feedback ten times a second. Without a scan it
 stops and waits (a recovery, counted in the feedback); after ``scan_timeout`` s
-without one it aborts the goal. A goal farther than 100 m from the origin is outside
+without one (counted from the goal's start if none came yet) it aborts the goal. A goal farther than 100 m from the origin is outside
 the map: aborted at once. A goal is cancelled when asked, and when the node is
 deactivated.
 
@@ -87,7 +87,7 @@ class Navigator(LifecycleNode):
             if handle.cancel_requested.is_set():
                 self.cmd_vel.write(ros.Twist())
                 return CANCELED, ros.NavigateToPose_Result()
-            silent = time.monotonic() - self.last_scan
+            silent = time.monotonic() - max(self.last_scan, began)  # none yet: since the goal
             if silent > self.scan_timeout:
                 self.cmd_vel.write(ros.Twist())
                 return ABORTED, ros.NavigateToPose_Result(
