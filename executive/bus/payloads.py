@@ -4,10 +4,9 @@
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
 from typing import Any
 
-from executive.bus.schema import Payload, Text
+from executive.bus.schema import Payload, Text, payload
 
 
 class Lifecycle(enum.Enum):
@@ -26,7 +25,7 @@ class Lifecycle(enum.Enum):
         return self in (Lifecycle.STARTING, Lifecycle.READY, Lifecycle.PAUSED, Lifecycle.STOPPING)
 
 
-@dataclass(frozen=True)
+@payload
 class ComponentState:
     """The payload of ``component/<name>/state``."""
 
@@ -72,7 +71,7 @@ NOT_AVAILABLE = -3
 TIMEOUT = -4
 
 
-@dataclass(frozen=True)
+@payload
 class ObservationInfo:
     """The payload of ``observations``: what one observer saw of its resources.
 
@@ -127,7 +126,7 @@ class ObservationInfo:
 # --- resources (thesis 6.2.4) ------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+@payload
 class NodeInfo:
     """CPU and memory of one component's process tree; ``error`` says it vanished."""
 
@@ -163,7 +162,7 @@ class NodeInfo:
 # The payload of ``resources``: {"stamp": float, "hostname": str, "nodes": [NodeInfo payloads]}
 
 
-@dataclass(frozen=True)
+@payload
 class ResourceInfo:
     """The payload of ``resources``, published by the resource monitor at its rate."""
 
@@ -221,7 +220,7 @@ class GoalStatus(enum.Enum):
     CANCELLED = "cancelled"
 
 
-@dataclass(frozen=True)
+@payload
 class GoalResult:
     """The payload of ``component/<name>/result``: how a behavior's goal ended.
 
@@ -262,7 +261,7 @@ class GoalResult:
         )
 
 
-@dataclass(frozen=True)
+@payload
 class GoalFeedback(Payload):
     """The payload of ``component/<name>/feedback``, published while a goal runs."""
 
@@ -279,7 +278,7 @@ class GoalFeedback(Payload):
 DIAGNOSIS_STATUSES = ("OK", "DIAGNOSED", "INCONSISTENT", "TIMEOUT")
 
 
-@dataclass(frozen=True)
+@payload
 class DiagnosisInfo:
     """The payload of ``diagnoses``: the newest diagnosis result.
 

@@ -1,9 +1,13 @@
-"""Typed payloads: frozen dataclasses read from JSON objects by their annotations.
+"""Typed payloads: dataclasses read from JSON objects by their annotations.
 
-A request or reply of a service's bus API is a :class:`Payload`: a frozen dataclass
+A request or reply of a service's bus API is a :class:`Payload`: a dataclass
 whose fields say what a valid JSON object holds. :meth:`Payload.from_payload` checks
 every field against its annotation and refuses bad input with one sentence that names
 the field and the bad value; nothing else in dura validates requests by hand.
+
+Payload classes are declared with :func:`payload`: type checkers hold their fields
+read-only, as for frozen dataclasses, but at run time they are plain dataclasses (with a
+hash), which cost little more than half as much to create: a command loads dozens.
 
 Supported annotations: ``str``, ``int`` (not ``bool``; within 64 bits), ``float``
 (finite; an integer is accepted), ``bool``, ``X | None``, ``list[X]``,
@@ -22,11 +26,20 @@ import types
 import typing
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Self
+from typing import Any, Self, TypeVar, dataclass_transform
 
 from knowledge.errors import DuraError
 
 INT64 = 2**63
+T = TypeVar("T")
+
+
+@dataclass_transform(frozen_default=True, field_specifiers=(dataclasses.field,))
+def payload(cls: type[T]) -> type[T]:
+    """A payload class: a dataclass with a hash, whose fields type checkers hold
+    read-only (``frozen`` for them; not at run time, where it would nearly double what
+    the class costs to create: 0.7 instead of 0.4 ms, 10 ms of a quick command)."""
+    return dataclass(unsafe_hash=True)(cls)
 
 
 class PayloadError(DuraError):

@@ -14,7 +14,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Generic, Protocol, Self, TypeVar
 
-from executive.bus.schema import Payload
+from executive.bus.schema import Payload, payload
 from executive.bus.session import Bus
 from knowledge.errors import DuraError
 
@@ -32,7 +32,7 @@ Req = TypeVar("Req", bound=Codec)
 Rep = TypeVar("Rep", bound=Codec)
 
 
-@dataclass(frozen=True)
+@payload
 class Empty(Payload):
     """A request or reply without fields."""
 

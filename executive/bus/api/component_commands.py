@@ -4,11 +4,11 @@ one payload type per verb (the launcher sends them, the SDK's framework answers)
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any, ClassVar
 
 from executive.bus.payloads import Command, ComponentPhase
-from executive.bus.schema import Payload, PayloadError, Text
+from executive.bus.schema import Payload, PayloadError, Text, payload
 
 
 class ComponentCommand(Payload):
@@ -38,7 +38,7 @@ class ComponentCommand(Payload):
         return command.from_payload(request)
 
 
-@dataclass(frozen=True)
+@payload
 class Configure(ComponentCommand):
     """Parameters, and the achievements kept for a warm start."""
 
@@ -47,28 +47,28 @@ class Configure(ComponentCommand):
     achievements: dict[str, Any] = field(default_factory=dict)
 
 
-@dataclass(frozen=True)
+@payload
 class Start(ComponentCommand):
     """Start running (after configure)."""
 
     verb = Command.START
 
 
-@dataclass(frozen=True)
+@payload
 class Pause(ComponentCommand):
     """Pause until resumed."""
 
     verb = Command.PAUSE
 
 
-@dataclass(frozen=True)
+@payload
 class Resume(ComponentCommand):
     """Resume after a pause."""
 
     verb = Command.RESUME
 
 
-@dataclass(frozen=True)
+@payload
 class Reconfigure(ComponentCommand):
     """Changed parameters only."""
 
@@ -76,14 +76,14 @@ class Reconfigure(ComponentCommand):
     params: dict[str, Any] = field(default_factory=dict)
 
 
-@dataclass(frozen=True)
+@payload
 class Stop(ComponentCommand):
     """Stop and exit."""
 
     verb = Command.STOP
 
 
-@dataclass(frozen=True)
+@payload
 class TakeGoal(ComponentCommand):
     """A behavior's goal: the reply comes at once, the result later on
     ``component/<name>/result``."""
@@ -93,7 +93,7 @@ class TakeGoal(ComponentCommand):
     goal: dict[str, Any] = field(default_factory=dict)
 
 
-@dataclass(frozen=True)
+@payload
 class CancelGoal(ComponentCommand):
     """Cancel the goal the behavior is carrying out."""
 
@@ -101,7 +101,7 @@ class CancelGoal(ComponentCommand):
     goal_id: Text
 
 
-@dataclass(frozen=True)
+@payload
 class InjectFault(ComponentCommand):
     """``"crash"`` or ``{"mode": "crash", ...}`` (see :mod:`executive.sdk.fault_injection`)."""
 
@@ -122,7 +122,7 @@ COMMANDS: tuple[type[ComponentCommand], ...] = (
 )
 
 
-@dataclass(frozen=True)
+@payload
 class CommandReply(Payload):
     """Where the component is after the command."""
 

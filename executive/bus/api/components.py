@@ -4,32 +4,32 @@ injection). The lifecycle commands every component process serves are in
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Annotated, Any
 
 from executive.bus.keys import api
 from executive.bus.payloads import ComponentState
-from executive.bus.schema import Between, Payload, Text
+from executive.bus.schema import Between, Payload, Text, payload
 from executive.bus.verb import Empty, Verb
 
 MAX_LOG_LINES = 10_000
 
 
-@dataclass(frozen=True)
+@payload
 class ComponentName(Payload):
     """A component, by name."""
 
     name: Text
 
 
-@dataclass(frozen=True)
+@payload
 class ComponentsReply(Payload):
     """Each component's state payload with its ``kind`` and ``log`` path."""
 
     components: list[dict[str, Any]]
 
 
-@dataclass(frozen=True)
+@payload
 class LogQuery(Payload):
     """The last ``lines`` lines of a component's log."""
 
@@ -37,7 +37,7 @@ class LogQuery(Payload):
     lines: Annotated[int, Between(0, MAX_LOG_LINES)] = 50
 
 
-@dataclass(frozen=True)
+@payload
 class LogReply(Payload):
     """The last lines of a component's log, and where the log is."""
 
@@ -46,7 +46,7 @@ class LogReply(Payload):
     lines: list[str]
 
 
-@dataclass(frozen=True)
+@payload
 class Achievement(Payload):
     """A behavior's achievement, kept for a warm start."""
 
@@ -55,7 +55,7 @@ class Achievement(Payload):
     value: Any = None
 
 
-@dataclass(frozen=True)
+@payload
 class Injection(Payload):
     """A fault to inject into a running component: a mode of the SDK's fault injection
     (:mod:`executive.sdk.fault_injection`) and its options (numbers)."""

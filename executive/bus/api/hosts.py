@@ -11,18 +11,16 @@ executive records the state with its own.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from executive.bus.api.components import LogQuery, LogReply
 from executive.bus.keys import host
-from executive.bus.schema import Payload, Text
+from executive.bus.schema import Payload, Text, payload
 from executive.bus.verb import Empty, Verb
 
 SPAWN_TIMEOUT = 10.0  # seconds: a fork, and a look for the program's pid
 SIGNAL_TIMEOUT = 2.0
 
 
-@dataclass(frozen=True)
+@payload
 class Spawn(Payload):
     """Start a component placed on the host under its supervisor. ``instance`` names the
     process's liveliness token; ``user`` and ``password`` are the component's own bus
@@ -35,7 +33,7 @@ class Spawn(Payload):
     password: str | None = None
 
 
-@dataclass(frozen=True)
+@payload
 class Spawned(Payload):
     """The started process: its supervisor's pid, the program's (once forked), and where
     its log is on the host."""
@@ -45,7 +43,7 @@ class Spawned(Payload):
     program: int | None = None
 
 
-@dataclass(frozen=True)
+@payload
 class ProcessSignal(Payload):
     """A signal to a process the host started: to its whole process group, or only to
     its supervisor."""
@@ -55,7 +53,7 @@ class ProcessSignal(Payload):
     group: bool = True
 
 
-@dataclass(frozen=True)
+@payload
 class ProcessExit(Payload):
     """The payload of ``host/<name>/exit``: a process the host started has ended and was
     reaped (its exit code, or the signal that killed it)."""

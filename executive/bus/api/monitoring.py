@@ -3,15 +3,15 @@ diagnosis model and exoneration (the diagnosis engine)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any
 
 from executive.bus.keys import DIAGNOSIS_EXONERATION, DIAGNOSIS_MODEL, observers_api
-from executive.bus.schema import Payload, Text
+from executive.bus.schema import Payload, Text, payload
 from executive.bus.verb import Empty, Verb
 
 
-@dataclass(frozen=True)
+@payload
 class ObserversReply(Payload):
     """Each observer: ``{id, type, component, enabled, active, main_loop_rate,
     start_up_time}``."""
@@ -19,7 +19,7 @@ class ObserversReply(Payload):
     observers: list[dict[str, Any]]
 
 
-@dataclass(frozen=True)
+@payload
 class ObserverAdd(Payload):
     """An observer entry (the thesis/tug schema), of a component or of its own, with an
     optional name (its id)."""
@@ -29,7 +29,7 @@ class ObserverAdd(Payload):
     name: str | None = None
 
 
-@dataclass(frozen=True)
+@payload
 class ObserverChange(Payload):
     """A new configuration for an observer (it keeps its id)."""
 
@@ -37,14 +37,14 @@ class ObserverChange(Payload):
     config: Any
 
 
-@dataclass(frozen=True)
+@payload
 class ObserverId(Payload):
     """An observer, by id (``<component>/<index>`` for those of the robot description)."""
 
     id: Text
 
 
-@dataclass(frozen=True)
+@payload
 class ObserverActive(Payload):
     """Whether the observer observes now (enabled, and its component READY)."""
 
@@ -52,7 +52,7 @@ class ObserverActive(Payload):
     active: bool
 
 
-@dataclass(frozen=True)
+@payload
 class LatestReply(Payload):
     """The last observation of every resource of every active observer, as published on
     ``observations``."""
@@ -60,7 +60,7 @@ class LatestReply(Payload):
     observations: list[dict[str, Any]]
 
 
-@dataclass(frozen=True)
+@payload
 class ModelChange(Payload):
     """A change of the diagnosis model: ADD, REMOVE, UPDATE, SET or GET, with nodes
     ``{name, sub_topic, pub_topic}`` and observers ``{type, resource, callerids}``."""
@@ -70,7 +70,7 @@ class ModelChange(Payload):
     observers: list[dict[str, Any]] = field(default_factory=list)
 
 
-@dataclass(frozen=True)
+@payload
 class ModelReply(Payload):
     """The model after the change, or why the change was refused (it changed nothing)."""
 
@@ -79,14 +79,14 @@ class ModelReply(Payload):
     error: str = ""
 
 
-@dataclass(frozen=True)
+@payload
 class ExonerationChange(Payload):
     """Switch exoneration on or off; without ``on``, only ask."""
 
     on: bool | None = None
 
 
-@dataclass(frozen=True)
+@payload
 class Exoneration(Payload):
     """Whether an OK topic observation means its topics are not abnormal (the thesis'
     model: off)."""

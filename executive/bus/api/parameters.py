@@ -7,15 +7,14 @@ description's ``params``) and reaches a running component at once: through its
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 from executive.bus.keys import api
-from executive.bus.schema import Payload, Text
+from executive.bus.schema import Payload, Text, payload
 from executive.bus.verb import Verb
 
 
-@dataclass(frozen=True)
+@payload
 class ParameterChange(Payload):
     """A new value for one parameter of a component (what the ``parameter`` repair
     action sends)."""
@@ -25,18 +24,18 @@ class ParameterChange(Payload):
     value: Any = None
 
 
-@dataclass(frozen=True)
+@payload
 class ParameterKey(Payload):
     component: Text
     key: Text
 
 
-@dataclass(frozen=True)
+@payload
 class ComponentParameters(Payload):
     component: Text
 
 
-@dataclass(frozen=True)
+@payload
 class ParameterReply(Payload):
     """A parameter's value and where it comes from (``description`` or ``knowledge
     base``); after a change, how the component took it: ``reconfigured`` (running, by
@@ -51,7 +50,7 @@ class ParameterReply(Payload):
     reason: str = ""
 
 
-@dataclass(frozen=True)
+@payload
 class ParametersReply(Payload):
     """Every parameter of a component with its value and source."""
 

@@ -3,11 +3,10 @@ status."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Annotated, Any
 
 from executive.bus.keys import api
-from executive.bus.schema import Between, Payload, Text
+from executive.bus.schema import Between, Payload, Text, payload
 from executive.bus.verb import Empty, Verb
 from knowledge.lifecycle import GoalState
 
@@ -15,7 +14,7 @@ Count = Annotated[int, Between(0, 2**63 - 1)]
 Priority = Annotated[int, Between(-(10**9), 10**9)]  # what the CLI accepts too
 
 
-@dataclass(frozen=True)
+@payload
 class GoalAdd(Payload):
     """A goal expression with its priority, deadline (seconds from now) and source;
     ``keep``: a maintenance goal, re-posted whenever it stops holding."""
@@ -27,35 +26,35 @@ class GoalAdd(Payload):
     keep: bool = False
 
 
-@dataclass(frozen=True)
+@payload
 class GoalId(Payload):
     """A goal, by id."""
 
     id: int
 
 
-@dataclass(frozen=True)
+@payload
 class GoalQuery(Payload):
     """Goals in these states (all goals without)."""
 
     states: list[GoalState] | None = None
 
 
-@dataclass(frozen=True)
+@payload
 class GoalReply(Payload):
     """A goal as stored."""
 
     goal: dict[str, Any]
 
 
-@dataclass(frozen=True)
+@payload
 class GoalsReply(Payload):
     """Goals as stored, by id."""
 
     goals: list[dict[str, Any]]
 
 
-@dataclass(frozen=True)
+@payload
 class GoalHistory(Payload):
     """A goal and the events that name it."""
 
@@ -63,7 +62,7 @@ class GoalHistory(Payload):
     events: list[dict[str, Any]]
 
 
-@dataclass(frozen=True)
+@payload
 class PlanReply(Payload):
     """The newest plan (stored) and how its execution stands."""
 
@@ -71,7 +70,7 @@ class PlanReply(Payload):
     execution: dict[str, Any]
 
 
-@dataclass(frozen=True)
+@payload
 class DryRun(Payload):
     """Plan for the open goals on the live state without executing (seconds to search;
     the robot's planner timeout without)."""
@@ -79,7 +78,7 @@ class DryRun(Payload):
     timeout: Annotated[float, Between(0.1, 3600.0)] | None = None
 
 
-@dataclass(frozen=True)
+@payload
 class DryRunReply(Payload):
     """What the planner would do now: the plan for the goals it reaches (``steps`` as
     ``dura plan --offline --json`` prints them), the goals that hold already, and why
@@ -97,14 +96,14 @@ class DryRunReply(Payload):
     makespan: float | None = None
 
 
-@dataclass(frozen=True)
+@payload
 class StateQuery(Payload):
     """Facts matching ``robot_at``, ``(robot_at lab)``, ``(robot_at *)`` (all without)."""
 
     pattern: str = ""
 
 
-@dataclass(frozen=True)
+@payload
 class StateReply(Payload):
     """Facts (name, args, value, text) and objects (name -> type)."""
 
@@ -112,7 +111,7 @@ class StateReply(Payload):
     objects: dict[str, str]
 
 
-@dataclass(frozen=True)
+@payload
 class FactChange(Payload):
     """A fact to set or unset: ``(robot_at lab)``, ``(= (battery) 80)``; ``source`` names
     who changes it (a component's name, or ``user``), as the event log records it."""
@@ -121,14 +120,14 @@ class FactChange(Payload):
     source: Text = "user"
 
 
-@dataclass(frozen=True)
+@payload
 class FactReply(Payload):
     """The fact as it was set or unset."""
 
     fact: dict[str, Any]
 
 
-@dataclass(frozen=True)
+@payload
 class ObjectAdd(Payload):
     """An object of a domain type."""
 
@@ -136,14 +135,14 @@ class ObjectAdd(Payload):
     type: Text
 
 
-@dataclass(frozen=True)
+@payload
 class ObjectName(Payload):
     """An object of the world, by name."""
 
     name: Text
 
 
-@dataclass(frozen=True)
+@payload
 class DomainReply(Payload):
     """The robot's domain: ``types`` ``{name, parent}``; ``predicates`` and ``functions``
     ``{name, parameters}`` (their types); ``actions`` ``{name, parameters [[?name, type]],
@@ -159,7 +158,7 @@ class DomainReply(Payload):
     constants: dict[str, str]
 
 
-@dataclass(frozen=True)
+@payload
 class EventQuery(Payload):
     """Events after a sequence number, of one kind (all without), oldest first: the
     newest ``limit`` of them, or with ``oldest`` the oldest ``limit`` (to page forward
@@ -171,14 +170,14 @@ class EventQuery(Payload):
     oldest: bool = False
 
 
-@dataclass(frozen=True)
+@payload
 class EventsReply(Payload):
     """Events of the log, oldest first."""
 
     events: list[dict[str, Any]]
 
 
-@dataclass(frozen=True)
+@payload
 class StatusReply(Payload):
     """Everything at a glance. ``tasks`` and ``components`` come from the task executor
     and the launcher: a list, or ``{"error": reason}`` when that service did not answer.

@@ -2,17 +2,17 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Annotated, Any
 
 from executive.bus.keys import api
-from executive.bus.schema import Between, Payload, Text
+from executive.bus.schema import Between, Payload, Text, payload
 from executive.bus.verb import Empty, Verb
 
 Seconds = Annotated[float, Between(0.0, 1e9)]
 
 
-@dataclass(frozen=True)
+@payload
 class TaskStart(Payload):
     """A task of the robot (or a behavior) with its goal fields and constraints; times
     are seconds from now, ``together`` lists waiting tasks to start with."""
@@ -32,28 +32,28 @@ class TaskStart(Payload):
         return f"{self.task}({fields})" if fields else self.task
 
 
-@dataclass(frozen=True)
+@payload
 class TaskStarted(Payload):
     id: str
     behavior: str
 
 
-@dataclass(frozen=True)
+@payload
 class TaskId(Payload):
     id: Text
 
 
-@dataclass(frozen=True)
+@payload
 class TaskReply(Payload):
     task: dict[str, Any]
 
 
-@dataclass(frozen=True)
+@payload
 class TasksReply(Payload):
     tasks: list[dict[str, Any]]
 
 
-@dataclass(frozen=True)
+@payload
 class ScheduleReply(Payload):
     """Waiting and running tasks in time, the running and the permanently faulty
     functionalities."""
@@ -63,7 +63,7 @@ class ScheduleReply(Payload):
     faulty: list[str]
 
 
-@dataclass(frozen=True)
+@payload
 class ComponentFault(Payload):
     """A fault of a component reported by a repair rule or a user."""
 
@@ -71,7 +71,7 @@ class ComponentFault(Payload):
     reason: str = ""
 
 
-@dataclass(frozen=True)
+@payload
 class FaultReply(Payload):
     """The component's state (a ``component/<name>/state`` payload) and its faults."""
 
@@ -80,12 +80,12 @@ class FaultReply(Payload):
     permanent: bool
 
 
-@dataclass(frozen=True)
+@payload
 class ComponentName(Payload):
     name: Text
 
 
-@dataclass(frozen=True)
+@payload
 class ResetReply(Payload):
     """The functionalities usable again."""
 
