@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 from executive.bus import security
 from executive.bus.clock import system_clock
-from executive.bus.keys import EXECUTIVE_ALIVE, service_alive
+from executive.bus.keys import EVENTS, EXECUTIVE_ALIVE, service_alive
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus
 from executive.planning.high_level import HighLevel
@@ -34,6 +34,7 @@ from executive.runtime.run_lock import RunLock, end_leftovers
 from knowledge.description import RobotDescription
 from knowledge.errors import BusError, ConfigError, DuraError
 from knowledge.knowledge_base import KnowledgeBase
+from knowledge.records import to_plain
 
 if TYPE_CHECKING:
     from executive.bus.topic_source import TopicSource
@@ -345,6 +346,9 @@ class ServiceProcess:
         with contextlib.ExitStack() as stack:
             stack.callback(bus.close)
             kb = stack.enter_context(KnowledgeBase(self.kb_path))
+            # what these services log (rule firings, ...) is on the bus, as the executive's
+            # own events are: for dura events --follow, the dashboard, the recorder
+            kb.add_listener(lambda event: bus.publish(EVENTS, to_plain(event)))
             for service in monitoring_services(Context(self.robot, bus, kb)):
                 service.start()
                 stack.callback(service.stop)

@@ -16,7 +16,7 @@ import psutil
 import pytest
 
 from executive.bus import security
-from executive.bus.keys import DIAGNOSES, component, service_alive, topic
+from executive.bus.keys import DIAGNOSES, EVENTS, component, service_alive, topic
 from executive.bus.payloads import ComponentState, Lifecycle
 from executive.bus.security import Login
 from executive.bus.session import Bus, Message
@@ -245,12 +245,15 @@ def test_monitoring_in_a_process_of_its_own_diagnoses_a_fault_of_the_main_proces
                     diagnosers.add(message.caller_id)
 
                 robot.bus.subscribe(DIAGNOSES, diagnosis)
+                live: list[str] = []  # events as they are published
+                robot.bus.subscribe(EVENTS, lambda m: live.append(m.payload["kind"]))
                 assert robot.request("component/start", {"name": "lidar"})["state"] == "ready"
                 robot.request("component/inject", {"name": "lidar", "mode": "stop_publishing"})
                 assert wait_for(lambda: any(["lidar"] in d["diagnoses"] for d in heard), 30)
                 # the repair rules run there too: the use case's rule restarts lidar
                 assert wait_for(lambda: robot.events("RULE_FIRED"), 30)
                 assert diagnosers == {"monitoring"}  # none of the executive's own
+                assert wait_for(lambda: "RULE_FIRED" in live, 10)  # on the bus, live
             finally:
                 monitoring.send_signal(signal.SIGTERM)
                 assert monitoring.wait(30) == 0
