@@ -12,7 +12,9 @@ executive closes. While it runs, the executive holds the liveliness token
 The monitoring services (observers, diagnosis, repair rules) talk to the rest only over
 the bus, so they can also run in a process of their own (``dura run --only
 monitoring``, :class:`ServiceProcess`), beside an executive that runs without them
-(``dura run --without monitoring``).
+(``dura run --without monitoring``). So can the high level (``--only planning``: goals,
+planner, plan executer and their verbs, ``status`` among them): it runs its plans'
+steps on the executive's task executor over the bus (:mod:`executive.bus.api.steps`).
 """
 
 from __future__ import annotations
@@ -45,7 +47,8 @@ if TYPE_CHECKING:
 
 
 MONITORING = "monitoring"
-SEPARABLE = (MONITORING,)
+PLANNING = "planning"
+SEPARABLE = (MONITORING, PLANNING)
 """The groups of services that can run in a process of their own."""
 
 RETRY = 1.0  # seconds between attempts to reach the executive
@@ -179,14 +182,18 @@ class Executive:
             )
             stack.callback(self.kb.log_event, "EXECUTIVE_STOPPED", self.robot.name)
             context = Context(self.robot, self.bus, self.kb)
-            self.high_level = HighLevel(
-                context,
-                self._plan_tasks,
-                status={"tasks": self._tasks, "components": self._components},
-                on_failure=self.on_failure,
-            )
-            self.high_level.open()  # the API answers from here on
-            stack.callback(self.high_level.stop)  # if a later start fails
+            self.high_level: HighLevel | None = None
+            if PLANNING in self.without:  # the high level relays the events otherwise
+                self.kb.add_listener(lambda event: self.bus.publish(EVENTS, to_plain(event)))
+            else:
+                self.high_level = HighLevel(
+                    context,
+                    self._plan_tasks,
+                    status={"tasks": self._tasks, "components": self._components},
+                    on_failure=self.on_failure,
+                )
+                self.high_level.open()  # the API answers from here on
+                stack.callback(self.high_level.stop)  # if a later start fails
             if self.on_open is not None:
                 self.on_open()
             self.progress("loading the launcher")
@@ -211,7 +218,8 @@ class Executive:
                 nodes = {c.ros2.node: name for name, c in self.robot.components.items()
                          if c.ros2 is not None and c.ros2.node is not None}  # fmt: skip
                 self.ros2 = stack.enter_context(Ros2Link(self.robot.ros2, nodes=nodes))
-                self.high_level.sources = (self.ros2.topics,)  # before it starts sensing
+                if self.high_level is not None:
+                    self.high_level.sources = (self.ros2.topics,)  # before it starts sensing
             self.progress("loading the services")
             for service in self.services(context):
                 self.progress(f"starting the {service.name} service")
@@ -265,9 +273,20 @@ class Executive:
             ),
             *extra,
             self.tasks,
-            self.high_level,
+            *self._planning(context),
             *last,
         ]
+
+    def _planning(self, context: Context) -> list[Service]:
+        """The high level, or the task executor's side of the plan steps that the high
+        level of another process asks for (``--without planning``)."""
+        if self.high_level is not None:
+            return [self.high_level]
+        from executive.tasks.step_service import StepService
+
+        if self.tasks is None:
+            raise DuraError("the task executor must come before the plan steps")
+        return [StepService(context, self.tasks)]
 
     def _plan_tasks(self) -> PlanTasks:
         """The task executor as the high level's runner of plan steps (once it runs)."""
@@ -346,13 +365,48 @@ class ServiceProcess:
         with contextlib.ExitStack() as stack:
             stack.callback(bus.close)
             kb = stack.enter_context(KnowledgeBase(self.kb_path))
-            # what these services log (rule firings, ...) is on the bus, as the executive's
-            # own events are: for dura events --follow, the dashboard, the recorder
-            kb.add_listener(lambda event: bus.publish(EVENTS, to_plain(event)))
-            for service in monitoring_services(Context(self.robot, bus, kb)):
+            for service in self._services(Context(self.robot, bus, kb), stack, stop):
                 service.start()
                 stack.callback(service.stop)
             bus.declare_alive(service_alive(self.group))  # who runs the group, for all to see
             self._say("runs")
             while not stop.wait(SIGNAL_POLL):  # in slices: see executive.cli.stopping
                 pass
+
+    def _services(
+        self, context: Context, stack: contextlib.ExitStack[Any], stop: threading.Event
+    ) -> list[Service]:
+        """The group's services, in the order they start."""
+        bus, kb = context.bus, context.kb
+        if self.group == MONITORING:
+            # what these services log (rule firings, ...) is on the bus, as the executive's
+            # own events are: for dura events --follow, the dashboard, the recorder
+            kb.add_listener(lambda event: bus.publish(EVENTS, to_plain(event)))
+            return monitoring_services(context)
+        from executive.bus.api.components import COMPONENT_LIST
+        from executive.bus.api.tasks import TASK_LIST
+        from executive.planning.bus_tasks import BusTasks
+
+        robot = self.robot
+        runner = BusTasks(
+            bus,
+            {action: robot.behaviors[spec.behavior].interruptible
+             for action, spec in robot.tasks.items() if spec.behavior in robot.behaviors},
+        )  # fmt: skip
+        stack.callback(runner.close)
+
+        def failed(reason: str) -> None:
+            self._say(f"stops: {reason}")
+            stop.set()
+
+        return [  # the high level relays what it logs on the events topic itself
+            HighLevel(
+                context,
+                runner,
+                status={
+                    "tasks": lambda: TASK_LIST.call(bus).tasks,
+                    "components": lambda: COMPONENT_LIST.call(bus).components,
+                },
+                on_failure=failed,
+            )
+        ]

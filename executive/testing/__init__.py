@@ -30,12 +30,25 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from executive.testing.harness import GoalEnded, RobotProcess, WaitTimedOut, robot_variant
+from executive.testing.harness import (
+    GoalEnded,
+    RobotProcess,
+    ServiceGroupProcess,
+    WaitTimedOut,
+    robot_variant,
+)
 
 if TYPE_CHECKING:
     from monitoring.timeline import Timeline
 
-__all__ = ["GoalEnded", "RobotProcess", "WaitTimedOut", "dura_replay", "dura_robot"]
+__all__ = [
+    "GoalEnded",
+    "RobotProcess",
+    "ServiceGroupProcess",
+    "WaitTimedOut",
+    "dura_replay",
+    "dura_robot",
+]
 
 
 @pytest.fixture

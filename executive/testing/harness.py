@@ -13,6 +13,7 @@ fixture.
 from __future__ import annotations
 
 import contextlib
+import itertools
 import os
 import signal
 import socket
@@ -30,7 +31,7 @@ from executive.bus import security
 from executive.bus.api import planning
 from executive.bus.api.components import COMPONENT_INJECT, COMPONENT_LIST, Injection
 from executive.bus.clock import SCALE_VARIABLE, Clock
-from executive.bus.keys import EXECUTIVE_ALIVE, api
+from executive.bus.keys import EXECUTIVE_ALIVE, api, service_alive
 from executive.bus.payloads import Lifecycle
 from executive.bus.security import Login
 from executive.bus.session import Bus
@@ -132,6 +133,7 @@ class RobotProcess:
         self.endpoint = endpoint or free_endpoint()
         self._own_endpoint = endpoint is None  # chosen here: another may be chosen on a clash
         self.run_args = tuple(run_args)
+        self._without_planning = ("--without", "planning") in itertools.pairwise(self.run_args)
         self.kb_path = self.folder / f"{self.robot.name}.db"
         self.output = self.folder / "executive.log"
         self._process: subprocess.Popen[bytes] | None = None
@@ -179,7 +181,8 @@ class RobotProcess:
                         self.robot.name, name="harness", endpoint=self.endpoint, login=self.login()
                     )
                     self._bus.watch_alive(EXECUTIVE_ALIVE, self._on_alive)
-                self.request("status", timeout=2.0)
+                # a high level in a process of its own answers status: ask the executive
+                self.request("task/list" if self._without_planning else "status", timeout=2.0)
                 if self._running.wait(0.1):  # every service started, not only the API
                     return
                 raise BusError("the executive is starting")
@@ -413,3 +416,54 @@ class RobotProcess:
 
     def status(self) -> dict[str, Any]:
         return planning.STATUS.call(self.bus).to_payload()
+
+
+class ServiceGroupProcess:
+    """A group of services in a process of its own (``dura run --only GROUP``) beside a
+    :class:`RobotProcess` that runs ``--without GROUP``; it runs once its liveliness
+    token is there. Its output goes to ``<group>.log`` in the robot's folder.
+    """
+
+    def __init__(self, robot: RobotProcess, group: str) -> None:
+        self.robot = robot
+        self.group = group
+        self.output = robot.folder / f"{group}.log"
+        self._process: subprocess.Popen[bytes] | None = None
+
+    def __enter__(self) -> ServiceGroupProcess:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def start(self, timeout: float = START_TIMEOUT) -> None:
+        """Start the process and wait until its services run."""
+        robot = self.robot
+        argv = [sys.executable, "-m", "executive.cli", "run", str(robot.description)]
+        argv += ["--only", self.group, "--endpoint", robot.endpoint, "--db", str(robot.kb_path)]
+        env = {**os.environ, **robot.clock.environment()}
+        if not robot.clock.scaled:
+            env.pop(SCALE_VARIABLE, None)
+        with self.output.open("ab") as out:
+            self._process = subprocess.Popen(
+                argv, cwd=robot.folder, stdout=out, stderr=subprocess.STDOUT, env=env
+            )
+        deadline = time.monotonic() + timeout
+        while not robot.bus.alive(service_alive(self.group), timeout=1.0):
+            if self._process.poll() is not None or time.monotonic() > deadline:
+                self.stop()
+                raise DuraError(f"the {self.group} process did not run:\n{self.log_tail()}")
+
+    def stop(self, timeout: float = 30.0) -> int | None:
+        """Stop the process as Ctrl-C does (SIGTERM); returns its exit code."""
+        process, self._process = self._process, None
+        if process is None:
+            return None
+        terminate(process, timeout)
+        return process.returncode
+
+    def log_tail(self, lines: int = 20) -> str:
+        with contextlib.suppress(OSError):
+            return "\n".join(self.output.read_text(errors="replace").splitlines()[-lines:])
+        return ""

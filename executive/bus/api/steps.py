@@ -1,0 +1,77 @@
+"""Plan steps carried out over the bus: the port between a high level and a task executor
+in different processes (``dura run --only planning`` beside ``--without planning``).
+
+The high level asks for a step's task (:data:`STEP_RUN`), pauses, resumes or cancels it
+(:data:`STEP_CONTROL`) and tells which steps are to come (:data:`STEP_UPCOMING`); the
+task executor's side reports how each step goes on :data:`STEP_PROGRESS`, by the run id
+the high level chose. The keys lie outside ``executive/api``: only the trusted users (the
+executive and its separated services) may call them, not operators.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import field
+from typing import Any
+
+from executive.bus.schema import Payload, Text, payload
+from executive.bus.verb import Empty, Verb
+
+STEP_PROGRESS = "executive/steps/progress"  # StepProgress payloads, by run id
+
+
+@payload
+class StepSpec(Payload):
+    """What the task executor needs of a plan step: its action and objects, the
+    parameters they bind, its index and the planned duration."""
+
+    action: Text
+    args: list[str] = field(default_factory=list)
+    parameters: list[str] = field(default_factory=list)
+    index: int = 0
+    duration: float | None = None
+
+
+@payload
+class StepRun(Payload):
+    """Run a plan's step; ``run`` names it in the progress reports and controls."""
+
+    run: Text
+    plan_id: int
+    step: StepSpec
+
+
+class StepAction(enum.Enum):
+    PAUSE = "pause"
+    RESUME = "resume"
+    CANCEL = "cancel"
+
+
+@payload
+class StepControl(Payload):
+    run: Text
+    action: StepAction
+
+
+@payload
+class StepsUpcoming(Payload):
+    """The steps of the current plan not dispatched yet (none: no plan)."""
+
+    plan_id: int | None = None
+    steps: list[StepSpec] = field(default_factory=list)
+
+
+@payload
+class StepProgress(Payload):
+    """How a step goes: ``started``, ``succeeded`` (``value``: the behavior's result) or
+    ``failed`` (``value``: the reason); the names of
+    :class:`executive.planning.task_runner.Progress`."""
+
+    run: Text
+    progress: Text
+    value: Any = None
+
+
+STEP_RUN = Verb("executive/steps/run", StepRun, Empty, timeout=10.0)
+STEP_CONTROL = Verb("executive/steps/control", StepControl, Empty, timeout=10.0)
+STEP_UPCOMING = Verb("executive/steps/upcoming", StepsUpcoming, Empty, timeout=10.0)

@@ -1,0 +1,102 @@
+"""Plan steps asked for over the bus: the task executor's side of
+:mod:`executive.bus.api.steps`, for a high level in another process.
+
+Each step runs through :class:`~executive.tasks.plan_tasks.PlanTasks`, exactly as it
+does for a high level in the executive's own process; its reports go out on
+:data:`~executive.bus.api.steps.STEP_PROGRESS`. A step the plan cancels itself reports
+nothing more; one cancelled by anybody else fails.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+from executive.bus.api.steps import (
+    STEP_CONTROL,
+    STEP_PROGRESS,
+    STEP_RUN,
+    STEP_UPCOMING,
+    StepAction,
+    StepControl,
+    StepProgress,
+    StepRun,
+    StepSpec,
+    StepsUpcoming,
+)
+from executive.bus.service import Context, Service
+from executive.bus.verb import Empty
+from executive.planning.partial_order import Step
+from executive.planning.task_runner import Progress, StepReport, StepTask
+from executive.tasks.executor import TaskExecutor
+from executive.tasks.plan_tasks import PlanTasks
+from knowledge.errors import DuraError
+
+
+def step_of(spec: StepSpec) -> Step:
+    """The plan step a :class:`StepSpec` describes (what running its task needs)."""
+    return Step(
+        spec.index, spec.action, tuple(spec.args), tuple(spec.parameters), 0.0, spec.duration
+    )
+
+
+class StepService(Service):
+    """Serves the step verbs on top of the task executor."""
+
+    name = "plan steps"
+
+    def __init__(self, context: Context, tasks: TaskExecutor) -> None:
+        super().__init__(context)
+        self.plan_tasks = PlanTasks(tasks, context.robot)
+        self._steps: dict[str, StepTask] = {}  # by run id, until the plan cancels them
+        self._lock = threading.Lock()
+        self._declared: list[Any] = []
+
+    def start(self) -> None:
+        bus = self.context.bus
+        self._declared = [
+            STEP_RUN.serve(bus, self._run),
+            STEP_CONTROL.serve(bus, self._control),
+            STEP_UPCOMING.serve(bus, self._upcoming),
+        ]
+
+    def stop(self) -> None:
+        for entity in self._declared:
+            entity.undeclare()
+        self._declared = []
+
+    def _run(self, request: StepRun) -> Empty:
+        run, bus = request.run, self.context.bus
+
+        def post(_: StepReport, progress: Progress, value: Any) -> None:
+            if not bus.closed:
+                bus.publish(STEP_PROGRESS, StepProgress(run, progress.value, value).to_payload())
+            if progress is not Progress.STARTED:
+                with self._lock:
+                    self._steps.pop(run, None)
+
+        task = self.plan_tasks.run(step_of(request.step), request.plan_id, StepReport(post))
+        with self._lock:
+            self._steps[run] = task
+        return Empty()
+
+    def _control(self, request: StepControl) -> Empty:
+        with self._lock:
+            task = self._steps.get(request.run)
+            if request.action is StepAction.CANCEL:
+                self._steps.pop(request.run, None)
+        if task is None:
+            if request.action is StepAction.CANCEL:
+                return Empty()  # it ended meanwhile
+            raise DuraError(f"no plan step '{request.run}' runs")
+        if request.action is StepAction.PAUSE:
+            task.pause()
+        elif request.action is StepAction.RESUME:
+            task.resume()
+        else:
+            task.cancel()
+        return Empty()
+
+    def _upcoming(self, request: StepsUpcoming) -> Empty:
+        self.plan_tasks.upcoming(request.plan_id, [step_of(s) for s in request.steps])
+        return Empty()
