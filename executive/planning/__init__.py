@@ -19,7 +19,8 @@ it never imports the task executor (steps run through the
 - :mod:`.plan_executer` — runs a plan (:mod:`.plan_run` its steps, :mod:`.step_run` one
   step, :mod:`.task_runner` the port, :mod:`.state_change` what it reports,
   :mod:`.recovery` after a crash, :mod:`.look_ahead` the rest of the plan checked when
-  facts change);
+  facts change; :mod:`.bus_tasks` the port over the bus, for ``dura run --only
+  planning``);
 - :mod:`.integrity` — goals that keep the robot going;
 - :mod:`.sensing` — facts and values kept in step with topics (the ``sensing:`` rules);
 - :mod:`.dry_run` — what the planner would do now; :mod:`.domain_check` — diagnostics

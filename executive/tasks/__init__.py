@@ -10,6 +10,7 @@ on the launcher (``configurator``), the diagnosis model (``diagnosis_model``),
 supervision of behaviors (``supervision``), fault handling (``fault_handling``), the
 decisions carried out (``dispatch``); the service with its bus API and status snapshot
 (``executor``, ``snapshot``); and the adapter that runs plan steps as tasks
-(``plan_tasks``). It may import :mod:`executive.bus`, :mod:`executive.runtime`, the
+(``plan_tasks``), also for a high level in another process over the bus
+(``step_service``). It may import :mod:`executive.bus`, :mod:`executive.runtime`, the
 plan executer's port in :mod:`executive.planning` and :mod:`knowledge`.
 """

@@ -71,3 +71,26 @@ def test_a_step_failing_in_the_executive_is_replanned_in_the_planning_process(
         replanned = first(events[failed:], "REPLAN") + failed
         assert first(events[replanned:], "DISPATCH", "move_to(dock, lab)") >= 0
         assert robot.facts("robot_at") == ["(robot_at lab)"]
+
+
+def test_a_step_the_plan_cancels_ends_in_the_executive_and_reports_nothing_more(
+    tmp_path: Path,
+) -> None:
+    changes = {"behaviors": {"move_to": {"params": {"duration": 40.0}}}}
+    description = robot_variant(USECASE, tmp_path / "description", changes)
+    with (
+        RobotProcess(description, tmp_path, run_args=WITHOUT_PLANNING, time_scale=FAST) as robot,
+        ServiceGroupProcess(robot, "planning"),
+    ):
+        far = robot.submit_goal("(robot_at lab)")
+        assert wait_for(lambda: robot.events("TASK_STARTED") != [], 60)
+        robot.cancel_goal(far)  # its plan cancels the move it runs
+        cancelled = robot.wait_for_event("TASK_CANCELLED", "move_to", timeout=30)
+        assert cancelled["data"]["reason"] == "the plan no longer needs it"
+        # a later round of the planner: by then a report of the move would have come
+        later = robot.submit_goal("(picture_taken dock)")
+        ended = ("achieved", "unreachable", "failed")
+        assert wait_for(lambda: robot.goal(later)["state"] in ended, 90)
+        assert robot.goal(far)["state"] == "cancelled"
+        kinds = [e["kind"] for e in robot.events() if "move_to(dock, lab)" in e["subject"]]
+        assert "CANCEL" in kinds and "FAIL" not in kinds

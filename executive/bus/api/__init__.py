@@ -8,7 +8,9 @@
   launcher);
 - :mod:`.component_commands` — the lifecycle commands each component process serves
   (the launcher sends them, the SDK answers);
-- :mod:`.monitoring` — observers at run time and the diagnosis model.
+- :mod:`.monitoring` — observers at run time and the diagnosis model;
+- :mod:`.steps` — plan steps run on the task executor for a high level in another
+  process (the task executor's side serves them).
 
 A declaration is a :class:`~executive.bus.verb.Verb`: its key, its request and reply
 types (:class:`~executive.bus.schema.Payload` dataclasses) and how long a caller waits.
