@@ -154,16 +154,9 @@ class RobotProcess:
         token is there: the bus API answers a little earlier)."""
         if self._process is not None:
             raise DuraError(f"the executive of '{self.robot.name}' runs already")
-        argv = [sys.executable, "-m", "executive.cli", "run", str(self.description)]
-        argv += ["--endpoint", self.endpoint, "--db", str(self.kb_path)]
+        argv = ["--endpoint", self.endpoint, "--db", str(self.kb_path)]
         argv += ["--log-dir", str(self.folder / "logs"), "--grace", "1", *self.run_args]
-        env = {**os.environ, **self.clock.environment()}
-        if not self.clock.scaled:
-            env.pop(SCALE_VARIABLE, None)
-        with self.output.open("ab") as out:
-            self._process = subprocess.Popen(
-                argv, cwd=self.folder, stdout=out, stderr=subprocess.STDOUT, env=env
-            )
+        self._process = self.run(argv, self.output)
         deadline = time.monotonic() + timeout
         while True:
             if self._process.poll() is not None:
@@ -193,6 +186,18 @@ class RobotProcess:
                         f"the executive did not answer within {timeout:g} s:\n{self.log_tail()}"
                     ) from None
                 time.sleep(0.1)
+
+    def run(self, args: Sequence[str], output: Path) -> subprocess.Popen[bytes]:
+        """Start ``dura run`` of this robot with ``args`` in its folder, on its clock,
+        its output appended to ``output``."""
+        argv = [sys.executable, "-m", "executive.cli", "run", str(self.description), *args]
+        env = {**os.environ, **self.clock.environment()}
+        if not self.clock.scaled:
+            env.pop(SCALE_VARIABLE, None)
+        with output.open("ab") as out:
+            return subprocess.Popen(
+                argv, cwd=self.folder, stdout=out, stderr=subprocess.STDOUT, env=env
+            )
 
     def _on_alive(self, key: str, alive: bool) -> None:
         if alive:
@@ -440,15 +445,8 @@ class ServiceGroupProcess:
     def start(self, timeout: float = START_TIMEOUT) -> None:
         """Start the process and wait until its services run."""
         robot = self.robot
-        argv = [sys.executable, "-m", "executive.cli", "run", str(robot.description)]
-        argv += ["--only", self.group, "--endpoint", robot.endpoint, "--db", str(robot.kb_path)]
-        env = {**os.environ, **robot.clock.environment()}
-        if not robot.clock.scaled:
-            env.pop(SCALE_VARIABLE, None)
-        with self.output.open("ab") as out:
-            self._process = subprocess.Popen(
-                argv, cwd=robot.folder, stdout=out, stderr=subprocess.STDOUT, env=env
-            )
+        argv = ["--only", self.group, "--endpoint", robot.endpoint, "--db", str(robot.kb_path)]
+        self._process = robot.run(argv, self.output)
         deadline = time.monotonic() + timeout
         while not robot.bus.alive(service_alive(self.group), timeout=1.0):
             if self._process.poll() is not None or time.monotonic() > deadline:

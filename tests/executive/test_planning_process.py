@@ -4,7 +4,9 @@ executive's task executor, over the bus."""
 
 from __future__ import annotations
 
+import contextlib
 import json
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +20,16 @@ pytestmark = pytest.mark.slow
 
 FAST = 10.0  # robot time ten times faster than the wall clock
 WITHOUT_PLANNING = ["--without", "planning"]
+
+
+@contextlib.contextmanager
+def split(description: Path, folder: Path) -> Iterator[RobotProcess]:
+    """The executive without planning, and the planning process beside it."""
+    with (
+        RobotProcess(description, folder, run_args=WITHOUT_PLANNING, time_scale=FAST) as robot,
+        ServiceGroupProcess(robot, "planning"),
+    ):
+        yield robot
 
 
 def first(events: list[dict[str, Any]], kind: str, subject: str = "") -> int:
@@ -58,10 +70,7 @@ def test_a_step_failing_in_the_executive_is_replanned_in_the_planning_process(
     # a move takes 20 robot seconds (2 s of wall time): time to crash it on the way
     changes = {"behaviors": {"move_to": {"max_restarts": 0, "params": {"duration": 20.0}}}}
     description = robot_variant(USECASE, tmp_path / "description", changes)
-    with (
-        RobotProcess(description, tmp_path, run_args=WITHOUT_PLANNING, time_scale=FAST) as robot,
-        ServiceGroupProcess(robot, "planning"),
-    ):
+    with split(description, tmp_path) as robot:
         goal = robot.submit_goal("(robot_at lab)")
         assert wait_for(lambda: robot.events("TASK_STARTED") != [], 60)
         robot.inject_fault("move_to", "crash")
@@ -78,10 +87,7 @@ def test_a_step_the_plan_cancels_ends_in_the_executive_and_reports_nothing_more(
 ) -> None:
     changes = {"behaviors": {"move_to": {"params": {"duration": 40.0}}}}
     description = robot_variant(USECASE, tmp_path / "description", changes)
-    with (
-        RobotProcess(description, tmp_path, run_args=WITHOUT_PLANNING, time_scale=FAST) as robot,
-        ServiceGroupProcess(robot, "planning"),
-    ):
+    with split(description, tmp_path) as robot:
         far = robot.submit_goal("(robot_at lab)")
         assert wait_for(lambda: robot.events("TASK_STARTED") != [], 60)
         robot.cancel_goal(far)  # its plan cancels the move it runs
