@@ -68,16 +68,20 @@ class StepService(Service):
     def _run(self, request: StepRun) -> Empty:
         run, bus = request.run, self.context.bus
 
+        ended = threading.Event()  # it may end before run() returns (a goal it cannot fill)
+
         def post(_: StepReport, progress: Progress, value: Any) -> None:
             if not bus.closed:
                 bus.publish(STEP_PROGRESS, StepProgress(run, progress.value, value).to_payload())
             if progress is not Progress.STARTED:
                 with self._lock:
+                    ended.set()
                     self._steps.pop(run, None)
 
         task = self.plan_tasks.run(step_of(request.step), request.plan_id, StepReport(post))
         with self._lock:
-            self._steps[run] = task
+            if not ended.is_set():
+                self._steps[run] = task
         return Empty()
 
     def _control(self, request: StepControl) -> Empty:
