@@ -99,12 +99,18 @@ def test_a_behavior_that_keeps_failing_fails_its_task_after_max_restarts(
 ) -> None:
     robot, dura, move = crashing_move(dura_robot, after=0.5, max_restarts=2)
     assert wait_for(lambda: task(dura, move)["state"] == "failed", 60)
-    kinds = [e["kind"] for e in trace(robot, move)]
-    assert kinds.count("TASK_RESTARTED") == 2 and kinds[-1] == "TASK_FAILED"
-    assert kinds.count("TASK_STARTED") == 3
-    attempts = {kind: [e["data"]["attempt"] for e in trace(robot, move) if e["kind"] == kind]
+    events = trace(robot, move)
+    kinds = [e["kind"] for e in events]
+    restarts = [e["data"]["reason"] for e in events if e["kind"] == "TASK_RESTARTED"]
+    # on a busy machine a functionality may be repaired meanwhile (lidar's rate drops, its
+    # rule restarts it): that restart is not the behavior's, and does not count
+    repaired = restarts.count("configuration repaired")
+    assert len(restarts) - repaired == 2 and kinds[-1] == "TASK_FAILED", restarts
+    assert kinds.count("TASK_STARTED") == 3 + repaired
+    attempts = {kind: [e["data"]["attempt"] for e in events if e["kind"] == kind]
                 for kind in ("TASK_STARTED", "TASK_RESTARTED")}  # fmt: skip
-    assert attempts == {"TASK_STARTED": [1, 2, 3], "TASK_RESTARTED": [1, 2]}
+    assert attempts == {"TASK_STARTED": list(range(1, 4 + repaired)),
+                        "TASK_RESTARTED": list(range(1, 3 + repaired))}  # fmt: skip
 
 
 def test_constraints_earliest_start_deadline_and_start_together(dura_robot: Start) -> None:
