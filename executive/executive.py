@@ -66,6 +66,12 @@ def separable(group: str) -> str:
     return group
 
 
+def relay_events(kb: KnowledgeBase, bus: Bus) -> None:
+    """Publish every event this process logs on the ``events`` topic, as the high level
+    does for its own process (a process without one needs this)."""
+    kb.add_listener(lambda event: bus.publish(EVENTS, to_plain(event)))
+
+
 def monitoring_services(context: Context, sources: Sequence[TopicSource] = ()) -> list[Service]:
     """The observers, the diagnosis engine and the repair rules, in the order they start."""
     from monitoring.diagnosis.service import DiagnosisService
@@ -184,7 +190,7 @@ class Executive:
             context = Context(self.robot, self.bus, self.kb)
             self.high_level: HighLevel | None = None
             if PLANNING in self.without:  # the high level relays the events otherwise
-                self.kb.add_listener(lambda event: self.bus.publish(EVENTS, to_plain(event)))
+                relay_events(self.kb, self.bus)
             else:
                 self.high_level = HighLevel(
                     context,
@@ -381,7 +387,7 @@ class ServiceProcess:
         if self.group == MONITORING:
             # what these services log (rule firings, ...) is on the bus, as the executive's
             # own events are: for dura events --follow, the dashboard, the recorder
-            kb.add_listener(lambda event: bus.publish(EVENTS, to_plain(event)))
+            relay_events(kb, bus)
             return monitoring_services(context)
         from executive.bus.api.components import COMPONENT_LIST
         from executive.bus.api.tasks import TASK_LIST
