@@ -15,6 +15,9 @@ monitoring``, :class:`ServiceProcess`), beside an executive that runs without th
 (``dura run --without monitoring``). So can the high level (``--only planning``: goals,
 planner, plan executer and their verbs, ``status`` among them): it runs its plans'
 steps on the executive's task executor over the bus (:mod:`executive.bus.api.steps`).
+And so can the task executor with the launcher (``--only tasks``: the components of the
+executive's computer, their verbs and resource monitor, and the plan steps the high
+level asks for over the bus).
 """
 
 from __future__ import annotations
@@ -40,6 +43,8 @@ from knowledge.records import to_plain
 
 if TYPE_CHECKING:
     from executive.bus.topic_source import TopicSource
+    from executive.planning.bus_tasks import BusTasks
+    from executive.planning.task_runner import TaskRunner
     from executive.ros2.link import Ros2Link
     from executive.runtime.launcher import Launcher
     from executive.tasks.executor import TaskExecutor
@@ -48,7 +53,8 @@ if TYPE_CHECKING:
 
 MONITORING = "monitoring"
 PLANNING = "planning"
-SEPARABLE = (MONITORING, PLANNING)
+TASKS = "tasks"
+SEPARABLE = (MONITORING, PLANNING, TASKS)
 """The groups of services that can run in a process of their own."""
 
 RETRY = 1.0  # seconds between attempts to reach the executive
@@ -70,6 +76,62 @@ def relay_events(kb: KnowledgeBase, bus: Bus) -> None:
     """Publish every event this process logs on the ``events`` topic, as the high level
     does for its own process (a process without one needs this)."""
     kb.add_listener(lambda event: bus.publish(EVENTS, to_plain(event)))
+
+
+def remote_status(bus: Bus) -> dict[str, Callable[[], Any]]:
+    """The sections of ``status`` that a task executor in another process answers."""
+    from executive.bus.api.components import COMPONENT_LIST
+    from executive.bus.api.tasks import TASK_LIST
+
+    return {
+        "tasks": lambda: TASK_LIST.call(bus).tasks,
+        "components": lambda: COMPONENT_LIST.call(bus).components,
+    }
+
+
+def bus_tasks(robot: RobotDescription, bus: Bus, server: str) -> BusTasks:
+    """The plan steps of a high level, run by the task executor of the process that holds
+    the liveliness token ``server``."""
+    from executive.planning.bus_tasks import BusTasks
+
+    return BusTasks(
+        bus,
+        {action: robot.behaviors[spec.behavior].interruptible
+         for action, spec in robot.tasks.items() if spec.behavior in robot.behaviors},
+        server,
+    )  # fmt: skip
+
+
+def launcher(
+    context: Context, log_dir: Path, grace: float, credentials: security.Credentials, run_id: str
+) -> Launcher:
+    """The launcher of the components placed on this computer (and of the host agents')."""
+    from executive.runtime.launcher import Launcher
+
+    return Launcher(
+        context.robot,
+        context.bus,
+        context.kb,
+        log_dir=log_dir,
+        grace=grace,
+        credentials=credentials,
+        run_id=run_id,
+    )
+
+
+def component_services(
+    context: Context, launcher: Launcher, tasks: TaskExecutor, resource_rate: float
+) -> list[Service]:
+    """The verbs of the components this process launches, and their resource monitor."""
+    from executive.runtime.component_api import ComponentApi
+    from monitoring.resource_monitor import ResourceMonitor
+
+    return [
+        ComponentApi(context, launcher, by_hand=tasks),
+        ResourceMonitor(  # host agents measure the components they run themselves
+            context, rate=resource_rate, components=context.robot.placed_on(None)
+        ),
+    ]
 
 
 def monitoring_services(context: Context, sources: Sequence[TopicSource] = ()) -> list[Service]:
@@ -192,30 +254,24 @@ class Executive:
             if PLANNING in self.without:  # the high level relays the events otherwise
                 relay_events(self.kb, self.bus)
             else:
+                runner: TaskRunner | Callable[[], TaskRunner] = self._plan_tasks
+                status = {"tasks": self._tasks, "components": self._components}
+                if TASKS in self.without:  # the task executor of the tasks process
+                    runner = bus_tasks(robot, self.bus, service_alive(TASKS))
+                    stack.callback(runner.close)
+                    status = remote_status(self.bus)
                 self.high_level = HighLevel(
-                    context,
-                    self._plan_tasks,
-                    status={"tasks": self._tasks, "components": self._components},
-                    on_failure=self.on_failure,
+                    context, runner, status=status, on_failure=self.on_failure
                 )
                 self.high_level.open()  # the API answers from here on
                 stack.callback(self.high_level.stop)  # if a later start fails
             if self.on_open is not None:
                 self.on_open()
-            self.progress("loading the launcher")
-            from executive.runtime.launcher import Launcher
-
-            self.launcher = stack.enter_context(
-                Launcher(
-                    self.robot,
-                    self.bus,
-                    self.kb,
-                    log_dir=self.log_dir,
-                    grace=self.grace,
-                    credentials=credentials,
-                    run_id=lock.run_id,
+            if TASKS not in self.without:
+                self.progress("loading the launcher")
+                self.launcher = stack.enter_context(
+                    launcher(context, self.log_dir, self.grace, credentials, lock.run_id)
                 )
-            )
             self.ros2: Ros2Link | None = None
             if self.robot.ros2 is not None:  # Cyclone DDS loads only for a ROS 2 robot
                 self.progress("joining the ROS 2 domain")
@@ -239,16 +295,14 @@ class Executive:
         """The services of the executive, in the order they start (and stop reversed):
         monitoring first, so that it watches every component the executive starts; the
         high level last (its API answers already: it begins planning)."""
-        from executive.runtime.component_api import ComponentApi
         from executive.tasks.executor import TaskExecutor
-        from monitoring.resource_monitor import ResourceMonitor
 
-        launcher = self.launcher
-        if launcher is None:
-            raise DuraError("the launcher must run before the services")
-        self.tasks = TaskExecutor(
-            context, launcher, linger=self.linger, sequential=self.sequential_starts
-        )
+        launched: list[Service] = []
+        if self.launcher is not None:
+            self.tasks = TaskExecutor(
+                context, self.launcher, linger=self.linger, sequential=self.sequential_starts
+            )
+            launched = component_services(context, self.launcher, self.tasks, self.resource_rate)
         ros2 = self.ros2
         extra: list[Service] = []
         last: list[Service] = []
@@ -268,17 +322,14 @@ class Executive:
             recording.append(Recording(context, self.record, max_size=size))
         return [
             *recording,
-            ComponentApi(context, launcher, by_hand=self.tasks),
-            ResourceMonitor(  # host agents measure the components they run themselves
-                context, rate=self.resource_rate, components=self.robot.placed_on(None)
-            ),
+            *launched,
             *(
                 monitoring_services(context, [ros2.topics] if ros2 is not None else [])
                 if MONITORING not in self.without
                 else []
             ),
             *extra,
-            self.tasks,
+            *([self.tasks] if self.tasks is not None else []),
             *self._planning(context),
             *last,
         ]
@@ -288,10 +339,10 @@ class Executive:
         level of another process asks for (``--without planning``)."""
         if self.high_level is not None:
             return [self.high_level]
+        if self.tasks is None:  # the tasks process serves the steps
+            return []
         from executive.tasks.step_service import StepService
 
-        if self.tasks is None:
-            raise DuraError("the task executor must come before the plan steps")
         return [StepService(context, self.tasks)]
 
     def _plan_tasks(self) -> PlanTasks:
@@ -323,6 +374,11 @@ class ServiceProcess:
     GROUP``): connected to the executive's bus as the trusted user ``service``, with the
     robot's knowledge base (which the executive holds the lock of).
 
+    The ``tasks`` group launches the components of the executive's computer: it runs in
+    the executive's folder (the components' bus credentials are there), holds a run lock
+    of its own on the knowledge base (``<database>.tasks.lock``: one such process at a
+    time, and the next one ends what a killed one left), and its components end with it.
+
     Args:
         robot: the robot.
         group: which services (:data:`SEPARABLE`).
@@ -330,6 +386,8 @@ class ServiceProcess:
         kb_path: the knowledge base (default: the robot's).
         folder: the working folder whose ``.dura/`` holds the bus credentials.
         say: told one line at each change, for the operator.
+        log_dir, resource_rate, grace, linger, sequential_starts: for ``tasks``, as for
+            :class:`Executive`.
     """
 
     def __init__(
@@ -341,6 +399,11 @@ class ServiceProcess:
         kb_path: Path | None = None,
         folder: Path | None = None,
         say: Callable[[str], None] = lambda line: None,
+        log_dir: Path | None = None,
+        resource_rate: float = 1.0,
+        grace: float = 3.0,
+        linger: float = 0.0,
+        sequential_starts: bool = False,
     ) -> None:
         self.robot = robot
         self.group = separable(group)
@@ -348,30 +411,33 @@ class ServiceProcess:
         self.kb_path = kb_path or robot.kb_path()
         self.folder = folder or Path.cwd()
         self._say = say
+        self.log_dir = log_dir or self.folder / ".dura" / "logs"
+        self.resource_rate = resource_rate
+        self.grace = grace
+        self.linger = linger
+        self.sequential_starts = sequential_starts
 
     def run(self, stop: threading.Event) -> None:
         """Serve until ``stop`` is set (waiting first, if need be, for the executive).
 
         Raises:
-            BusError: the credentials are there but unusable.
+            BusError: the credentials are there but unusable (or missing, for ``tasks``).
+            KnowledgeError: another tasks process runs on the knowledge base.
         """
-        login = security.find_login(self.robot.name, security.SERVICE, [self.folder])
-        bus = None
-        said = False
-        while bus is None and not stop.is_set():
-            try:
-                bus = Bus(self.robot.name, name=self.group, endpoint=self.endpoint, login=login)
-            except BusError as e:
-                if not said:
-                    self._say(f"waiting for the executive at {self.endpoint} ({e})")
-                    said = True
-                stop.wait(RETRY)
-        if bus is None:
-            return
         with contextlib.ExitStack() as stack:
+            run_id = None
+            if self.group == TASKS:  # before waiting: a second one is refused at once
+                lock = stack.enter_context(RunLock(self.kb_path, TASKS))
+                if lock.predecessor is not None:
+                    end_leftovers(lock.predecessor)
+                run_id = lock.run_id
+            bus = self._connect(stop)
+            if bus is None:
+                return
             stack.callback(bus.close)
             kb = stack.enter_context(KnowledgeBase(self.kb_path))
-            for service in self._services(Context(self.robot, bus, kb), stack, stop):
+            context = Context(self.robot, bus, kb)
+            for service in self._services(context, stack, stop, run_id):
                 service.start()
                 stack.callback(service.stop)
             bus.declare_alive(service_alive(self.group))  # who runs the group, for all to see
@@ -379,40 +445,68 @@ class ServiceProcess:
             while not stop.wait(SIGNAL_POLL):  # in slices: see executive.cli.stopping
                 pass
 
-    def _services(
-        self, context: Context, stack: contextlib.ExitStack[Any], stop: threading.Event
-    ) -> list[Service]:
-        """The group's services, in the order they start."""
-        bus, kb = context.bus, context.kb
-        if self.group == MONITORING:
-            # what these services log (rule firings, ...) is on the bus, as the executive's
-            # own events are: for dura events --follow, the dashboard, the recorder
-            relay_events(kb, bus)
-            return monitoring_services(context)
-        from executive.bus.api.components import COMPONENT_LIST
-        from executive.bus.api.tasks import TASK_LIST
-        from executive.planning.bus_tasks import BusTasks
+    def _connect(self, stop: threading.Event) -> Bus | None:
+        """The bus, once the executive is there (``None``: stopped before)."""
+        said = False
+        while not stop.is_set():
+            # read each time: the executive writes the credentials on its first run
+            login = security.find_login(self.robot.name, security.SERVICE, [self.folder])
+            try:
+                return Bus(self.robot.name, name=self.group, endpoint=self.endpoint, login=login)
+            except BusError as e:
+                if not said:
+                    self._say(f"waiting for the executive at {self.endpoint} ({e})")
+                    said = True
+                stop.wait(RETRY)
+        return None
 
-        robot = self.robot
-        runner = BusTasks(
-            bus,
-            {action: robot.behaviors[spec.behavior].interruptible
-             for action, spec in robot.tasks.items() if spec.behavior in robot.behaviors},
-        )  # fmt: skip
+    def _services(
+        self,
+        context: Context,
+        stack: contextlib.ExitStack[Any],
+        stop: threading.Event,
+        run_id: str | None,
+    ) -> list[Service]:
+        """The group's services, in the order they start (``run_id``: the tasks process's
+        run, which marks the processes it starts)."""
+        bus, kb = context.bus, context.kb
+        if self.group != PLANNING:
+            # what these services log (rule firings, task ends, ...) is on the bus, as the
+            # executive's own events are: for the high level, dura events --follow, the
+            # dashboard, the recorder
+            relay_events(kb, bus)
+        if self.group == MONITORING:
+            return monitoring_services(context)
+        if run_id is not None:
+            return self._task_services(context, stack, run_id)
+        runner = bus_tasks(self.robot, bus, EXECUTIVE_ALIVE)
         stack.callback(runner.close)
 
         def failed(reason: str) -> None:
             self._say(f"stops: {reason}")
             stop.set()
 
-        return [  # the high level relays what it logs on the events topic itself
-            HighLevel(
-                context,
-                runner,
-                status={
-                    "tasks": lambda: TASK_LIST.call(bus).tasks,
-                    "components": lambda: COMPONENT_LIST.call(bus).components,
-                },
-                on_failure=failed,
-            )
+        # the high level relays what it logs on the events topic itself
+        return [HighLevel(context, runner, status=remote_status(bus), on_failure=failed)]
+
+    def _task_services(
+        self, context: Context, stack: contextlib.ExitStack[Any], run_id: str
+    ) -> list[Service]:
+        from executive.tasks.executor import TaskExecutor
+        from executive.tasks.step_service import StepService
+
+        # each component's login: the tasks process runs in the executive's folder
+        credentials = security.read_credentials(
+            security.credentials_file(self.folder, self.robot.name)
+        )
+        running = stack.enter_context(
+            launcher(context, self.log_dir, self.grace, credentials, run_id)
+        )
+        tasks = TaskExecutor(
+            context, running, linger=self.linger, sequential=self.sequential_starts
+        )
+        return [
+            *component_services(context, running, tasks, self.resource_rate),
+            tasks,
+            StepService(context, tasks),
         ]

@@ -162,7 +162,18 @@ def run_only(args: argparse.Namespace, robot: RobotDescription, stop: threading.
             print(f"dura: {args.only} of robot '{robot.name}': {line}")
         sys.stdout.flush()
 
-    services = ServiceProcess(robot, args.only, endpoint=endpoint, kb_path=args.db, say=say)
+    services = ServiceProcess(
+        robot,
+        args.only,
+        endpoint=endpoint,
+        kb_path=args.db,
+        say=say,
+        log_dir=args.log_dir.resolve(),
+        resource_rate=args.resource_rate,
+        grace=args.grace,
+        linger=args.linger,
+        sequential_starts=args.starts == "sequential",
+    )
     say(f"connects to {endpoint}; Ctrl-C stops it")
     services.run(stop)
     say("stopped")

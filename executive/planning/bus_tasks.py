@@ -1,11 +1,14 @@
 """Plan steps carried out by a task executor in another process: the plan executer's
 :class:`~executive.planning.task_runner.TaskRunner` over the bus
-(:mod:`executive.bus.api.steps`), for ``dura run --only planning``.
+(:mod:`executive.bus.api.steps`), for ``dura run --only planning`` and ``--without
+tasks``.
 
 Each step gets a run id of its own before it is asked for, so that no report of it is
 missed; reports arrive on the progress topic and go to the step's
 :class:`~executive.planning.task_runner.StepReport`. A step whose request fails (no task
-executor answers) fails with the reason, and the planner plans again.
+executor answers), and a step running when the task executor's process vanishes, fails
+with the reason, and the planner plans again; while no task executor is there, a step
+waits for one (:data:`SERVER_WAIT`).
 """
 
 from __future__ import annotations
@@ -28,10 +31,13 @@ from executive.bus.api.steps import (
     StepSpec,
     StepsUpcoming,
 )
+from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.session import Bus, Message
 from executive.planning.partial_order import Step
 from executive.planning.task_runner import Progress, StepReport, StepTask, TaskRunner
 from knowledge.errors import DuraError
+
+SERVER_WAIT = 30.0  # seconds a step waits for a task executor to serve it
 
 
 def spec_of(step: Step) -> StepSpec:
@@ -59,18 +65,43 @@ class _BusStep(StepTask):
 class BusTasks(TaskRunner):
     """Runs plan steps on the task executor of another process, over ``bus``.
 
+    Args:
+        bus: this process's bus session.
+        interruptible: by action: may its task be paused?
+        server: the liveliness token of the process whose task executor serves the steps:
+            when it vanishes (the process stopped or died), every step still running
+            there fails, and the planner plans again; a step asked for while it is not
+            there waits for it (at most :data:`SERVER_WAIT`), so that a task executor
+            restarting does not use up the goal's plans.
+
     Call :meth:`close` to stop listening for reports.
     """
 
-    def __init__(self, bus: Bus, interruptible: dict[str, bool]) -> None:
+    def __init__(
+        self, bus: Bus, interruptible: dict[str, bool], server: str = EXECUTIVE_ALIVE
+    ) -> None:
         self.bus = bus
-        self.interruptible = dict(interruptible)  # by action: may its task be paused?
+        self.interruptible = dict(interruptible)
+        self.server = server
         self._reports: dict[str, StepReport] = {}
         self._lock = threading.Lock()
+        self._served = threading.Event()  # the server's token is there
         self._subscriber = bus.subscribe(STEP_PROGRESS, self._on_progress)
+        self._watch = bus.watch_alive(server, self._on_server)
 
     def close(self) -> None:
         self._subscriber.undeclare()
+        self._watch.undeclare()
+
+    def _on_server(self, _key: str, alive: bool) -> None:
+        if alive:
+            self._served.set()
+            return
+        self._served.clear()
+        with self._lock:
+            lost, self._reports = list(self._reports.values()), {}
+        for report in lost:
+            report.failed(f"the task executor is gone ({self.server} vanished)")
 
     def upcoming(self, plan_id: int | None, steps: Sequence[Step]) -> None:
         request = StepsUpcoming(plan_id, [spec_of(s) for s in steps])
@@ -80,12 +111,37 @@ class BusTasks(TaskRunner):
         run = uuid.uuid4().hex
         with self._lock:
             self._reports[run] = report
-        try:
-            STEP_RUN.call(self.bus, StepRun(run, plan_id, spec_of(step)))
-        except DuraError as e:
-            self._forget(run)
-            report.failed(f"the task executor did not take the step: {e}")
+        request = StepRun(run, plan_id, spec_of(step))
+        if self._served.is_set():
+            self._send(request)
+        else:  # the plan executer goes on meanwhile (a cancel of the step, another step)
+            threading.Thread(target=self._send_when_served, args=(request,), daemon=True).start()
         return _BusStep(self, run, self.interruptible.get(step.action, True))
+
+    def _send(self, request: StepRun) -> None:
+        try:
+            STEP_RUN.call(self.bus, request)
+        except DuraError as e:
+            self._fail(request.run, f"the task executor did not take the step: {e}")
+
+    def _send_when_served(self, request: StepRun) -> None:
+        if not self._served.wait(SERVER_WAIT):
+            self._fail(
+                request.run,
+                f"no task executor served the step within {SERVER_WAIT:g} s ({self.server} "
+                "is not there)",
+            )
+            return
+        with self._lock:
+            wanted = request.run in self._reports  # not cancelled meanwhile
+        if wanted:
+            self._send(request)
+
+    def _fail(self, run: str, reason: str) -> None:
+        with self._lock:
+            report = self._reports.pop(run, None)
+        if report is not None:
+            report.failed(reason)
 
     def _on_progress(self, message: Message) -> None:
         try:

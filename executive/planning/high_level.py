@@ -5,7 +5,8 @@ robot's knowledge base, with a warm planner worker, and serves the requests of t
 submission interface as declared once in :mod:`executive.bus.api.planning` (goals,
 plans, the world's facts and objects, events, status); the declared payload types check
 every request before a handler sees it. Every event logged in the knowledge base is
-also published on the bus key ``events``. ``status`` and ``plan/show`` answer from the
+also published on the bus key ``events``; the events other processes publish there (a
+task executor or repair rules that run apart) are followed as its own. ``status`` and ``plan/show`` answer from the
 snapshots the plan executer and the goal planner keep: they never wait behind a step
 being dispatched or a plan being computed.
 
@@ -41,7 +42,7 @@ from executive.bus.clock import Clock, system_clock
 from executive.bus.keys import DIAGNOSES, EVENTS
 from executive.bus.payloads import DiagnosisInfo
 from executive.bus.service import Context, Service
-from executive.bus.session import Handler
+from executive.bus.session import Handler, Message
 from executive.bus.topic_source import Subscription, TopicSource
 from executive.bus.verb import Empty
 from executive.planning.domain_description import describe
@@ -155,7 +156,10 @@ class HighLevel(Service):
         self.planner = Planner(robot.planner.engine, robot.planner.timeout)
         self._relaying = True
         kb.add_listener(self._on_event)
-        self._declared = [bus.subscribe(DIAGNOSES, self._on_diagnoses)]
+        self._declared = [
+            bus.subscribe(DIAGNOSES, self._on_diagnoses),
+            bus.subscribe(EVENTS, self._on_bus_event),
+        ]
         self._declared.extend(self._serve())
         self._stopping.clear()
         self._warm_up = threading.Thread(target=self._warm, name="high-level warm-up", daemon=True)
@@ -300,17 +304,32 @@ class HighLevel(Service):
     # --- events, diagnoses and integrity goals ---------------------------------------------
 
     def _on_event(self, event: Event) -> None:
+        """An event this process logged: on the bus for all, then as any other."""
         if not self._relaying:
             return
         self.context.bus.publish(EVENTS, to_plain(event))
-        if event.kind in FAULT_CHANGES:
+        self._followed(event.kind, event.subject)
+
+    def _on_bus_event(self, message: Message) -> None:
+        """An event another process logged (the task executor's, the repair rules' when
+        they run apart): in the knowledge base already, to be followed here too."""
+        if message.caller_id == self.context.bus.name or not self._relaying:
+            return  # its own events, followed as they are logged
+        payload = message.payload
+        if not isinstance(payload, dict) or not isinstance(payload.get("kind"), str):
+            log.warning("ignored a malformed event from %s", message.caller_id or "?")
+            return
+        self._followed(payload["kind"], str(payload.get("subject", "")))
+
+    def _followed(self, kind: str, subject: str) -> None:
+        if kind in FAULT_CHANGES:
             self._faults_changed.set()
         if self._started():  # until then, the goal planner's first round sees it all
-            if event.kind in OUTSIDE_CHANGES:
-                self.goals.world_changed(f"{event.kind} {event.subject}")
-            elif event.kind in PLAN_CHANGES:
-                self.goals.facts_changed(f"{event.kind} {event.subject}")
-        if not event.kind.startswith("INTEGRITY_"):
+            if kind in OUTSIDE_CHANGES:
+                self.goals.world_changed(f"{kind} {subject}")
+            elif kind in PLAN_CHANGES:
+                self.goals.facts_changed(f"{kind} {subject}")
+        if not kind.startswith("INTEGRITY_"):
             self._check.set()
 
     def _on_diagnoses(self, message: Any) -> None:

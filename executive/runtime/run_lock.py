@@ -39,10 +39,15 @@ class RunLock:
 
     Args:
         database: the knowledge base file; the lock is ``<database>.lock`` beside it.
+        holder: who holds it: ``executive``, or the group of services that runs the
+            components in a process of its own (``tasks``: ``<database>.tasks.lock``).
     """
 
-    def __init__(self, database: Path) -> None:
-        self.path = database.with_name(database.name + ".lock")
+    def __init__(self, database: Path, holder: str = "executive") -> None:
+        suffix = ".lock" if holder == "executive" else f".{holder}.lock"
+        self.database = database
+        self.path = database.with_name(database.name + suffix)
+        self.holder_name = holder if holder == "executive" else f"{holder} process"
         self.run_id = uuid.uuid4().hex
         self.predecessor: str | None = None  # the run that held the lock before
         self._fd: int | None = None
@@ -64,10 +69,9 @@ class RunLock:
         except BlockingIOError:
             holder = _read(fd).get("pid", "unknown")
             os.close(fd)
-            database = self.path.with_suffix("")
             raise KnowledgeError(
-                f"{database}: the knowledge base is in use by another executive (pid "
-                f"{holder}); stop it first or give this one another --db"
+                f"{self.database}: the knowledge base is in use by another {self.holder_name} "
+                f"(pid {holder}); stop it first or give this one another --db"
             ) from None
         previous = _read(fd).get("run")
         self.predecessor = previous if isinstance(previous, str) else None

@@ -133,7 +133,13 @@ class RobotProcess:
         self.endpoint = endpoint or free_endpoint()
         self._own_endpoint = endpoint is None  # chosen here: another may be chosen on a clash
         self.run_args = tuple(run_args)
-        self._without_planning = ("--without", "planning") in itertools.pairwise(self.run_args)
+        without = {b for a, b in itertools.pairwise(self.run_args) if a == "--without"}
+        # what answers once the executive's services run: status needs the task executor
+        # and the high level, each of which may run in a process of its own
+        self._probe = (
+            "task/list" if "planning" in without else "goal/list" if "tasks" in without
+            else "status"
+        )  # fmt: skip
         self.kb_path = self.folder / f"{self.robot.name}.db"
         self.output = self.folder / "executive.log"
         self._process: subprocess.Popen[bytes] | None = None
@@ -174,8 +180,7 @@ class RobotProcess:
                         self.robot.name, name="harness", endpoint=self.endpoint, login=self.login()
                     )
                     self._bus.watch_alive(EXECUTIVE_ALIVE, self._on_alive)
-                # a high level in a process of its own answers status: ask the executive
-                self.request("task/list" if self._without_planning else "status", timeout=2.0)
+                self.request(self._probe, timeout=2.0)
                 if self._running.wait(0.1):  # every service started, not only the API
                     return
                 raise BusError("the executive is starting")
@@ -186,6 +191,13 @@ class RobotProcess:
                         f"the executive did not answer within {timeout:g} s:\n{self.log_tail()}"
                     ) from None
                 time.sleep(0.1)
+
+    @property
+    def pid(self) -> int:
+        """The executive's process id."""
+        if self._process is None:
+            raise DuraError(f"the executive of '{self.robot.name}' does not run")
+        return self._process.pid
 
     def run(self, args: Sequence[str], output: Path) -> subprocess.Popen[bytes]:
         """Start ``dura run`` of this robot with ``args`` in its folder, on its clock,
@@ -452,6 +464,13 @@ class ServiceGroupProcess:
             if self._process.poll() is not None or time.monotonic() > deadline:
                 self.stop()
                 raise DuraError(f"the {self.group} process did not run:\n{self.log_tail()}")
+
+    @property
+    def pid(self) -> int:
+        """The process's id."""
+        if self._process is None:
+            raise DuraError(f"the {self.group} process does not run")
+        return self._process.pid
 
     def stop(self, timeout: float = 30.0) -> int | None:
         """Stop the process as Ctrl-C does (SIGTERM); returns its exit code."""
