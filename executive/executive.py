@@ -23,6 +23,7 @@ level asks for over the bus).
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import os
 import threading
 from collections.abc import Callable, Collection, Sequence
@@ -76,6 +77,22 @@ def relay_events(kb: KnowledgeBase, bus: Bus) -> None:
     """Publish every event this process logs on the ``events`` topic, as the high level
     does for its own process (a process without one needs this)."""
     kb.add_listener(lambda event: bus.publish(EVENTS, to_plain(event)))
+
+
+def ros2_link(robot: RobotDescription, group: str | None = None) -> Ros2Link:
+    """The robot's ROS 2 link (the robot has a ``ros2:`` section): the executive's, or
+    that of a group of services in a process of its own, whose node is named after the
+    group (``dura_monitoring``) so that ROS 2 tools tell the two apart."""
+    from executive.ros2.link import Ros2Link
+
+    spec = robot.ros2
+    if spec is None:
+        raise ConfigError(f"robot '{robot.name}' has no ros2 section")
+    if group is not None:
+        spec = dataclasses.replace(spec, node=f"{spec.node}_{group}")
+    nodes = {c.ros2.node: name for name, c in robot.components.items()
+             if c.ros2 is not None and c.ros2.node is not None}  # fmt: skip
+    return Ros2Link(spec, nodes=nodes)
 
 
 def remote_status(bus: Bus) -> dict[str, Callable[[], Any]]:
@@ -275,11 +292,7 @@ class Executive:
             self.ros2: Ros2Link | None = None
             if self.robot.ros2 is not None:  # Cyclone DDS loads only for a ROS 2 robot
                 self.progress("joining the ROS 2 domain")
-                from executive.ros2.link import Ros2Link
-
-                nodes = {c.ros2.node: name for name, c in self.robot.components.items()
-                         if c.ros2 is not None and c.ros2.node is not None}  # fmt: skip
-                self.ros2 = stack.enter_context(Ros2Link(self.robot.ros2, nodes=nodes))
+                self.ros2 = stack.enter_context(ros2_link(self.robot))
                 if self.high_level is not None:
                     self.high_level.sources = (self.ros2.topics,)  # before it starts sensing
             self.progress("loading the services")
@@ -470,13 +483,16 @@ class ServiceProcess:
         """The group's services, in the order they start (``run_id``: the tasks process's
         run, which marks the processes it starts)."""
         bus, kb = context.bus, context.kb
+        sources: list[TopicSource] = []
+        if self.robot.ros2 is not None and self.group != TASKS:  # observers, sensing rules
+            sources.append(stack.enter_context(ros2_link(self.robot, self.group)).topics)
         if self.group != PLANNING:
             # what these services log (rule firings, task ends, ...) is on the bus, as the
             # executive's own events are: for the high level, dura events --follow, the
             # dashboard, the recorder
             relay_events(kb, bus)
         if self.group == MONITORING:
-            return monitoring_services(context)
+            return monitoring_services(context, sources)
         if run_id is not None:
             return self._task_services(context, stack, run_id)
         runner = bus_tasks(self.robot, bus, EXECUTIVE_ALIVE)
@@ -487,7 +503,11 @@ class ServiceProcess:
             stop.set()
 
         # the high level relays what it logs on the events topic itself
-        return [HighLevel(context, runner, status=remote_status(bus), on_failure=failed)]
+        return [
+            HighLevel(
+                context, runner, status=remote_status(bus), on_failure=failed, sources=sources
+            )
+        ]
 
     def _task_services(
         self, context: Context, stack: contextlib.ExitStack[Any], run_id: str

@@ -20,7 +20,7 @@ from executive.ros2.names import dds_topic
 from executive.ros2.participant import Participant
 from executive.ros2.qos import dds_qos
 from executive.ros2.types import TypeLibrary
-from executive.testing.harness import RobotProcess, robot_variant
+from executive.testing.harness import RobotProcess, ServiceGroupProcess, robot_variant
 from knowledge.ros2_messages import standard_store
 from knowledge.ros2_spec import PROFILES
 from tests.conftest import ROOT, run_dura, wait_for
@@ -106,3 +106,26 @@ def test_dura_demo_ros2_runs_end_to_end(tmp_path: Path) -> None:
     assert "TASK_PAUSED" in kinds and "TASK_RESUMED" in kinds
     assert report["ros2_diagnostic_arrays"] > 0
     assert os.environ.get("CYCLONEDDS_URI") == env_before
+
+
+def test_a_ros2_robots_monitoring_and_high_level_apart_read_ros2_topics_themselves(
+    domain: int, tmp_path: Path
+) -> None:
+    # the sensing rule reads /odom: near x = 0 the robot is at the dock
+    rule = {"name": "at_dock", "topic": "odom", "field": "pose.pose.position.x",
+            "fact": "(visited dock)", "below": 0.5}  # fmt: skip
+    changes = {"ros2": {"domain_id": domain}, "sensing": [rule]}
+    description = robot_variant(EXAMPLE, tmp_path / "robot", changes)
+    split = ["--without", "monitoring", "--without", "planning"]
+    with (
+        RobotProcess(description, tmp_path / "run", run_args=split) as robot,
+        ServiceGroupProcess(robot, "monitoring"),
+        ServiceGroupProcess(robot, "planning"),
+    ):
+        goal = robot.submit_goal("(and (visited lab) (robot_at dock))")
+        robot.wait_for(goal, "achieved", timeout=120)
+        # the monitoring process's observers saw /scan and /odom: no silence taken for a fault
+        assert robot.events("FAULT") == []
+        # the planning process's sensing rule read /odom
+        sensed = [e for e in robot.events("STATE_SET") if e["subject"] == "(visited dock)"]
+        assert sensed and sensed[0]["data"]["topic"] == "odom", robot.events("STATE_SET")
