@@ -34,11 +34,11 @@ from executive.bus import security
 from executive.bus.clock import system_clock
 from executive.bus.keys import EVENTS, EXECUTIVE_ALIVE, service_alive
 from executive.bus.service import Context, Service
-from executive.bus.session import Bus
+from executive.bus.session import Bus, connect_when_there
 from executive.planning.high_level import HighLevel
 from executive.runtime.run_lock import RunLock, end_leftovers
 from knowledge.description import RobotDescription
-from knowledge.errors import BusError, ConfigError, DuraError
+from knowledge.errors import ConfigError, DuraError
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import to_plain
 
@@ -58,7 +58,6 @@ TASKS = "tasks"
 SEPARABLE = (MONITORING, PLANNING, TASKS)
 """The groups of services that can run in a process of their own."""
 
-RETRY = 1.0  # seconds between attempts to reach the executive
 SIGNAL_POLL = 0.1  # seconds: the longest a pending Ctrl-C or SIGTERM waits for its handler
 
 
@@ -460,18 +459,13 @@ class ServiceProcess:
 
     def _connect(self, stop: threading.Event) -> Bus | None:
         """The bus, once the executive is there (``None``: stopped before)."""
-        said = False
-        while not stop.is_set():
+
+        def connect() -> Bus:
             # read each time: the executive writes the credentials on its first run
             login = security.find_login(self.robot.name, security.SERVICE, [self.folder])
-            try:
-                return Bus(self.robot.name, name=self.group, endpoint=self.endpoint, login=login)
-            except BusError as e:
-                if not said:
-                    self._say(f"waiting for the executive at {self.endpoint} ({e})")
-                    said = True
-                stop.wait(RETRY)
-        return None
+            return Bus(self.robot.name, name=self.group, endpoint=self.endpoint, login=login)
+
+        return connect_when_there(connect, self.endpoint, stop, self._say)
 
     def _services(
         self,

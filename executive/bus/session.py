@@ -406,6 +406,27 @@ class Bus:
         return subscriber
 
 
+RETRY = 1.0  # seconds between attempts to reach the executive
+
+
+def connect_when_there(
+    connect: Callable[[], Bus], endpoint: str, stop: threading.Event, say: Callable[[str], None]
+) -> Bus | None:
+    """Call ``connect`` every :data:`RETRY` seconds until it opens a session (the
+    executive listens at ``endpoint``); ``None`` if ``stop`` is set first. Tells ``say``
+    once why it waits."""
+    said = False
+    while not stop.is_set():
+        try:
+            return connect()
+        except BusError as e:
+            if not said:
+                say(f"waiting for the executive at {endpoint} ({e})")
+                said = True
+            stop.wait(RETRY)
+    return None
+
+
 def _short(error: Exception) -> str:
     """A zenoh error without its Rust source location."""
     return str(error).split(" at /")[0].strip().rstrip("!.")

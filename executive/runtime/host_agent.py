@@ -33,18 +33,17 @@ from executive.bus import keys, security
 from executive.bus.api import hosts as api
 from executive.bus.api.components import LogQuery, LogReply
 from executive.bus.security import Login
-from executive.bus.session import Bus
+from executive.bus.session import Bus, connect_when_there
 from executive.bus.verb import Empty
 from executive.runtime.logfile import tail
 from executive.runtime.process_host import Launch, component_environment
 from executive.runtime.processes import ComponentProcess, ProcessThread
 from executive.runtime.spawn import command, describe_exit
 from knowledge.description import RobotDescription
-from knowledge.errors import BusError, ComponentError
+from knowledge.errors import ComponentError
 
 log = logging.getLogger("dura.host")
 
-RETRY = 1.0  # seconds between attempts to reach the executive
 PROGRAM_WAIT = 0.5  # seconds to wait for the program's pid below its supervisor
 
 
@@ -152,19 +151,13 @@ class HostAgent:
 
     def _connect(self, stop: threading.Event) -> Bus | None:
         """The bus, once the executive's endpoint answers (``None``: stopped first)."""
-        said = False
-        while not stop.is_set():
-            try:
-                self.bus = Bus(self.robot.name, name=security.host_user(self.name),
-                               endpoint=self.endpoint, login=self.login,
-                               lease=self.lease)  # fmt: skip
-                return self.bus
-            except BusError as e:
-                if not said:
-                    self._say(f"waiting for the executive at {self.endpoint} ({e})")
-                    said = True
-                stop.wait(RETRY)
-        return None
+
+        def connect() -> Bus:
+            return Bus(self.robot.name, name=security.host_user(self.name),
+                       endpoint=self.endpoint, login=self.login, lease=self.lease)  # fmt: skip
+
+        self.bus = connect_when_there(connect, self.endpoint, stop, self._say)
+        return self.bus
 
     def _on_executive(self, key: str, alive: bool) -> None:
         self._executive = alive
