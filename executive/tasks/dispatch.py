@@ -12,7 +12,12 @@ ready, lets repaired tasks go on, and sets a timer for the next due start. Endin
 schedules the others before the configuration changes, so what they share keeps
 running. The behavior of the plan's next step starts ahead, and one that a step to come
 runs again keeps running (``--starts sequential``: a behavior starts only on its ready
-configuration, and none ahead).
+configuration, and none ahead). When a plan step's behavior fails (the planner plans
+again), the functionalities its task held linger for :data:`REPLAN_GRACE` (robot time):
+the new plan's first steps take over those they need without a start, and the rest stops
+when the grace ends. The behavior itself stops at once, and a functionality that is
+unusable or no longer runs is not kept (one that fails meanwhile is a fault as any
+other).
 
 It composes the parts that act: the :class:`~executive.tasks.ledger.TaskLedger`, the
 :class:`~executive.tasks.configurator.Configurator`, the
@@ -26,6 +31,7 @@ import threading
 import time
 from collections.abc import Callable
 
+from executive.bus.clock import Clock, system_clock
 from executive.bus.service import Context
 from executive.runtime.launcher import Launcher
 from executive.tasks.configuration import SystemConfiguration, Transition
@@ -38,6 +44,14 @@ from executive.tasks.ledger import TaskLedger
 from executive.tasks.parameters import RuntimeParameters
 from executive.tasks.supervision import Post, Supervisor
 from executive.tasks.task import Task, TaskControl, TaskEnd, TaskPhase
+
+REPLAN_GRACE = 3.0  # robot seconds a failed plan step's functionalities wait for the new plan
+# ends of a plan step's task after which the planner plans again (plan_tasks reports them
+# as the step's failure) with its configuration still usable; a task the scheduler
+# cancelled had no place for its configuration
+REPLANNED = frozenset(
+    {TaskEnd.BEHAVIOR_FAILED, TaskEnd.BEHAVIOR_CANCELLED, TaskEnd.BEHAVIOR_FAULTY, TaskEnd.USER}
+)
 
 
 class Dispatcher:
@@ -56,6 +70,7 @@ class Dispatcher:
             running before it stops.
         sequential: change configurations one component after another, stopping first
             (:class:`~executive.tasks.configurator.Configurator`).
+        clock: robot time, for :data:`REPLAN_GRACE` (default: this process's).
     """
 
     def __init__(
@@ -69,10 +84,12 @@ class Dispatcher:
         time_limit: float = 1.0,
         linger: float = 0.0,
         sequential: bool = False,
+        clock: Clock | None = None,
     ) -> None:
         self.robot = context.robot
         self.time_limit = time_limit
         self.linger = linger
+        self.clock = clock or system_clock()
         self.standby = True  # keep the warm spares (until the executive stops)
         self._post = post
         self._timer: threading.Timer | None = None
@@ -165,15 +182,26 @@ class Dispatcher:
                                 standby=self.standby)  # fmt: skip
 
         needed = keep(set())
-        if self.linger <= 0:
-            return needed
         for f in list(self._lingering):
             if f in needed.configuration.functionalities or f not in running.functionalities:
                 del self._lingering[f]  # needed again, or it stopped
-        released = running.functionalities - needed.configuration.functionalities
-        for f in released - self._lingering.keys():  # needed until now: it starts to linger
-            self._lingering[f] = now + self.linger
+        if self.linger > 0:
+            released = running.functionalities - needed.configuration.functionalities
+            for f in released - self._lingering.keys():  # needed until now: it starts to linger
+                self._lingering[f] = now + self.linger
+        if not self._lingering:
+            return needed
         return keep({f for f, until in self._lingering.items() if until > now})
+
+    def _await_replan(self, task: Task) -> None:
+        """A plan step's task failed and the planner plans again: what it held lingers
+        for the grace (or longer, if functionalities linger longer), for the new plan's
+        first steps to take over; what is faulty or no longer runs is not kept."""
+        until = time.time() + max(self.clock.wall(REPLAN_GRACE), self.linger)
+        unusable = self.faults.unusable()
+        for f in set(task.providers.values()) - unusable:
+            if self.configurator.alive(f):
+                self._lingering[f] = max(self._lingering.get(f, 0.0), until)
 
     def end(self, task: Task, end: TaskEnd, reason: str, *, reschedule: bool = True) -> None:
         """End a task; then (unless the caller goes on scheduling) schedule the others."""
@@ -187,6 +215,8 @@ class Dispatcher:
             self.supervisor.stop(task, reason or phase.value, keep=keep)
             if keep:
                 self._warm.add(task.behavior)
+            elif task.plan_id is not None and end in REPLANNED:
+                self._await_replan(task)
         self.ledger.set_phase(task, phase, reason=reason, result=task.result)
         self.faults.finished(task.id)
         self.ledger.event(f"TASK_{phase.name}", task, **({"reason": reason} if reason else {}))

@@ -55,6 +55,7 @@ from executive.bus.api.tasks import (
     TaskStart,
     TaskStarted,
 )
+from executive.bus.clock import Clock
 from executive.bus.payloads import ComponentState
 from executive.bus.service import Context, Service
 from executive.bus.worker import Worker
@@ -87,6 +88,9 @@ class TaskExecutor(Service):
             keeps running before it stops.
         sequential: change configurations one component after another, stopping first
             (by default the new components start all at once, before the old stop).
+        clock: robot time (default: this process's): a failed plan step's
+            functionalities wait :data:`~executive.tasks.dispatch.REPLAN_GRACE` of it
+            for the new plan.
     """
 
     name = "task-executor"
@@ -99,12 +103,14 @@ class TaskExecutor(Service):
         time_limit: float = 1.0,
         linger: float = 0.0,
         sequential: bool = False,
+        clock: Clock | None = None,
     ) -> None:
         super().__init__(context)
         self.launcher = launcher
         self.time_limit = time_limit
         self.linger = linger
         self.sequential = sequential
+        self.clock = clock
         self.robot = context.robot
         self.kb = context.kb
         self._worker = Worker("task executor", after_each=self._publish)
@@ -129,6 +135,7 @@ class TaskExecutor(Service):
             time_limit=self.time_limit,
             linger=self.linger,
             sequential=self.sequential,
+            clock=self.clock,
         )
         with self.kb.transaction():  # tasks of an executive that died
             for task in self.kb.tasks():
@@ -193,6 +200,7 @@ class TaskExecutor(Service):
         task = Task(
             str(record.id), name or behavior, behavior, dict(goal or {}), duration,
             now + earliest, None if deadline is None else now + deadline, together, listener,
+            plan_id=plan_id,
         )  # fmt: skip
         with self._lock:
             self._arrivals[task.id] = task

@@ -161,6 +161,7 @@ class Task:
     start_at: float | None = None  # scheduled start (epoch), while waiting
     behind: tuple[str, ...] = ()  # the running tasks it waits for, while waiting
     repair: TaskAction = TaskAction.RESTART  # how it goes on after a repair
+    plan_id: int | None = None  # the plan whose step it runs (its failure: a new plan)
 
     def usage(self) -> TaskUsage:
         """What fault handling needs to know of it."""

@@ -8,6 +8,7 @@ import dataclasses
 from collections.abc import Iterator
 from pathlib import Path
 
+from executive.bus.clock import Clock
 from executive.bus.service import Context
 from executive.tasks.executor import TaskExecutor
 from knowledge.description import RobotDescription
@@ -31,11 +32,18 @@ def slow_camera_robot(delay: float, picture: float = 1.0) -> RobotDescription:
 
 @contextlib.contextmanager
 def executor(
-    description: RobotDescription, endpoint: str, folder: Path, *, linger: float = 0.0
+    description: RobotDescription,
+    endpoint: str,
+    folder: Path,
+    *,
+    linger: float = 0.0,
+    sequential: bool = False,
+    clock: Clock | None = None,
 ) -> Iterator[tuple[TaskExecutor, Rig]]:
     """A started task executor (stopped on leaving, with every component)."""
     with rig(description, endpoint, folder) as r:
-        tasks = TaskExecutor(Context(description, r.bus, r.kb), r.launcher, linger=linger)
+        context = Context(description, r.bus, r.kb)
+        tasks = TaskExecutor(context, r.launcher, linger=linger, sequential=sequential, clock=clock)
         tasks.start()
         try:
             yield tasks, r

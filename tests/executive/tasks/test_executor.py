@@ -1,16 +1,20 @@
 """The task executor with real component processes, bus and knowledge base: status
-queries from its snapshot, and why a task ended as code reads it."""
+queries from its snapshot, why a task ended as code reads it, and what keeps running
+between tasks (lingering, warm spares, plan steps to come, a failed step's replan)."""
 
 from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from executive.bus.api.tasks import SCHEDULE_SHOW, TASK_LIST, TASK_STOP, TaskId
+from executive.bus.clock import Clock
 from executive.bus.payloads import Lifecycle
-from executive.tasks.task import TaskEnd, TaskPhase
+from executive.tasks.executor import TaskExecutor
+from executive.tasks.task import TaskEnd, TaskHandle, TaskPhase
 from knowledge.description import RobotDescription
 from tests.conftest import wait_for
 from tests.executive.runtime.rig import USECASE_ROBOT, Rig, robot, usecase
@@ -173,3 +177,99 @@ def test_a_behavior_started_ahead_stops_when_no_step_to_come_needs_it(
         tasks.expect([])  # the plan was dropped
         assert wait_for(lambda: r.launcher.state("take_picture").state is Lifecycle.STOPPED, 30)
         assert r.kb.events(kind="TASK_STARTED") == []
+
+
+SLOW = Clock(0.1)  # robot time at a tenth: the failed step's grace outlasts any new step
+BASE = ("lidar", "lidar_filter", "robot_base")  # move_to's configuration
+
+
+def all_stopped(r: Rig, names: tuple[str, ...]) -> bool:
+    return all(r.launcher.state(n).state is Lifecycle.STOPPED for n in names)
+
+
+def plan_step(tasks: TaskExecutor, r: Rig, behavior: str, goal: dict[str, Any]) -> TaskHandle:
+    """The first step of a new plan (stored), running ``behavior``."""
+    return tasks.start_task(behavior, goal, plan_id=r.kb.store_plan([]).id, step=0)
+
+
+def replan_robot() -> RobotDescription:
+    """The failover robot whose move_to fails at its first crash, and take_picture
+    (30 s, on the camera)."""
+    move_to = usecase("move_to", max_restarts=0, params={"duration": 30.0, "input_timeout": 5.0})
+    described = failover_robot()
+    return dataclasses.replace(
+        described,
+        behaviors={**described.behaviors, "move_to": move_to,
+                   "take_picture": usecase("take_picture", params={"duration": 30.0})},
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("sequential", [False, True], ids=["parallel", "sequential"])
+def test_the_new_plans_step_takes_over_a_failed_steps_functionalities_without_a_start(
+    endpoint: str, tmp_path: Path, sequential: bool
+) -> None:
+    with executor(replan_robot(), endpoint, tmp_path, sequential=sequential, clock=SLOW) as (
+        tasks,
+        r,
+    ):
+        failed = plan_step(tasks, r, "move_to", {"target": "lab"})
+        assert wait_for(lambda: failed.phase is TaskPhase.RUNNING, 30)
+        r.launcher.inject_fault("move_to", "crash")
+        assert failed.wait(30) and failed.end is TaskEnd.BEHAVIOR_FAILED, failed.reason
+        # the planner plans again, and the new plan's first step runs the same behavior
+        again = plan_step(tasks, r, "move_to", {"target": "lab"})
+        assert wait_for(lambda: again.phase is TaskPhase.RUNNING, 30), again.reason
+        assert again.providers == failed.providers
+        starts = [s for k, s in states_of(r) if k == "COMPONENT_STARTING"]
+        assert [starts.count(n) for n in BASE] == [1, 1, 1]  # kept for the new plan
+        assert starts.count("move_to") == 2  # the crashed behavior was not kept
+        stops = [s for k, s in states_of(r) if k == "COMPONENT_STOPPING"]
+        assert not set(BASE) & set(stops)
+
+
+def test_a_failed_steps_functionalities_no_new_step_takes_over_stop_when_the_grace_ends(
+    endpoint: str, tmp_path: Path
+) -> None:
+    with executor(replan_robot(), endpoint, tmp_path, clock=Clock(2.0)) as (tasks, r):
+        failed = plan_step(tasks, r, "move_to", {"target": "lab"})
+        assert wait_for(lambda: failed.phase is TaskPhase.RUNNING, 30)
+        r.launcher.inject_fault("move_to", "crash")
+        assert failed.wait(30) and failed.end is TaskEnd.BEHAVIOR_FAILED, failed.reason
+        picture = plan_step(tasks, r, "take_picture", {"place": "lab"})  # needs none of them
+        assert wait_for(lambda: picture.phase is TaskPhase.RUNNING, 30), picture.reason
+        assert wait_for(lambda: all_stopped(r, BASE), 30)
+        assert picture.phase is TaskPhase.RUNNING  # no task ended meanwhile: the grace did
+        stops = [e for e in r.kb.events(kind="CONFIGURATION") if set(BASE) & set(e.data["stop"])]
+        assert len(stops) == 1 and set(stops[0].data["stop"]) == set(BASE)
+        assert "linger" in stops[0].data["why"]  # not at the failure: when the grace ended
+
+
+def test_a_behavior_marked_faulty_stops_at_once_while_its_steps_functionalities_wait(
+    endpoint: str, tmp_path: Path
+) -> None:
+    with executor(replan_robot(), endpoint, tmp_path, clock=Clock(2.0)) as (tasks, r):
+        failed = plan_step(tasks, r, "move_to", {"target": "lab"})
+        assert wait_for(lambda: failed.phase is TaskPhase.RUNNING, 30)
+        tasks.fault("move_to", "diagnosed faulty", permanent=True)
+        assert failed.wait(30) and failed.end is TaskEnd.BEHAVIOR_FAULTY, failed.reason
+        assert r.launcher.state("move_to").state is Lifecycle.STOPPED  # not kept
+        assert wait_for(lambda: all_stopped(r, BASE), 30)
+        seen = states_of(r)
+        assert seen.index(("COMPONENT_STOPPED", "move_to")) < min(
+            seen.index(("COMPONENT_STOPPING", n)) for n in BASE
+        )
+        stops = [e for e in r.kb.events(kind="CONFIGURATION") if set(BASE) & set(e.data["stop"])]
+        assert len(stops) == 1 and "linger" in stops[0].data["why"]
+
+
+def test_a_failed_task_of_no_plan_stops_its_functionalities_at_once(
+    endpoint: str, tmp_path: Path
+) -> None:
+    with executor(replan_robot(), endpoint, tmp_path) as (tasks, r):
+        failed = tasks.start_task("move_to", {"target": "lab"})  # a user's task: no replan
+        assert wait_for(lambda: failed.phase is TaskPhase.RUNNING, 30)
+        r.launcher.inject_fault("move_to", "crash")
+        assert failed.wait(30) and failed.end is TaskEnd.BEHAVIOR_FAILED, failed.reason
+        assert wait_for(lambda: all_stopped(r, BASE), 30)
+        stops = [e for e in r.kb.events(kind="CONFIGURATION") if set(BASE) & set(e.data["stop"])]
+        assert len(stops) == 1 and stops[0].data["why"] == f"task {failed.id} failed"
