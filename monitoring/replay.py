@@ -34,8 +34,9 @@ from collections.abc import Callable, Collection, Iterable, Sequence
 from dataclasses import dataclass
 
 from executive.bus.keys import DIAGNOSES, EVENTS
-from executive.bus.payloads import ComponentState, Lifecycle
+from executive.bus.payloads import ComponentState
 from executive.bus.session import Message
+from executive.bus.states import Lifecycle
 from knowledge.description import RobotDescription
 from knowledge.errors import BusError
 from monitoring.diagnosis.engine import DiagnosisEngine

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from executive.bus.payloads import GoalStatus, Lifecycle
+from executive.bus.states import GoalStatus, Lifecycle
 from knowledge.lifecycle import GoalState
 
 NAMED = frozenset(

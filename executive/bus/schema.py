@@ -22,6 +22,7 @@ import dataclasses
 import enum
 import json
 import math
+import reprlib
 import types
 import typing
 from collections.abc import Mapping
@@ -38,7 +39,11 @@ T = TypeVar("T")
 def payload(cls: type[T]) -> type[T]:
     """A payload class: a dataclass with a hash, whose fields type checkers hold
     read-only (``frozen`` for them; not at run time, where it would nearly double what
-    the class costs to create: 0.7 instead of 0.4 ms, 10 ms of a quick command)."""
+    the class costs to create: 0.7 instead of 0.4 ms, 10 ms of a quick command). A
+    :class:`Payload` takes its comparison, hash and repr from the base class rather than
+    having dataclasses write and compile them for each class (0.25 instead of 0.4 ms)."""
+    if issubclass(cls, Payload):
+        return dataclass(eq=False, repr=False)(cls)
     return dataclass(unsafe_hash=True)(cls)
 
 
@@ -184,7 +189,29 @@ def _fields(cls: type) -> tuple[tuple[str, Any, bool], ...]:
 
 
 class Payload:
-    """A frozen dataclass that is a JSON object on the bus (subclasses are dataclasses)."""
+    """A frozen dataclass that is a JSON object on the bus (subclasses are dataclasses).
+
+    Equal to a payload of the same class with equal fields, hashed and shown by its
+    fields, as a dataclass is (a subclass declared with ``@dataclass`` writes its own).
+    """
+
+    def _compared(self) -> tuple[Any, ...]:
+        fields = dataclasses.fields(self)  # type: ignore[arg-type]
+        return tuple(getattr(self, f.name) for f in fields if f.compare)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Payload) or other.__class__ is not self.__class__:
+            return NotImplemented
+        return self._compared() == other._compared()
+
+    def __hash__(self) -> int:
+        return hash(self._compared())
+
+    @reprlib.recursive_repr()
+    def __repr__(self) -> str:
+        fields = dataclasses.fields(self)  # type: ignore[arg-type]
+        shown = ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in fields if f.repr)
+        return f"{self.__class__.__qualname__}({shown})"
 
     @classmethod
     def from_payload(cls, payload: Mapping[str, Any], *, prefix: str = "") -> Self:

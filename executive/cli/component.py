@@ -8,7 +8,8 @@ import time
 from typing import Any
 
 from executive.bus.api import components
-from executive.bus.payloads import ComponentState, Lifecycle
+from executive.bus.payloads import ComponentState
+from executive.bus.states import Lifecycle
 from executive.bus.wording import plural
 from executive.cli import exits_at_once
 from executive.cli.arguments import count, seconds

@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from executive.bus.event_text import describe
-from executive.bus.payloads import DiagnosisInfo, Lifecycle
+from executive.bus.payloads import DiagnosisInfo
+from executive.bus.states import Lifecycle
 from executive.dashboard import gantt, graph, svg
 from knowledge.description import FunctionalitySpec, RobotDescription
 

@@ -20,9 +20,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from executive.bus.payloads import Command, ComponentState
+from executive.bus.payloads import ComponentState
 from executive.bus.security import Credentials
 from executive.bus.session import Bus
+from executive.bus.states import Command
 from executive.runtime.behavior_goals import BehaviorGoals, GoalHandle
 from executive.runtime.lifecycle import LifecycleControl, local_endpoint
 from executive.runtime.process_host import ProcessHost

@@ -33,9 +33,10 @@ from executive.bus.api.component_commands import (
     Start,
     Stop,
 )
-from executive.bus.payloads import Command, ComponentState, Lifecycle
+from executive.bus.payloads import ComponentState
 from executive.bus.security import Credentials
 from executive.bus.session import Bus
+from executive.bus.states import Command, Lifecycle
 from executive.runtime.process_host import Launch, LocalHost, ProcessHandle, ProcessHost
 from executive.runtime.processes import ProcessThread
 from executive.runtime.remote_host import Hosts

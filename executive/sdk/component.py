@@ -42,9 +42,9 @@ from executive.bus import keys
 from executive.bus.api.components import COMPONENT_ACHIEVE, Achievement
 from executive.bus.api.planning import STATE_SET, STATE_UNSET, FactChange
 from executive.bus.clock import Clock, system_clock
-from executive.bus.payloads import ComponentPhase
 from executive.bus.security import ENV_PASSWORD, ENV_USER, Login
 from executive.bus.session import Bus, Message
+from executive.bus.states import ComponentPhase
 from executive.sdk.fault_injection import FaultInjector
 from executive.sdk.framework import Framework
 from knowledge.description import Kind

@@ -34,7 +34,7 @@ from executive.bus.api.component_commands import (
     Stop,
     TakeGoal,
 )
-from executive.bus.payloads import ComponentPhase
+from executive.bus.states import ComponentPhase
 from executive.sdk.fault_injection import Fault
 from knowledge.errors import ComponentError, DuraError
 

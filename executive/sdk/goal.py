@@ -14,7 +14,8 @@ import time
 from typing import TYPE_CHECKING, Any
 
 from executive.bus import keys
-from executive.bus.payloads import GoalResult, GoalStatus
+from executive.bus.payloads import GoalResult
+from executive.bus.states import GoalStatus
 from knowledge.errors import ComponentError
 
 if TYPE_CHECKING:

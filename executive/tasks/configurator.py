@@ -22,7 +22,8 @@ import threading
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 
-from executive.bus.payloads import ComponentState, Lifecycle
+from executive.bus.payloads import ComponentState
+from executive.bus.states import Lifecycle
 from executive.runtime.launcher import Launcher
 from executive.tasks.configuration import SystemConfiguration, Transition
 from executive.tasks.diagnosis_model import DiagnosisModelSync

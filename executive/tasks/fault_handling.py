@@ -18,7 +18,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from executive.bus.api.tasks import FaultReply
-from executive.bus.payloads import ComponentState, Lifecycle
+from executive.bus.payloads import ComponentState
+from executive.bus.states import Lifecycle
 from executive.runtime.launcher import Launcher
 from executive.tasks.configurator import Configurator
 from executive.tasks.faults import Faults, TaskAction

@@ -17,7 +17,8 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from executive.bus.api.parameters import ParameterReply, ParametersReply
-from executive.bus.payloads import ComponentState, Lifecycle
+from executive.bus.payloads import ComponentState
+from executive.bus.states import Lifecycle
 from executive.runtime.launcher import Launcher
 from knowledge.description import ComponentSpec, RobotDescription
 from knowledge.errors import ComponentError, ConfigError

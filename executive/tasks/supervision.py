@@ -17,7 +17,8 @@ import contextlib
 import time
 from collections.abc import Callable
 
-from executive.bus.payloads import GoalResult, GoalStatus, Lifecycle
+from executive.bus.payloads import GoalResult
+from executive.bus.states import GoalStatus, Lifecycle
 from executive.runtime.launcher import Launcher
 from executive.tasks.configurator import Configurator
 from executive.tasks.faults import Faults, TaskAction

@@ -32,9 +32,9 @@ from executive.bus.api import planning
 from executive.bus.api.components import COMPONENT_INJECT, COMPONENT_LIST, Injection
 from executive.bus.clock import SCALE_VARIABLE, Clock
 from executive.bus.keys import EXECUTIVE_ALIVE, api, service_alive
-from executive.bus.payloads import Lifecycle
 from executive.bus.security import Login
 from executive.bus.session import Bus
+from executive.bus.states import Lifecycle
 from knowledge.errors import BusError, DuraError
 from knowledge.records import GoalState
 from knowledge.robot import load_robot

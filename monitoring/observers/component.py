@@ -20,8 +20,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from executive.bus.keys import RESOURCES
-from executive.bus.payloads import GENERAL_OK, NOT_AVAILABLE, Lifecycle, NodeInfo
+from executive.bus.payloads import GENERAL_OK, NOT_AVAILABLE, NodeInfo
 from executive.bus.session import Message
+from executive.bus.states import Lifecycle
 from monitoring.config_entry import Entry
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
 from monitoring.observers.resources import absence, node_infos, node_name

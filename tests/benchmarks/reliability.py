@@ -36,8 +36,8 @@ import psutil
 import zenoh
 
 from executive.bus import security
-from executive.bus.payloads import Lifecycle
 from executive.bus.session import session_config
+from executive.bus.states import Lifecycle
 from executive.testing.harness import RobotProcess
 from tests.conftest import ROOT, USECASE, free_endpoint, wait_for
 from tests.executive.runtime.rig import rig, robot, scripted

@@ -10,8 +10,9 @@ from typing import Any
 import pytest
 
 from executive.bus.keys import observers_api
-from executive.bus.payloads import NO_STATE_FITS, Lifecycle
+from executive.bus.payloads import NO_STATE_FITS
 from executive.bus.session import Bus
+from executive.bus.states import Lifecycle
 from knowledge.errors import BusError, ConfigError
 from knowledge.robot import read_robot
 from monitoring.observer_manager import ObserverManager

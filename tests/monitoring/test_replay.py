@@ -9,8 +9,9 @@ from collections.abc import Iterator
 import pytest
 
 from executive.bus.keys import component, topic
-from executive.bus.payloads import ComponentState, Lifecycle
+from executive.bus.payloads import ComponentState
 from executive.bus.session import Message
+from executive.bus.states import Lifecycle
 from knowledge.description import RobotDescription
 from knowledge.robot import load_robot
 from monitoring.replay import Replay

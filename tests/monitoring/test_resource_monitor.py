@@ -12,9 +12,10 @@ import psutil
 import pytest
 
 from executive.bus.keys import RESOURCES, component
-from executive.bus.payloads import ComponentState, Lifecycle, NodeInfo, ResourceInfo
+from executive.bus.payloads import ComponentState, NodeInfo, ResourceInfo
 from executive.bus.service import Context
 from executive.bus.session import Bus
+from executive.bus.states import Lifecycle
 from knowledge.errors import ConfigError
 from knowledge.knowledge_base import KnowledgeBase
 from monitoring.resource_monitor import ResourceMonitor

@@ -7,8 +7,8 @@ from collections.abc import Mapping
 from dataclasses import field
 from typing import Any, ClassVar
 
-from executive.bus.payloads import Command, ComponentPhase
 from executive.bus.schema import Payload, PayloadError, Text, payload
+from executive.bus.states import Command, ComponentPhase
 
 
 class ComponentCommand(Payload):

@@ -16,12 +16,12 @@ from executive.bus.keys import DIAGNOSES, OBSERVATIONS, RESOURCES, component, to
 from executive.bus.payloads import (
     ComponentState,
     DiagnosisInfo,
-    Lifecycle,
     NodeInfo,
     ObservationInfo,
     ResourceInfo,
 )
 from executive.bus.session import Message, encode
+from executive.bus.states import Lifecycle
 
 T0 = 1_700_000_000.0
 

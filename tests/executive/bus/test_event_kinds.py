@@ -8,7 +8,7 @@ import ast
 from collections.abc import Iterator
 
 from executive.bus.event_kinds import FAMILIES, KINDS, NAMED, known
-from executive.bus.payloads import GoalStatus, Lifecycle
+from executive.bus.states import GoalStatus, Lifecycle
 from executive.tasks.task import TaskPhase
 from knowledge.lifecycle import GoalState
 from tests.conftest import ROOT

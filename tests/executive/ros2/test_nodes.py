@@ -17,7 +17,7 @@ from typing import Any
 import psutil
 import pytest
 
-from executive.bus.payloads import GoalStatus, Lifecycle
+from executive.bus.states import GoalStatus, Lifecycle
 from executive.ros2.lifecycle import LifecycleClient
 from executive.ros2.names import dds_topic
 from executive.ros2.participant import Participant

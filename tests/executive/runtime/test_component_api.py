@@ -16,8 +16,8 @@ from executive.bus.api.components import (
     ComponentName,
     LogQuery,
 )
-from executive.bus.payloads import Lifecycle
 from executive.bus.service import Context
+from executive.bus.states import Lifecycle
 from executive.runtime.component_api import ComponentApi
 from knowledge.errors import BusError
 from tests.executive.runtime.rig import rig, robot, usecase

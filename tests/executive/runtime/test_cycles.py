@@ -11,7 +11,7 @@ from pathlib import Path
 import psutil
 import pytest
 
-from executive.bus.payloads import Lifecycle
+from executive.bus.states import Lifecycle
 from tests.conftest import wait_for
 from tests.executive.runtime.rig import Rig, rig, robot, scripted
 

@@ -14,7 +14,8 @@ import psutil
 import pytest
 
 from executive.bus.keys import topic
-from executive.bus.payloads import ComponentState, GoalStatus, Lifecycle
+from executive.bus.payloads import ComponentState
+from executive.bus.states import GoalStatus, Lifecycle
 from knowledge.description import FunctionalitySpec
 from knowledge.errors import ComponentError
 from tests.conftest import wait_for

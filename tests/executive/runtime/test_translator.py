@@ -7,7 +7,7 @@ from pathlib import Path
 
 import psutil
 
-from executive.bus.payloads import GoalStatus, Lifecycle
+from executive.bus.states import GoalStatus, Lifecycle
 from executive.runtime.translator import load
 from executive.runtime.translators.process import ProcessTranslator
 from knowledge.description import ComponentSpec

@@ -14,8 +14,8 @@ import pytest
 
 from executive.bus import keys
 from executive.bus.keys import component, topic
-from executive.bus.payloads import Lifecycle
 from executive.bus.session import Bus
+from executive.bus.states import Lifecycle
 from executive.sdk import Behavior, Functionality, Message
 from executive.sdk.fault_injection import Fault, FaultMode
 from knowledge.description import ComponentSpec

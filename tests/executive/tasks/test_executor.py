@@ -12,7 +12,7 @@ import pytest
 
 from executive.bus.api.tasks import SCHEDULE_SHOW, TASK_LIST, TASK_STOP, TaskId
 from executive.bus.clock import Clock
-from executive.bus.payloads import Lifecycle
+from executive.bus.states import Lifecycle
 from executive.tasks.executor import TaskExecutor
 from executive.tasks.task import TaskEnd, TaskHandle, TaskPhase
 from knowledge.description import RobotDescription

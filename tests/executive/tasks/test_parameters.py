@@ -14,7 +14,7 @@ from executive.bus.api.parameters import (
     ComponentParameters,
     ParameterKey,
 )
-from executive.bus.payloads import Lifecycle
+from executive.bus.states import Lifecycle
 from executive.tasks.parameters import checked
 from knowledge.errors import BusError, ConfigError
 from tests.executive.runtime.rig import robot, usecase

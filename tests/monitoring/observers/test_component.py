@@ -5,8 +5,9 @@ from __future__ import annotations
 import json
 
 from executive.bus.keys import RESOURCES
-from executive.bus.payloads import GENERAL_OK, NOT_AVAILABLE, Lifecycle, NodeInfo
+from executive.bus.payloads import GENERAL_OK, NOT_AVAILABLE, NodeInfo
 from executive.bus.session import Bus, Message
+from executive.bus.states import Lifecycle
 from monitoring.observer import Environment, make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager

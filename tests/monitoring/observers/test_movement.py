@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from executive.bus.payloads import Lifecycle
 from executive.bus.session import Bus, Message
+from executive.bus.states import Lifecycle
 from monitoring.observer import Environment, make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager
