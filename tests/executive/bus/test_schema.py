@@ -8,7 +8,7 @@ from typing import Annotated, Any
 
 import pytest
 
-from executive.bus.schema import Between, Payload, PayloadError, Text
+from executive.bus.schema import Between, Payload, PayloadError, Text, payload
 
 
 class Color(enum.Enum):
@@ -37,6 +37,32 @@ def test_a_full_payload_reads_back_to_what_it_was() -> None:
     sample = Sample("hi", 3, 0.5, True, [Color.RED], Inner("x"), {"a": [1]}, 7)
     assert Sample.from_payload(sample.to_payload()) == sample
     assert sample.to_payload()["colors"] == ["red"]
+
+
+@payload
+class Declared(Payload):
+    text: Text
+    inner: Inner | None = None
+    tags: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Written(Payload):
+    text: Text
+    inner: Inner | None = None
+    tags: tuple[str, ...] = ()
+
+
+def test_a_payload_class_compares_hashes_and_shows_as_a_frozen_dataclass_does() -> None:
+    one, same, other = (
+        Declared("a", Inner("x"), ("t",)),
+        Declared("a", Inner("x"), ("t",)),
+        Declared("b"),
+    )
+    assert one == same and hash(one) == hash(same) and len({one, same, other}) == 2
+    assert one != other and one != Written("a", Inner("x"), ("t",)) and one != ("a",)
+    assert repr(one) == repr(Written("a", Inner("x"), ("t",))).replace("Written", "Declared")
+    assert repr(other) == "Declared(text='b', inner=None, tags=())"
 
 
 def test_absent_fields_take_their_defaults_and_unknown_keys_are_ignored() -> None:
