@@ -14,6 +14,7 @@ import threading
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
+from executive.cli import deferred
 from knowledge.errors import DuraError
 
 # Each command's module, in the order ``dura --help`` lists them. A module registers its
@@ -153,6 +154,7 @@ def entry() -> None:
     # quick command). Collection resumes once they are made, with those objects frozen
     # out of every later collection.
     gc.disable()
+    deferred.defer()  # the modules that the imports name but no quick command uses
     try:
         args = parse()
     except KeyboardInterrupt:  # Ctrl-C while the command loads: no traceback

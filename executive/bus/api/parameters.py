@@ -26,12 +26,16 @@ class ParameterChange(Payload):
 
 @payload
 class ParameterKey(Payload):
+    """One parameter of a component, by its key."""
+
     component: Text
     key: Text
 
 
 @payload
 class ComponentParameters(Payload):
+    """A component whose parameters to list."""
+
     component: Text
 
 

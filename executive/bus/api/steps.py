@@ -49,6 +49,8 @@ class StepAction(enum.Enum):
 
 @payload
 class StepControl(Payload):
+    """Pause, resume or cancel the step of a run."""
+
     run: Text
     action: StepAction
 

@@ -34,22 +34,30 @@ class TaskStart(Payload):
 
 @payload
 class TaskStarted(Payload):
+    """The started task's id and the behavior that carries it out."""
+
     id: str
     behavior: str
 
 
 @payload
 class TaskId(Payload):
+    """A task, by id."""
+
     id: Text
 
 
 @payload
 class TaskReply(Payload):
+    """A task as the executor holds it."""
+
     task: dict[str, Any]
 
 
 @payload
 class TasksReply(Payload):
+    """Every task as the executor holds it."""
+
     tasks: list[dict[str, Any]]
 
 
@@ -82,6 +90,8 @@ class FaultReply(Payload):
 
 @payload
 class ComponentName(Payload):
+    """A component, by name."""
+
     name: Text
 
 
