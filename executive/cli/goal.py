@@ -10,7 +10,6 @@ import time
 from typing import Any, TextIO
 
 from executive.bus.api import planning as api
-from executive.bus.event_text import describe
 from executive.bus.keys import EVENTS
 from executive.bus.session import Bus, Message
 from executive.cli import exits_at_once
@@ -319,6 +318,8 @@ def run_list(args: argparse.Namespace) -> int:
 
 
 def run_show(args: argparse.Namespace) -> int:
+    from executive.bus.event_text import describe  # not for 'goal list' (nor 'status')
+
     reply = ask(args, api.GOAL_SHOW, api.GoalId(args.id))
     if args.json:
         print_json(reply.to_payload())
