@@ -65,6 +65,23 @@ def test_a_payload_class_compares_hashes_and_shows_as_a_frozen_dataclass_does() 
     assert repr(other) == "Declared(text='b', inner=None, tags=())"
 
 
+@payload
+class Single(Payload):
+    name: str
+
+
+@payload
+class Bare(Payload):
+    pass
+
+
+def test_a_payload_class_of_one_field_or_none_compares_and_hashes_by_them() -> None:
+    assert Single("a") == Single("a") and Single("a") != Single("b") and Single("a") != "a"
+    assert hash(Single("a")) == hash(Single("a")) and len({Single("a"), Single("b")}) == 2
+    assert Bare() == Bare() and hash(Bare()) == hash(Bare()) and Bare() != Single("a")
+    assert (repr(Single("a")), repr(Bare())) == ("Single(name='a')", "Bare()")
+
+
 def test_absent_fields_take_their_defaults_and_unknown_keys_are_ignored() -> None:
     assert Sample.from_payload({"text": "hi", "newer": 1}) == Sample("hi")
 
