@@ -44,7 +44,7 @@ def payload(cls: type[T]) -> type[T]:
 
     Its comparison, hash and repr are those a dataclass has (same class and equal fields;
     the fields' hash; the fields shown), but shared by every payload class rather than
-    written and compiled for each (0.25 instead of 0.4 ms a class); a class that defines
+    written and compiled for each (0.12 instead of 0.3 ms a class); a class that defines
     its own keeps it."""
     made = dataclass(eq=False, repr=False)(cls)
     fields = dataclasses.fields(made)  # type: ignore[arg-type]
