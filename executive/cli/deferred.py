@@ -3,11 +3,12 @@
 ``dataclasses`` imports ``inspect`` (and with it ``ast``, ``dis`` and ``tokenize``) only
 to write the docstring of a dataclass that has none: 8 ms of CPU at every command's
 start, a sixth of what ``dura status`` cost beyond a bare Python, for nothing the quick
-commands use. :func:`defer` puts a stand-in in ``sys.modules`` that imports the module
-when something first asks it for a name, and from then on holds the module's names:
-whoever imported the stand-in gets the module's functions, whoever imports the module
-afterwards gets the module. Only the ``dura`` console script defers (see
-:func:`executive.cli.entry`), not a program that calls :func:`executive.cli.main`.
+commands use; and ``copy`` (with ``weakref``: 0.8 ms), which it needs only for
+``asdict`` and ``astuple``. :func:`defer` puts a stand-in in ``sys.modules`` that
+imports the module when something first asks it for a name, and from then on holds the
+module's names: whoever imported the stand-in gets the module's functions, whoever
+imports the module afterwards gets the module. Only the ``dura`` console script defers
+(see :func:`executive.cli.entry`), not a program that calls :func:`executive.cli.main`.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import threading
 import types
 from typing import Any
 
-DEFERRED = ("inspect",)
+DEFERRED = ("inspect", "copy")
 """The modules :func:`defer` defers: imported by modules on a quick command's path, used
 by none of them there."""
 

@@ -54,7 +54,7 @@ def test_a_name_the_module_lacks_is_an_attribute_error_after_the_import() -> Non
     """) == ["AttributeError", "AttributeError"]
 
 
-def test_dataclasses_work_with_inspect_deferred() -> None:
+def test_dataclasses_work_with_inspect_and_copy_deferred() -> None:
     assert run("""
         import sys
         from executive.cli import deferred
@@ -73,4 +73,15 @@ def test_dataclasses_work_with_inspect_deferred() -> None:
             x: int
 
         print(type(sys.modules["inspect"]).__name__, Bare.__doc__)
-    """) == ["DeferredModule", "module", "Bare(x:", "int)"]
+        print(type(sys.modules["copy"]).__name__, dataclasses.asdict(Bare([1])))
+        print(type(sys.modules["copy"]).__name__)
+    """) == [
+        "DeferredModule",
+        "module",
+        "Bare(x:",
+        "int)",
+        "DeferredModule",
+        "{'x':",
+        "[1]}",
+        "module",
+    ]

@@ -310,9 +310,10 @@ def test_a_quick_command_imports_no_solver_planner_or_graph_library(
     modules = imported(robot.folder, *command)
     assert sorted(m for m in modules if m.split(".")[0] in HEAVY) == []
     # nor what it does not need: the robot description, the records, logging, and
-    # inspect with its parsers (dataclasses names it: executive.cli.deferred defers it)
+    # inspect with its parsers, copy (dataclasses names them: executive.cli.deferred
+    # defers them)
     unneeded = {"knowledge.description", "knowledge.records", "logging", "yaml", "inspect"}
-    assert not modules & (unneeded | {"ast", "dis", "tokenize"})
+    assert not modules & (unneeded | {"ast", "dis", "tokenize", "copy"})
     assert not modules & UNNEEDED[command]
 
 
