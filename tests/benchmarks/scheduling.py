@@ -42,6 +42,9 @@ SIZES = (5, 20, 50, 200)
 
 
 def percentiles(samples: list[float]) -> tuple[float, float]:
+    """The median and the 95th percentile (of one sample: that sample)."""
+    if len(samples) < 2:
+        return samples[0], samples[0]
     cuts = statistics.quantiles(samples, n=20, method="inclusive")
     return statistics.median(samples), cuts[18]
 
