@@ -478,7 +478,8 @@ class ServiceProcess:
         run, which marks the processes it starts)."""
         bus, kb = context.bus, context.kb
         sources: list[TopicSource] = []
-        if self.robot.ros2 is not None and self.group != TASKS:  # observers, sensing rules
+        reads_topics = self.group == MONITORING or (self.group == PLANNING and self.robot.sensing)
+        if self.robot.ros2 is not None and reads_topics:  # observers, sensing rules
             sources.append(stack.enter_context(ros2_link(self.robot, self.group)).topics)
         if self.group != PLANNING:
             # what these services log (rule firings, task ends, ...) is on the bus, as the

@@ -16,6 +16,7 @@ from executive.bus.states import Lifecycle
 from executive.tasks.executor import TaskExecutor
 from executive.tasks.task import TaskEnd, TaskHandle, TaskPhase
 from knowledge.description import RobotDescription
+from knowledge.records import Event
 from tests.conftest import wait_for
 from tests.executive.runtime.rig import USECASE_ROBOT, Rig, robot, usecase
 from tests.executive.tasks.executor_rig import executor, slow_camera_robot
@@ -187,6 +188,18 @@ def all_stopped(r: Rig, names: tuple[str, ...]) -> bool:
     return all(r.launcher.state(n).state is Lifecycle.STOPPED for n in names)
 
 
+def crash_when_running(r: Rig, move: TaskHandle) -> None:
+    """Crash the behavior of a move task once it runs; wait until the task failed."""
+    assert wait_for(lambda: move.phase is TaskPhase.RUNNING, 30)
+    r.launcher.inject_fault("move_to", "crash")
+    assert move.wait(30) and move.end is TaskEnd.BEHAVIOR_FAILED, move.reason
+
+
+def base_stops(r: Rig) -> list[Event]:
+    """The CONFIGURATION events that stop any of move_to's functionalities."""
+    return [e for e in r.kb.events(kind="CONFIGURATION") if set(BASE) & set(e.data["stop"])]
+
+
 def plan_step(tasks: TaskExecutor, r: Rig, behavior: str, goal: dict[str, Any]) -> TaskHandle:
     """The first step of a new plan (stored), running ``behavior``."""
     return tasks.start_task(behavior, goal, plan_id=r.kb.store_plan([]).id, step=0)
@@ -213,9 +226,7 @@ def test_the_new_plans_step_takes_over_a_failed_steps_functionalities_without_a_
         r,
     ):
         failed = plan_step(tasks, r, "move_to", {"target": "lab"})
-        assert wait_for(lambda: failed.phase is TaskPhase.RUNNING, 30)
-        r.launcher.inject_fault("move_to", "crash")
-        assert failed.wait(30) and failed.end is TaskEnd.BEHAVIOR_FAILED, failed.reason
+        crash_when_running(r, failed)
         # the planner plans again, and the new plan's first step runs the same behavior
         again = plan_step(tasks, r, "move_to", {"target": "lab"})
         assert wait_for(lambda: again.phase is TaskPhase.RUNNING, 30), again.reason
@@ -232,14 +243,12 @@ def test_a_failed_steps_functionalities_no_new_step_takes_over_stop_when_the_gra
 ) -> None:
     with executor(replan_robot(), endpoint, tmp_path, clock=Clock(2.0)) as (tasks, r):
         failed = plan_step(tasks, r, "move_to", {"target": "lab"})
-        assert wait_for(lambda: failed.phase is TaskPhase.RUNNING, 30)
-        r.launcher.inject_fault("move_to", "crash")
-        assert failed.wait(30) and failed.end is TaskEnd.BEHAVIOR_FAILED, failed.reason
+        crash_when_running(r, failed)
         picture = plan_step(tasks, r, "take_picture", {"place": "lab"})  # needs none of them
         assert wait_for(lambda: picture.phase is TaskPhase.RUNNING, 30), picture.reason
         assert wait_for(lambda: all_stopped(r, BASE), 30)
         assert picture.phase is TaskPhase.RUNNING  # no task ended meanwhile: the grace did
-        stops = [e for e in r.kb.events(kind="CONFIGURATION") if set(BASE) & set(e.data["stop"])]
+        stops = base_stops(r)
         assert len(stops) == 1 and set(stops[0].data["stop"]) == set(BASE)
         assert "linger" in stops[0].data["why"]  # not at the failure: when the grace ended
 
@@ -258,7 +267,7 @@ def test_a_behavior_marked_faulty_stops_at_once_while_its_steps_functionalities_
         assert seen.index(("COMPONENT_STOPPED", "move_to")) < min(
             seen.index(("COMPONENT_STOPPING", n)) for n in BASE
         )
-        stops = [e for e in r.kb.events(kind="CONFIGURATION") if set(BASE) & set(e.data["stop"])]
+        stops = base_stops(r)
         assert len(stops) == 1 and "linger" in stops[0].data["why"]
 
 
@@ -267,9 +276,7 @@ def test_a_failed_task_of_no_plan_stops_its_functionalities_at_once(
 ) -> None:
     with executor(replan_robot(), endpoint, tmp_path) as (tasks, r):
         failed = tasks.start_task("move_to", {"target": "lab"})  # a user's task: no replan
-        assert wait_for(lambda: failed.phase is TaskPhase.RUNNING, 30)
-        r.launcher.inject_fault("move_to", "crash")
-        assert failed.wait(30) and failed.end is TaskEnd.BEHAVIOR_FAILED, failed.reason
+        crash_when_running(r, failed)
         assert wait_for(lambda: all_stopped(r, BASE), 30)
-        stops = [e for e in r.kb.events(kind="CONFIGURATION") if set(BASE) & set(e.data["stop"])]
+        stops = base_stops(r)
         assert len(stops) == 1 and stops[0].data["why"] == f"task {failed.id} failed"
