@@ -73,7 +73,7 @@ FOLLOW = 2.0  # seconds a command that runs until Ctrl-C runs
 SETTLE = 60.0  # seconds a command that changes nothing is asked again until it matches
 IDLE = 90.0  # seconds the robot may take to finish what earlier blocks gave it
 TIMEOUT = 240.0  # seconds any one command may take (the demo is the longest)
-READ_ONLY = {"show", "list", "get", "status", "observe", "logs"}
+READ_ONLY = {"show", "list", "get", "status", "observe", "logs", "--dry-run"}
 
 
 @dataclass
