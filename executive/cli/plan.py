@@ -34,8 +34,9 @@ def register(sub: Any) -> None:
         "(--dry-run), or plan without a robot (--offline)",
         description="'dura plan show' prints the running robot's current plan as a timeline, "
         "with the state of each step. 'dura plan --dry-run' plans for the running robot's open "
-        "goals from its live state and prints the plan, without executing it or changing "
-        "anything: exit 0 with a plan (or nothing to plan), 1 without one. 'dura plan "
+        "goals (and each --goal, as if it were added now) from its live state and prints the "
+        "plan, without executing it or changing anything: exit 0 with a plan (or nothing to "
+        "plan), 1 without one. 'dura plan "
         "--offline DOMAIN PROBLEM' plans for the goal of a PDDL problem with one of dura's "
         "engines, validates the plan, and prints it as a timeline: exit 0 with a plan, 1 "
         "without one.",
@@ -52,6 +53,14 @@ def register(sub: Any) -> None:
         "--dry-run",
         action="store_true",
         help="plan for the running robot's open goals on its live state, without executing",
+    )
+    p.add_argument(
+        "--goal",
+        action="append",
+        default=[],
+        metavar="EXPR",
+        help="with --dry-run: also plan for this goal, as if it were added now (nothing is "
+        "added; repeatable)",
     )
     p.add_argument(
         "--engine",
@@ -79,6 +88,8 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     if [args.show is not None, args.offline is not None, args.dry_run].count(True) != 1:
         args.parser.error("say one of 'show', '--dry-run' or '--offline DOMAIN PROBLEM'")
+    if args.goal and not args.dry_run:
+        args.parser.error("--goal goes with --dry-run")
     if args.show:
         return run_show(args)
     if args.dry_run:
@@ -150,25 +161,32 @@ def run_show(args: argparse.Namespace) -> int:
 
 def run_dry_run(args: argparse.Namespace) -> int:
     wait = max(api.PLAN_DRY_RUN.timeout, 3 * (args.timeout or 0.0) + 30.0)
-    reply = ask(args, api.PLAN_DRY_RUN, api.DryRun(args.timeout), timeout=wait)
+    reply = ask(args, api.PLAN_DRY_RUN, api.DryRun(args.timeout, args.goal), timeout=wait)
     ok = reply.status in ("solved", "nothing_to_do")
     if args.json:
         print_json(reply.to_payload())
         return 0 if ok else 1
+
+    def named(goal: int) -> str:
+        """A stored goal by its id, a goal asked about (id -n) by its expression."""
+        return f"goal {goal}" if goal > 0 else reply.asked[-goal - 1]
+
     for held in reply.achieved:
-        print(f"goal {held}: holds already")
+        print(f"{named(held)}: holds already")
     for key, why in sorted(reply.unreachable.items(), key=lambda kv: int(kv[0])):
-        print(f"goal {key}: unreachable: {why}")
+        print(f"{named(int(key))}: unreachable: {why}")
     if reply.status == "nothing_to_do":
         print(f"dry run: nothing to plan ({reply.reason})")
         return 0
     if not ok:
         print(f"dura: dry run: no plan: {reply.reason}", file=sys.stderr)
         return 1
-    goals = ", ".join(str(g) for g in reply.planned) or "-"
+    stored = [str(g) for g in reply.planned if g > 0]
+    asked = [named(g) for g in reply.planned if g < 0]
+    goals = ", ".join((["goals " + ", ".join(stored)] if stored else []) + asked) or "no goal"
     print(
         f"dry run: {len(reply.steps)} steps, makespan {reply.makespan or 0.0:g} s, by "
-        f"{reply.engine} in {reply.time:.2f} s, for goals {goals} (nothing executed)"
+        f"{reply.engine} in {reply.time:.2f} s, for {goals} (nothing executed)"
     )
     span = reply.makespan or 0.0
     rows = [

@@ -1,10 +1,11 @@
 """A dry run (PlanSys2's "get plan"): what the planner would do now, without doing it.
 
-It plans for the open goals from the state the goal planner would plan from (the
-knowledge base's facts, with the at-start effects of paused steps undone), without the
-actions that cannot run now, with the same engine and the same choice of goals by
-priority, and changes nothing: no goal or plan state, no event, no pause of the plan
-under way. Its search waits for the goal planner's (one engine, one worker).
+It plans for the open goals, and for goal expressions asked about as if they were added
+now, from the state the goal planner would plan from (the knowledge base's facts, with
+the at-start effects of paused steps undone), without the actions that cannot run now,
+with the same engine and the same choice of goals by priority, and changes nothing: no
+goal stored, no goal or plan state, no event, no pause of the plan under way. Its search
+waits for the goal planner's (one engine, one worker).
 """
 
 from __future__ import annotations
@@ -14,15 +15,16 @@ from typing import Any
 
 from executive.bus.api.planning import DryRunReply
 from executive.bus.clock import Clock
-from executive.planning.expression import Signature, WorldState
-from executive.planning.goals import specs
+from executive.planning.expression import Signature, WorldState, parse
+from executive.planning.goals import normalized, specs
 from executive.planning.oversubscription import blocked_note, plan_goals
 from executive.planning.partial_order import PartialOrderPlan
 from executive.planning.planner import Planner, PlanningTask
 from executive.planning.problem import World
 from knowledge.domain import DomainInfo
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.records import Fact
+from knowledge.lifecycle import GoalState
+from knowledge.records import Fact, Goal
 
 
 def dry_run(
@@ -34,11 +36,23 @@ def dry_run(
     *,
     clock: Clock,
     timeout: float | None = None,
+    asked: Sequence[str] = (),
 ) -> DryRunReply:
-    """Plan for the open goals on the live state; nothing is stored or executed."""
+    """Plan for the open goals and the goals ``asked`` about (ids -1, -2, ...: nothing is
+    stored) on the live state; nothing is executed.
+
+    Raises:
+        DomainError: a goal asked about does not fit the domain and objects.
+    """
     objects = kb.objects()
-    open_goals = kb.open_goals()
-    usable, refused = specs(open_goals, Signature.of(domain, objects), clock=clock)
+    signature = Signature.of(domain, objects)
+    asked = [normalized(text) for text in asked]
+    for text in asked:
+        parse(text, signature)
+    open_goals = kb.open_goals() + [
+        Goal(-n, text, GoalState.PENDING) for n, text in enumerate(asked, 1)
+    ]
+    usable, refused = specs(open_goals, signature, clock=clock)
     unreachable = {str(i): r.reason for i, r in refused.items()}
     state = WorldState(facts)
     achieved = [g.id for g in usable if state.holds(g.expression)]
@@ -47,7 +61,7 @@ def dry_run(
     if not todo:
         why = "no open goal needs a plan" if ids else "no open goals"
         return DryRunReply("nothing_to_do", planner.engine, 0.0, why, ids, [], achieved,
-                           unreachable, [], None)  # fmt: skip
+                           unreachable, [], None, asked)  # fmt: skip
     task = PlanningTask(domain.path, World(objects, tuple(facts)), todo, frozenset(blocked))
     outcome = plan_goals(planner, task, timeout)
     note = blocked_note(blocked)
@@ -65,6 +79,7 @@ def dry_run(
         unreachable=unreachable,
         steps=steps_json(plan),
         makespan=plan.makespan if plan is not None else None,
+        asked=asked,
     )
 
 

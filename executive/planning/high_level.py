@@ -439,7 +439,8 @@ class HighLevel(Service):
         return api.PlanReply(None if plan is None else to_plain(plan), self._execution())
 
     def _plan_dry_run(self, request: api.DryRun) -> api.DryRunReply:
-        """Plan for the open goals on the live state; nothing changes."""
+        """Plan for the open goals and those asked about on the live state; nothing
+        changes."""
         self._planning()
         return dry_run(
             self.context.kb,
@@ -449,6 +450,7 @@ class HighLevel(Service):
             self.blocked(),
             clock=self.clock,
             timeout=request.timeout,
+            asked=request.goals,
         )
 
     def _state_get(self, request: api.StateQuery) -> api.StateReply:

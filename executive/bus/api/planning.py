@@ -3,6 +3,7 @@ status."""
 
 from __future__ import annotations
 
+from dataclasses import field
 from typing import Annotated, Any
 
 from executive.bus.keys import api
@@ -72,17 +73,20 @@ class PlanReply(Payload):
 
 @payload
 class DryRun(Payload):
-    """Plan for the open goals on the live state without executing (seconds to search;
-    the robot's planner timeout without)."""
+    """Plan for the open goals, and the goal expressions ``goals`` as if they were added
+    now, on the live state without executing (seconds to search; the robot's planner
+    timeout without)."""
 
     timeout: Annotated[float, Between(0.1, 3600.0)] | None = None
+    goals: list[Text] = field(default_factory=list)
 
 
 @payload
 class DryRunReply(Payload):
     """What the planner would do now: the plan for the goals it reaches (``steps`` as
     ``dura plan --offline --json`` prints them), the goals that hold already, and why
-    each other goal is unreachable (by id)."""
+    each other goal is unreachable, by id: a stored goal's id, and for the n-th goal
+    expression asked about (``asked``, not stored) the id -n."""
 
     status: str
     engine: str
@@ -94,6 +98,7 @@ class DryRunReply(Payload):
     unreachable: dict[str, str]
     steps: list[dict[str, Any]]
     makespan: float | None = None
+    asked: list[str] = field(default_factory=list)
 
 
 @payload

@@ -370,3 +370,25 @@ def test_a_dry_run_plans_on_the_live_state_and_changes_nothing(robot: Robot) -> 
     robot.runner.wait_for("take_picture(office)").end(None)
     assert wait_for(lambda: state_of(robot, goal["id"]) is GoalState.ACHIEVED, 30)
     assert "dry run: nothing to plan (no open goals)" in robot.dura("plan", "--dry-run").stdout
+
+
+def test_a_dry_run_plans_for_a_goal_asked_about_without_adding_it(robot: Robot) -> None:
+    stored = (robot.kb.goals(), len(robot.kb.plans()), len(robot.kb.events()))
+    asked = ["(picture_taken office)", "(robot_at  dock)"]
+    dry = robot.dura("plan", "--dry-run", "--goal", asked[0], "--goal", asked[1])
+    assert dry.returncode == 0, dry.stderr
+    lines = dry.stdout.splitlines()
+    assert lines[0] == "(robot_at dock): holds already", lines
+    assert lines[1].startswith("dry run: 2 steps, makespan 7 s, by kairos in "), lines
+    assert lines[1].endswith(" for (picture_taken office) (nothing executed)"), lines
+    assert [line.split()[3] for line in lines[3:]] == ["move_to(dock,", "take_picture(office)"]
+    reply = json.loads(robot.dura("plan", "--dry-run", "--goal", asked[0], "--json").stdout)
+    assert (reply["asked"], reply["goals"], reply["planned"]) == ([asked[0]], [-1], [-1])
+    wrong = robot.dura("plan", "--dry-run", "--goal", "(picture_taken lob)")
+    assert wrong.returncode == 1
+    assert wrong.stderr.strip().splitlines() == [
+        "dura: goal '(picture_taken lob)': unknown object 'lob' (did you mean 'lab'?)"
+    ]
+    assert (robot.kb.goals(), len(robot.kb.plans()), len(robot.kb.events())) == stored
+    alone = robot.dura("plan", "show", "--goal", asked[0])
+    assert alone.returncode == 2 and "--goal goes with --dry-run" in alone.stderr
