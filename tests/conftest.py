@@ -9,8 +9,13 @@ import sys
 import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any
 
 import pytest
+
+from executive.bus.session import Bus
+from executive.bus.verb import Verb
+from knowledge.errors import NoAnswer
 
 ROOT = Path(__file__).resolve().parent.parent
 USECASE = ROOT / "examples" / "usecase" / "robot.yaml"
@@ -66,3 +71,16 @@ def wait_for(condition: Callable[[], object], timeout: float = 5.0) -> bool:
             return True
         time.sleep(0.01)
     return bool(condition())
+
+
+def nobody_answers(bus: Bus, verb: Verb[Any, Any], within: float = 2.0) -> bool:
+    """Whether no process serves ``verb`` (nobody answers it within ``within`` seconds).
+
+    The command line asks such a verb again for its whole timeout (30 s: an executive
+    that has just started serves its verbs one service after another) before it says so
+    in one line; a test that knows nothing is starting asks the bus once."""
+    try:
+        verb.call(bus, timeout=within)
+    except NoAnswer:
+        return True
+    return False

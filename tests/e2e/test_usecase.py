@@ -118,7 +118,7 @@ def test_a_killed_executive_restarts_and_continues_its_open_goals(dura_robot: St
 def test_functionalities_needed_by_later_steps_keep_running_between_the_steps(
     dura_robot: Start,
 ) -> None:
-    robot = dura_robot(USECASE)
+    robot = dura_robot(USECASE, time_scale=FAST)
     goal = robot.submit_goal("(and (picture_taken lab) (picture_taken office) (robot_at dock))")
     robot.wait_for(goal, "achieved", timeout=120)
     moves = [e for e in robot.events("DISPATCH") if e["subject"].startswith("move_to")]
