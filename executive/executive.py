@@ -437,19 +437,28 @@ class ServiceProcess:
             KnowledgeError: another tasks process runs on the knowledge base.
         """
         with contextlib.ExitStack() as stack:
-            run_id = None
+            lock = None
             if self.group == TASKS:  # before waiting: a second one is refused at once
                 lock = stack.enter_context(RunLock(self.kb_path, TASKS))
                 if lock.predecessor is not None:
                     end_leftovers(lock.predecessor)
-                run_id = lock.run_id
             bus = self._connect(stop)
             if bus is None:
                 return
             stack.callback(bus.close)
             kb = stack.enter_context(KnowledgeBase(self.kb_path))
+            if self.group != PLANNING:
+                # what these services log (rule firings, task ends, ...) is on the bus, as
+                # the executive's own events are: for the high level, dura events
+                # --follow, the dashboard, the recorder (a high level relays its own)
+                relay_events(kb, bus)
             context = Context(self.robot, bus, kb)
-            for service in self._services(context, stack, stop, run_id):
+            services = (
+                self._services(context, stack, stop)
+                if lock is None
+                else self._task_services(context, stack, lock.run_id)
+            )
+            for service in services:
                 service.start()
                 stack.callback(service.stop)
             bus.declare_alive(service_alive(self.group))  # who runs the group, for all to see
@@ -468,28 +477,16 @@ class ServiceProcess:
         return connect_when_there(connect, self.endpoint, stop, self._say)
 
     def _services(
-        self,
-        context: Context,
-        stack: contextlib.ExitStack[Any],
-        stop: threading.Event,
-        run_id: str | None,
+        self, context: Context, stack: contextlib.ExitStack[Any], stop: threading.Event
     ) -> list[Service]:
-        """The group's services, in the order they start (``run_id``: the tasks process's
-        run, which marks the processes it starts)."""
-        bus, kb = context.bus, context.kb
+        """The monitoring or planning group's services, in the order they start."""
+        bus = context.bus
         sources: list[TopicSource] = []
-        reads_topics = self.group == MONITORING or (self.group == PLANNING and self.robot.sensing)
+        reads_topics = self.group == MONITORING or self.robot.sensing
         if self.robot.ros2 is not None and reads_topics:  # observers, sensing rules
             sources.append(stack.enter_context(ros2_link(self.robot, self.group)).topics)
-        if self.group != PLANNING:
-            # what these services log (rule firings, task ends, ...) is on the bus, as the
-            # executive's own events are: for the high level, dura events --follow, the
-            # dashboard, the recorder
-            relay_events(kb, bus)
         if self.group == MONITORING:
             return monitoring_services(context, sources)
-        if run_id is not None:
-            return self._task_services(context, stack, run_id)
         runner = bus_tasks(self.robot, bus, EXECUTIVE_ALIVE)
         stack.callback(runner.close)
 
@@ -497,7 +494,6 @@ class ServiceProcess:
             self._say(f"stops: {reason}")
             stop.set()
 
-        # the high level relays what it logs on the events topic itself
         return [
             HighLevel(
                 context, runner, status=remote_status(bus), on_failure=failed, sources=sources
@@ -507,6 +503,8 @@ class ServiceProcess:
     def _task_services(
         self, context: Context, stack: contextlib.ExitStack[Any], run_id: str
     ) -> list[Service]:
+        """The tasks group's services (``run_id``: its run lock's, which marks the
+        processes it starts)."""
         from executive.tasks.executor import TaskExecutor
         from executive.tasks.step_service import StepService
 

@@ -6,9 +6,9 @@ submission interface as declared once in :mod:`executive.bus.api.planning` (goal
 plans, the world's facts and objects, events, status); the declared payload types check
 every request before a handler sees it. Every event logged in the knowledge base is
 also published on the bus key ``events``; the events other processes publish there (a
-task executor or repair rules that run apart) are followed as its own. ``status`` and ``plan/show`` answer from the
-snapshots the plan executer and the goal planner keep: they never wait behind a step
-being dispatched or a plan being computed.
+task executor or repair rules that run apart) are followed as its own. ``status`` and
+``plan/show`` answer from the snapshots the plan executer and the goal planner keep:
+they never wait behind a step being dispatched or a plan being computed.
 
 On start it first takes back what a killed executive's unfinished steps did
 (:mod:`executive.planning.recovery`) and answers on the bus; then, in the background, its
