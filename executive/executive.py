@@ -13,7 +13,7 @@ The monitoring services (observers, diagnosis, repair rules) talk to the rest on
 the bus, so they can also run in a process of their own (``dura run --only
 monitoring``, :class:`ServiceProcess`), beside an executive that runs without them
 (``dura run --without monitoring``). So can the high level (``--only planning``: goals,
-planner, plan executer and their verbs, ``status`` among them): it runs its plans'
+planner, plan executor and their verbs, ``status`` among them): it runs its plans'
 steps on the executive's task executor over the bus (:mod:`executive.bus.api.steps`).
 And so can the task executor with the launcher (``--only tasks``: the components of the
 executive's computer, their verbs and resource monitor, and the plan steps the high
@@ -152,9 +152,9 @@ def component_services(
 
 def monitoring_services(context: Context, sources: Sequence[TopicSource] = ()) -> list[Service]:
     """The observers, the diagnosis engine and the repair rules, in the order they start."""
-    from monitoring.diagnosis.service import DiagnosisService
+    from monitoring.diagnosis.diagnosis_service import DiagnosisService
     from monitoring.observer_manager import ObserverManager
-    from monitoring.repair.service import RuleService
+    from monitoring.repair.rule_service import RuleService
 
     return [
         ObserverManager(context, sources=list(sources)),
@@ -319,7 +319,7 @@ class Executive:
         extra: list[Service] = []
         last: list[Service] = []
         if ros2 is not None:
-            from executive.ros2.goals import Ros2Goals
+            from executive.ros2.goal_topic import Ros2Goals
             from executive.ros2.graph_model import Ros2GraphModel
             from executive.ros2.state import Ros2StatePublisher
 

@@ -23,7 +23,7 @@ from typing import Any
 
 from knowledge.records import to_plain
 from knowledge.tables.components import ComponentTables
-from knowledge.tables.goals import GoalTables
+from knowledge.tables.goals_and_plans import GoalTables
 from knowledge.tables.tasks import TaskTables
 from knowledge.tables.world import WorldTables
 

@@ -8,7 +8,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from knowledge.lifecycle import (
+from knowledge.transitions import (
     GOAL_TRANSITIONS,
     KEEP_TRANSITIONS,
     PLAN_TRANSITIONS,
@@ -17,7 +17,7 @@ from knowledge.lifecycle import (
     TaskState,
 )
 
-__all__ = [  # the states live in knowledge.lifecycle; records names them too
+__all__ = [  # the states live in knowledge.transitions; records names them too
     "GOAL_TRANSITIONS",
     "KEEP_TRANSITIONS",
     "PLAN_TRANSITIONS",

@@ -112,7 +112,7 @@ MIGRATIONS: tuple[tuple[str, ...], ...] = (
     _statements("""
     ALTER TABLE goals ADD COLUMN keep INTEGER NOT NULL DEFAULT 0
     """),
-    # 3: what happened to each step of a plan (written by the plan executer)
+    # 3: what happened to each step of a plan (written by the plan executor)
     ("ALTER TABLE plan_steps ADD COLUMN state TEXT NOT NULL DEFAULT 'pending'",),
 )
 

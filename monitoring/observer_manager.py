@@ -102,7 +102,7 @@ class _Feed:
     handlers: tuple[Handler, ...] = ()
     users: dict[int, _Slot] = field(default_factory=dict)  # the observers on it, by identity
 
-    def dispatch(self, message: Message) -> None:
+    def deliver(self, message: Message) -> None:
         for handler in self.handlers:
             try:
                 handler(message)
@@ -303,11 +303,11 @@ class ObserverManager(Service):
             if feed is None:
                 feed = self._feeds[key] = _Feed()
                 source = next((s for s in self._sources if s.serves(key)), None)
-                dispatch = self._time.handler(feed.dispatch)
+                deliver = self._time.handler(feed.deliver)
                 feed.subscriber = (
-                    source.subscribe(key, dispatch)
+                    source.subscribe(key, deliver)
                     if source is not None
-                    else self.context.bus.subscribe(key, dispatch, decoded=False)
+                    else self.context.bus.subscribe(key, deliver, decoded=False)
                 )
             feed.users[id(slot)] = slot
         self._refresh(slot)

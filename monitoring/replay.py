@@ -39,9 +39,9 @@ from executive.bus.session import Message
 from executive.bus.states import Lifecycle
 from knowledge.description import RobotDescription
 from knowledge.errors import BusError
+from monitoring.diagnosis.diagnosis_service import PERIOD, SETTLE
 from monitoring.diagnosis.engine import DiagnosisEngine
 from monitoring.diagnosis.model import Node, UpdateAction
-from monitoring.diagnosis.service import PERIOD, SETTLE
 from monitoring.diagnosis.timed import TimedDiagnosis
 from monitoring.observer import Environment, Handler, Observer, ObserverResult, make_observer
 from monitoring.observer_config import config_of

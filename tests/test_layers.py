@@ -30,7 +30,7 @@ ALLOWED: dict[str, set[str]] = {
         "knowledge",
     },
     "executive.planning": {"executive.bus", "knowledge"},
-    # the task executor runs plan steps through the plan executer's port
+    # the task executor runs plan steps through the plan executor's port
     "executive.tasks": {
         "executive.bus",
         "executive.runtime",

@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from executive.bus.states import GoalStatus, Lifecycle
-from knowledge.lifecycle import GoalState
+from knowledge.transitions import GoalState
 
 NAMED = frozenset(
     {

@@ -1,6 +1,6 @@
 """A worker thread: the one thread that touches an object's state, running jobs in the
 order they were posted. Other threads post jobs, or call a function there and wait for
-its result (the task executor and the plan executer are built on it)."""
+its result (the task executor and the plan executor are built on it)."""
 
 from __future__ import annotations
 

@@ -17,38 +17,38 @@ from typing import Any, NoReturn
 from executive.cli import deferred
 from knowledge.errors import DuraError
 
-# Each command's module, in the order ``dura --help`` lists them. A module registers its
-# commands with ``register(subparsers)`` (its parsers set ``run(args) -> int``). Only the
+# Each command, in the order ``dura --help`` lists them; ``executive/cli/<command>.py``
+# registers it with ``register(subparsers)`` (its parsers set ``run(args) -> int``). Only the
 # module of the command being run is imported, so that a quick command (status, goal
 # list) starts in tens of milliseconds, not in the time it takes to import the planner,
 # the solvers and the web stack that other commands need.
-COMMANDS: dict[str, str] = {
-    "demo": "demo",
-    "validate": "validate",
-    "run": "run",
-    "host": "host",
-    "goal": "goal",
-    "plan": "plan",
-    "domain": "domain",
-    "state": "world",
-    "object": "world",
-    "events": "status",
-    "status": "status",
-    "task": "task",
-    "schedule": "task",
-    "component": "component",
-    "param": "param",
-    "observe": "observe",
-    "observer": "observer",
-    "dashboard": "dashboard",
-    "graph": "graph",
-    "diagnose": "diagnose",
-    "record": "record",
-    "replay": "replay",
-    "rules": "rules",
-    "kb": "kb",
-    "version": "version",
-}
+COMMANDS = (
+    "demo",
+    "validate",
+    "run",
+    "host",
+    "goal",
+    "plan",
+    "domain",
+    "state",
+    "object",
+    "events",
+    "status",
+    "task",
+    "schedule",
+    "component",
+    "param",
+    "observe",
+    "observer",
+    "dashboard",
+    "graph",
+    "diagnose",
+    "record",
+    "replay",
+    "rules",
+    "kb",
+    "version",
+)
 
 
 def _columns() -> int:
@@ -105,8 +105,7 @@ def build_parser(argv: Sequence[str] = ()) -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     named = next((word for word in argv if not word.startswith("-")), None)
-    wanted = [COMMANDS[named]] if named in COMMANDS else list(COMMANDS.values())
-    for module in dict.fromkeys(wanted):
+    for module in [named] if named in COMMANDS else COMMANDS:
         importlib.import_module(f"executive.cli.{module}").register(sub)
     return parser
 

@@ -33,7 +33,7 @@ from executive.cli.output import print_json
 from executive.ros2.names import dds_topic
 from executive.ros2.participant import Participant
 from executive.ros2.qos import dds_qos
-from executive.ros2.service import ServiceClient
+from executive.ros2.service_client import ServiceClient
 from executive.ros2.types import TypeLibrary
 from executive.testing.harness import RobotProcess, robot_variant
 from knowledge.errors import DuraError

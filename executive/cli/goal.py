@@ -17,7 +17,7 @@ from executive.cli.arguments import identifier, priority, seconds
 from executive.cli.client import add_client_options, ask, connect
 from executive.cli.output import add_json_flag, print_json, table
 from knowledge.errors import DuraError
-from knowledge.lifecycle import GoalState
+from knowledge.transitions import GoalState
 
 REFRESH = 0.2  # seconds at least between two looks at the goal while following it
 CHECK = 2.0  # seconds at most between two looks (should an event be missed)

@@ -1,52 +1,20 @@
-"""``dura events [--follow] [--db FILE]`` and ``dura status``: what a robot does, at a glance."""
+"""``dura status``: what a running robot does, at a glance."""
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-import time
-from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from executive.bus.api import planning as api
-from executive.bus.event_text import diagnosis, line
-from executive.bus.keys import EVENTS
-from executive.bus.session import Bus, Message
+from executive.bus.event_text import diagnosis
 from executive.cli import exits_at_once
-from executive.cli.arguments import count, event_kind
-from executive.cli.client import add_client_options, ask, connect
+from executive.cli.client import add_client_options, ask
 from executive.cli.goal import GOAL_HEADERS, goal_rows
 from executive.cli.output import add_json_flag, print_json, section, table
 
-if TYPE_CHECKING:
-    import queue
-
-PAGE = 1000  # events read at a time when catching up
-
 
 def register(sub: Any) -> None:
-    events = sub.add_parser(
-        "events",
-        help="the execution trace: goals, plans, dispatches, faults, repairs",
-        description="Print the newest events of the knowledge base's log; with --follow, "
-        "keep printing them as they happen until Ctrl-C. --db reads the log from a knowledge "
-        "base file instead (a stopped robot's; a running robot's file may be read too).",
-    )
-    events.add_argument(
-        "-n", "--lines", type=count, default=30, metavar="N", help="how many past events (30)"
-    )
-    events.add_argument(
-        "--kind",
-        type=event_kind,
-        metavar="KIND",
-        help="only events of this kind (e.g. FAIL, TASK_FAILED, COMPONENT_READY)",
-    )
-    events.add_argument("--follow", action="store_true", help="keep printing new events")
-    events.add_argument(
-        "--db", type=Path, metavar="FILE", help="read this knowledge base file, not a robot"
-    )
-    events.set_defaults(run=run_events, parser=events)
     status = sub.add_parser(
         "status",
         help="goals, plan, tasks, components and diagnoses at a glance",
@@ -54,101 +22,9 @@ def register(sub: Any) -> None:
         "the tasks and the components they use, faults and the newest diagnosis.",
     )
     status.set_defaults(run=run_status)
-    for cmd in (events, status):
-        exits_at_once(cmd)
-        add_client_options(cmd)
-        add_json_flag(cmd)
-
-
-def run_events(args: argparse.Namespace) -> int:
-    if args.db is not None:
-        if args.robot is not None or args.endpoint is not None:
-            args.parser.error("--db reads a file; --robot and --endpoint ask an executive")
-        return _events_from_file(args)
-    import queue  # only to follow: not for 'dura status'
-
-    arrived: queue.Queue[dict[str, Any]] = queue.Queue()
-    with connect(args) as bus:
-        if args.follow:  # before the history: nothing falls between the two
-            bus.subscribe(EVENTS, lambda m: arrived.put(m.payload) if _is_event(m) else None)
-        past = api.EVENTS.call(bus, api.EventQuery(limit=args.lines, kind=args.kind)).events
-        if args.json and not args.follow:
-            print_json({"events": past})
-            return 0
-        for event in past:
-            _show(event, args.json)
-        if args.follow:
-            newest = api.EVENTS.call(bus, api.EventQuery(limit=1)).events
-            _follow(bus, arrived, max((int(e["id"]) for e in newest + past), default=0), args)
-    return 0
-
-
-POLL = 0.25  # seconds between two reads of a followed knowledge base file
-
-
-def _events_from_file(args: argparse.Namespace) -> int:
-    """``dura events --db FILE``: the log as the knowledge base file holds it; with
-    ``--follow``, read it again every ``POLL`` seconds (readers never block a writer)."""
-    from knowledge.knowledge_base import KnowledgeBase
-    from knowledge.records import to_plain
-
-    with KnowledgeBase(args.db, readonly=True) as kb:
-        past = to_plain(kb.events(limit=args.lines, kind=args.kind))
-        if args.json and not args.follow:
-            print_json({"events": past})
-            return 0
-        for event in past:
-            _show(event, args.json)
-        if not args.follow:
-            return 0
-        newest = kb.events(limit=1)
-        last = max([int(e["id"]) for e in past] + [e.id for e in newest], default=0)
-        while True:
-            time.sleep(POLL)
-            for event in to_plain(kb.events(after=last, limit=PAGE, oldest=True)):
-                last = int(event["id"])
-                _print_followed(event, args)
-
-
-def _follow(
-    bus: Bus, arrived: queue.Queue[dict[str, Any]], last: int, args: argparse.Namespace
-) -> None:
-    """Print events as they come, in order and without a gap: an event that arrives
-    after a gap (the bus dropped some, or they came before the subscription) is
-    preceded by the missing ones, read from the knowledge base by sequence number."""
-    import queue
-
-    while True:
-        try:
-            event = arrived.get(timeout=0.5)
-        except queue.Empty:
-            continue
-        number = int(event["id"])
-        if number <= last:
-            continue
-        while last < number - 1:
-            page = api.EVENTS.call(bus, api.EventQuery(after=last, limit=PAGE, oldest=True))
-            missing = [e for e in page.events if int(e["id"]) < number]
-            if not missing:
-                break  # not stored yet: the stream's own copies come later
-            for old in missing:
-                _print_followed(old, args)
-            last = int(missing[-1]["id"])
-        _print_followed(event, args)
-        last = number
-
-
-def _print_followed(event: dict[str, Any], args: argparse.Namespace) -> None:
-    if not args.kind or event.get("kind") == args.kind:
-        _show(event, args.json)
-
-
-def _is_event(message: Message) -> bool:
-    return isinstance(message.payload.get("id"), int)
-
-
-def _show(event: dict[str, Any], as_json: bool) -> None:
-    print(json.dumps(event, sort_keys=True) if as_json else line(event), flush=True)
+    exits_at_once(status)
+    add_client_options(status)
+    add_json_flag(status)
 
 
 def run_status(args: argparse.Namespace) -> int:

@@ -1,5 +1,5 @@
-"""``dura task start|list|stop|pause|resume`` and ``dura schedule show``: the task
-executor of a running robot, by hand (the thesis' text interface)."""
+"""``dura task start|list|stop|pause|resume``: the task executor of a running robot, by
+hand (the thesis' text interface)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from typing import Any
 from executive.bus.api import tasks as api
 from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
-from executive.cli.output import add_json_flag, bar, print_json, section, table
+from executive.cli.output import add_json_flag, print_json, table
 from knowledge.errors import DuraError
 
 
@@ -61,12 +61,6 @@ def register(sub: Any) -> None:
         cmd.add_argument("id", metavar="ID", help="the task's id (dura task list)")
         cmd.set_defaults(run=run_verb, verb=verb)
         commands.append(cmd)
-    s = sub.add_parser("schedule", help="the schedule: tasks in time and what they use")
-    ssub = s.add_subparsers(dest="schedule_command", metavar="SCHEDULE_COMMAND")
-    ssub.required = True
-    show = ssub.add_parser("show", help="a timeline of the tasks and their functionalities")
-    show.set_defaults(run=run_schedule)
-    commands.append(show)
     for cmd in commands:
         add_client_options(cmd)
         add_json_flag(cmd)
@@ -117,28 +111,4 @@ def run_verb(args: argparse.Namespace) -> int:
         print_json(task)
     else:
         print(f"task {task['id']}: {task['state']}")
-    return 0
-
-
-def run_schedule(args: argparse.Namespace) -> int:
-    schedule = ask(args, api.SCHEDULE_SHOW)
-    if args.json:
-        print_json(schedule.to_payload())
-        return 0
-    tasks = schedule.tasks
-    span = max((t["end"] for t in tasks), default=0.0)
-    first = min((t["start"] for t in tasks), default=0.0)
-    table(
-        ["id", "task", "state", "start", "end", "uses", "timeline"],
-        [
-            [t["id"], t["name"], t["state"], f"{t['start']:+.1f}", f"{t['end']:+.1f}",
-             ", ".join(t["functionalities"]) or "-",
-             bar(t["start"] - first, t["end"] - t["start"], span - first)]
-            for t in tasks
-        ],
-    )  # fmt: skip
-    section(
-        f"running: {', '.join(schedule.running) or 'nothing'}; "
-        f"permanently faulty: {', '.join(schedule.faulty) or 'none'}"
-    )
     return 0

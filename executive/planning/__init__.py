@@ -16,7 +16,7 @@ it never imports the task executor (steps run through the
 - :mod:`.problem` — unified-planning problems from the domain and the knowledge base;
 - :mod:`.expression` — ground PDDL expressions: nodes, evaluation, reading;
 - :mod:`.stn`, :mod:`.partial_order` — plans as partial orders of steps;
-- :mod:`.plan_executer` — runs a plan (:mod:`.plan_run` its steps, :mod:`.step_run` one
+- :mod:`.plan_executor` — runs a plan (:mod:`.plan_run` its steps, :mod:`.step_run` one
   step, :mod:`.task_runner` the port, :mod:`.state_change` what it reports,
   :mod:`.recovery` after a crash, :mod:`.look_ahead` the rest of the plan checked when
   facts change; :mod:`.bus_tasks` the port over the bus, for ``dura run --only

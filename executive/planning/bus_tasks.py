@@ -1,4 +1,4 @@
-"""Plan steps carried out by a task executor in another process: the plan executer's
+"""Plan steps carried out by a task executor in another process: the plan executor's
 :class:`~executive.planning.task_runner.TaskRunner` over the bus
 (:mod:`executive.bus.api.steps`), for ``dura run --only planning`` and ``--without
 tasks``.
@@ -114,7 +114,7 @@ class BusTasks(TaskRunner):
         request = StepRun(run, plan_id, spec_of(step))
         if self._served.is_set():
             self._send(request)
-        else:  # the plan executer goes on meanwhile (a cancel of the step, another step)
+        else:  # the plan executor goes on meanwhile (a cancel of the step, another step)
             threading.Thread(target=self._send_when_served, args=(request,), daemon=True).start()
         return _BusStep(self, run, self.interruptible.get(step.action, True))
 

@@ -23,8 +23,8 @@ from executive.planning.planner import Planner, PlanningTask
 from executive.planning.problem import World
 from knowledge.domain import DomainInfo
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.lifecycle import GoalState
 from knowledge.records import Fact, Goal
+from knowledge.transitions import GoalState
 
 
 def dry_run(

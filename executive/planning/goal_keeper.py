@@ -41,7 +41,7 @@ LOOK_TIMEOUT = 10.0  # seconds the planner may search for one unreachable goal o
 
 @dataclass(frozen=True)
 class KeeperLinks:
-    """How the keeper reaches the goal planner's threads and the plan executer.
+    """How the keeper reaches the goal planner's threads and the plan executor.
 
     Args:
         post: run a job on the goal planner's thread.

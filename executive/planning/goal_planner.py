@@ -1,12 +1,12 @@
 """The goal planner (thesis 5.1.2, Figure 5.3): plan for every open goal, and own the
 goals' states.
 
-It wakes when a goal is added or cancelled and when the plan executer asks for a new
-plan. Each round it pauses the executer (interruptible tasks pause, critical ones
+It wakes when a goal is added or cancelled and when the plan executor asks for a new
+plan. Each round it pauses the executor (interruptible tasks pause, critical ones
 finish first), reads the open goals and the facts again from the knowledge base, plans
 for all goals (or the best subset by priority, see
 :mod:`executive.planning.oversubscription`), validates and stores the plan, marks the
-goals planned or unreachable with the reason, and hands the plan to the executer. A
+goals planned or unreachable with the reason, and hands the plan to the executor. A
 goal that already holds is achieved without planning; one whose deadline passed fails.
 A goal fails once ``max_attempts`` plans for it have failed. Actions whose task cannot
 run (its behavior or every provider of a capability it needs is permanently faulty)
@@ -16,9 +16,9 @@ that stopped holding are re-posted (:mod:`executive.planning.goal_keeper`).
 
 One owner: the goal planner's thread is the only thread that changes the state of a
 goal or a plan. Its rounds mark goals; a cancel (:meth:`GoalPlanner.cancel`) and the
-plan executer's reports (a plan executing, ended or failed; a goal executing, achieved
+plan executor's reports (a plan executing, ended or failed; a goal executing, achieved
 or past its deadline) are posted to it and applied in order. That thread never waits
-long: pausing the executer (which waits for critical tasks) and the search for a plan
+long: pausing the executor (which waits for critical tasks) and the search for a plan
 run on a second thread, whose results come back to it as jobs. So a cancel takes
 effect at once, also while a plan is being computed, and a search that included a goal
 cancelled meanwhile is thrown away and done again without it: a cancelled goal is never
@@ -44,7 +44,7 @@ from executive.planning.expression import Signature, WorldState
 from executive.planning.goal_keeper import GoalKeeper, KeeperLinks
 from executive.planning.goals import GoalSpec, RefusalCause, specs
 from executive.planning.oversubscription import GoalPlan, blocked_note, plan_goals
-from executive.planning.plan_executer import PlanExecuter
+from executive.planning.plan_executor import PlanExecutor
 from executive.planning.planner import Planner, PlanningTask, PlanResult
 from executive.planning.problem import World
 from executive.planning.state_change import Change, apply_change
@@ -62,7 +62,7 @@ PAUSE_SLICE = 0.5  # seconds between looks at a stop while critical tasks finish
 class RoundPhase(enum.Enum):
     """Where a planning round is."""
 
-    PAUSING = "pausing"  # the executer pauses; critical tasks finish first
+    PAUSING = "pausing"  # the executor pauses; critical tasks finish first
     SEARCHING = "searching"  # the planner searches for a plan
 
 
@@ -75,7 +75,7 @@ class PlannerStatus:
     reason: str = ""  # why it began
     goals: tuple[int, ...] = ()  # the goals open when it began
     since: float | None = None  # when it began (seconds since the epoch)
-    planned: tuple[int, ...] = ()  # the goals of the plan handed to the executer
+    planned: tuple[int, ...] = ()  # the goals of the plan handed to the executor
     starting: bool = False  # the planner is still loading the domain (at the start)
 
 
@@ -95,7 +95,7 @@ class GoalPlanner:
     """Plans for the open goals whenever :meth:`wake` is called, on its own thread
     after :meth:`start` (see the module docstring).
 
-    It takes over the goal and plan state changes ``executer`` reports.
+    It takes over the goal and plan state changes ``executor`` reports.
     """
 
     def __init__(
@@ -103,7 +103,7 @@ class GoalPlanner:
         kb: KnowledgeBase,
         domain: DomainInfo,
         planner: Planner,
-        executer: PlanExecuter,
+        executor: PlanExecutor,
         *,
         max_attempts: int = 5,
         pause_timeout: float | None = None,
@@ -112,7 +112,7 @@ class GoalPlanner:
         self.kb = kb
         self.domain = domain
         self.planner = planner
-        self.executer = executer
+        self.executor = executor
         self.max_attempts = max_attempts
         self.pause_timeout = pause_timeout
         self.blocked = blocked or dict  # action -> why its task cannot run now
@@ -134,12 +134,12 @@ class GoalPlanner:
                 post=self._worker.post,
                 search=self._search.post,
                 want=lambda reason: self._want(reason, False),
-                planning_facts=executer.planning_facts,
+                planning_facts=executor.planning_facts,
                 blocked=self.blocked,
             ),
-            executer.clock,
+            executor.clock,
         )
-        executer.report_to(self._reported)
+        executor.report_to(self._reported)
 
     # --- lifecycle ----------------------------------------------------------------------
 
@@ -191,7 +191,7 @@ class GoalPlanner:
         self._worker.post(lambda: self._keeper.changed(reason, outside=False))
 
     def replan(self, reason: str) -> None:
-        """The executer's ``on_replan`` callback: the current plan failed."""
+        """The executor's ``on_replan`` callback: the current plan failed."""
         self._worker.post(lambda: self._plan_failed(reason))
 
     def cancel(self, goal_id: int, timeout: float = CANCEL_WAIT) -> Goal:
@@ -224,7 +224,7 @@ class GoalPlanner:
         return answer[0]
 
     def _reported(self, change: Change) -> None:
-        """A goal or plan state change the executer saw (on its thread): apply it here."""
+        """A goal or plan state change the executor saw (on its thread): apply it here."""
         self._worker.post(lambda: self._apply(change))
 
     # --- the goal planner's thread --------------------------------------------------------
@@ -290,7 +290,7 @@ class GoalPlanner:
             return
         objects = self.kb.objects()
         usable, refused = specs(
-            self.kb.open_goals(), Signature.of(self.domain, objects), clock=self.executer.clock
+            self.kb.open_goals(), Signature.of(self.domain, objects), clock=self.executor.clock
         )
         failed: dict[int, str] = {}
         for goal_id, refusal in refused.items():
@@ -370,7 +370,7 @@ class GoalPlanner:
             if goal_id in open_now:
                 self.kb.set_goal_state(goal_id, GoalState.UNREACHABLE, why)
         if plan_id is not None and result is not None and result.plan is not None:
-            self.executer.execute(result.plan, plan_id, planned)
+            self.executor.execute(result.plan, plan_id, planned)
         else:
             self._end_plan("no plan for the open goals" if open_now else "no goal is open")
         self._planned = frozenset(g.id for g in planned)
@@ -383,7 +383,7 @@ class GoalPlanner:
         plan = self.kb.latest_plan()
         if plan is not None and plan.state in (PlanState.PENDING, PlanState.EXECUTING):
             self.kb.set_plan_state(plan.id, PlanState.CANCELLED, reason)
-        self.executer.abandon(reason)
+        self.executor.abandon(reason)
 
     def _step(self, round_: _Round, step: Callable[[], None]) -> Callable[[], None]:
         """A job of a round, on either thread: a round that fails is over (logged), and
@@ -405,17 +405,17 @@ class GoalPlanner:
     # --- the search thread ----------------------------------------------------------------
 
     def _pause(self, round_: _Round) -> None:
-        """Pause the executer (critical tasks finish first) and read the facts to plan from."""
+        """Pause the executor (critical tasks finish first) and read the facts to plan from."""
         limit = None if self.pause_timeout is None else time.monotonic() + self.pause_timeout
         while not self._stopping.is_set():
             left = PAUSE_SLICE if limit is None else min(PAUSE_SLICE, limit - time.monotonic())
-            if self.executer.pause(max(0.0, left)):
+            if self.executor.pause(max(0.0, left)):
                 break
             if limit is not None and time.monotonic() >= limit:
                 break  # plan anyway: the tasks still running are in the facts
         if self._stopping.is_set():
             return
-        facts = self.executer.planning_facts()
+        facts = self.executor.planning_facts()
         self._worker.post(self._step(round_, lambda: self._decide(round_, facts)))
 
     def _solve(self, round_: _Round, task: PlanningTask) -> None:

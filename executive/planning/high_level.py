@@ -1,13 +1,13 @@
 """The high level of the executive (thesis 5.1.2) as one service, and its bus API.
 
-It composes the goal planner, the plan executer and the integrity goal generator on the
+It composes the goal planner, the plan executor and the integrity goal generator on the
 robot's knowledge base, with a warm planner worker, and serves the requests of the goal
 submission interface as declared once in :mod:`executive.bus.api.planning` (goals,
 plans, the world's facts and objects, events, status); the declared payload types check
 every request before a handler sees it. Every event logged in the knowledge base is
 also published on the bus key ``events``; the events other processes publish there (a
 task executor or repair rules that run apart) are followed as its own. ``status`` and
-``plan/show`` answer from the snapshots the plan executer and the goal planner keep:
+``plan/show`` answer from the snapshots the plan executor and the goal planner keep:
 they never wait behind a step being dispatched or a plan being computed.
 
 On start it first takes back what a killed executive's unfinished steps did
@@ -23,7 +23,7 @@ fit the robot ends the executive (``on_failure``) with the one-line reason.
 
 The robot's sensing rules (:mod:`executive.planning.sensing`) read their topics through
 the topic sources it is given (ROS 2) or the bus. A change of the world from outside the
-plan (a fact or object set, a component reset or repaired) reaches the plan executer,
+plan (a fact or object set, a component reset or repaired) reaches the plan executor,
 which checks the plan ahead, and the goal planner, which looks again at unreachable
 goals; any change of facts reaches the maintenance goals.
 """
@@ -51,10 +51,10 @@ from executive.planning.expression import Signature, parse_fact
 from executive.planning.goal_planner import GoalPlanner, PlannerStatus
 from executive.planning.goals import submit
 from executive.planning.integrity import IntegrityGoals, IntegrityRule, Trigger, read_rules
-from executive.planning.plan_executer import (
+from executive.planning.plan_executor import (
     ExecutionLimits,
     ExecutionStatus,
-    PlanExecuter,
+    PlanExecutor,
     TaskRunner,
 )
 from executive.planning.planner import Planner
@@ -63,8 +63,8 @@ from executive.planning.recovery import recover
 from executive.planning.sensing import Sensing
 from knowledge.availability import blocked_tasks
 from knowledge.errors import ConfigError, DuraError, KnowledgeError
-from knowledge.lifecycle import PlanState
 from knowledge.records import Event, Fact, to_plain
+from knowledge.transitions import PlanState
 from knowledge.yamlsource import did_you_mean
 
 log = logging.getLogger("dura.high_level")
@@ -79,7 +79,7 @@ WARM_UP_WAIT = 25.0  # seconds a request waits for the planner at start (callers
 
 
 class HighLevel(Service):
-    """Goal planner, plan executer and integrity goals, served on the bus.
+    """Goal planner, plan executor and integrity goals, served on the bus.
 
     Args:
         context: the robot, bus and knowledge base.
@@ -204,11 +204,11 @@ class HighLevel(Service):
             return
         self.domain = domain
         runner = self.runner if isinstance(self.runner, TaskRunner) else self.runner()
-        self.executer = PlanExecuter(
+        self.executor = PlanExecutor(
             kb, runner, robot.tasks, self._replan, self.limits, clock=self.clock
         )
         self._blocked = self.blocked()
-        self.goals = GoalPlanner(kb, self.domain, self.planner, self.executer, blocked=self.blocked)
+        self.goals = GoalPlanner(kb, self.domain, self.planner, self.executor, blocked=self.blocked)
         with self._lock:  # the diagnoses that came meanwhile, then each as it comes
             self.integrity = IntegrityGoals(kb, self.domain, rules, clock=self.clock)
             if self._diagnoses:
@@ -219,7 +219,7 @@ class HighLevel(Service):
         # started outside the lock: starting subscribes on the bus, whose callback
         # threads may be waiting for the lock (a diagnosis)
         integrity.start()
-        self.executer.start()
+        self.executor.start()
         self.goals.start()
         self.sensing = Sensing(
             kb,
@@ -230,7 +230,7 @@ class HighLevel(Service):
             clock=self.clock,
         )
         self.sensing.start()
-        self._running = [self.sensing.stop, self.goals.stop, self.executer.stop]
+        self._running = [self.sensing.stop, self.goals.stop, self.executor.stop]
         self._ready.set()
 
     def wait_ready(self, timeout: float | None = None) -> bool:
@@ -298,7 +298,7 @@ class HighLevel(Service):
 
     def _sensed(self, facts: list[Fact], reason: str) -> None:
         """A sensing rule changed facts: as a user's ``dura state set`` does."""
-        self.executer.facts_changed([(f.name, f.args) for f in facts])
+        self.executor.facts_changed([(f.name, f.args) for f in facts])
         self.goals.wake(reason)
 
     # --- events, diagnoses and integrity goals ---------------------------------------------
@@ -446,7 +446,7 @@ class HighLevel(Service):
             self.context.kb,
             self.domain,
             self.planner,
-            self.executer.planning_facts(),
+            self.executor.planning_facts(),
             self.blocked(),
             clock=self.clock,
             timeout=request.timeout,
@@ -471,7 +471,7 @@ class HighLevel(Service):
                 kb.set_fact(fact)
             kind = "STATE_UNSET" if unset else "STATE_SET"
             kb.log_event(kind, str(fact), {"source": request.source})
-        self.executer.facts_changed([(fact.name, fact.args)])
+        self.executor.facts_changed([(fact.name, fact.args)])
         by = "the user" if request.source == "user" else request.source
         self.goals.wake(f"{fact} {'unset' if unset else 'set'} by {by}")
         return api.FactReply(_fact(fact))
@@ -514,7 +514,7 @@ class HighLevel(Service):
                 name,
                 {"type": objects[name], "facts": [str(f) for f in facts], "source": "user"},
             )
-        self.executer.facts_changed()
+        self.executor.facts_changed()
         self.goals.wake(f"object {name} removed by the user")
         return api.StateReply([_fact(f) for f in facts], {name: objects[name]})
 
@@ -569,7 +569,7 @@ class HighLevel(Service):
         return self._ready.is_set() and self._failure is None
 
     def _execution(self) -> dict[str, Any]:
-        return self.executer.status() if self._started() else dict(to_plain(ExecutionStatus()))
+        return self.executor.status() if self._started() else dict(to_plain(ExecutionStatus()))
 
     def _section(self, name: str) -> Any:
         """A section another service adds to ``status``; its error if it did not answer."""

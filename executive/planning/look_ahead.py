@@ -1,13 +1,13 @@
 """Watch the plan ahead: will the steps still to come work in the world as it is now?
 
 When facts change outside the plan (``dura state set``, a component, a sensing rule),
-the plan executer runs the rest of its plan forward from the current facts, in the
+the plan executor runs the rest of its plan forward from the current facts, in the
 order the planner timed it: each step not yet started checks its at-start condition,
 applies its at-start effects and checks its over-all condition; each step not yet
 ended checks its over-all and at-end conditions and applies its at-end effects; at the end, the plan's open goals
 must hold. The first condition that fails and names a fact that changed is a road
-blocked ahead: the executer asks for a new plan now, not when the robot gets there.
-A failure that names no changed fact is left to the executer as the plan runs (the
+blocked ahead: the executor asks for a new plan now, not when the robot gets there.
+A failure that names no changed fact is left to the executor as the plan runs (the
 simulation follows the planner's timing, which the real run need not keep), and a
 change that breaks nothing changes nothing.
 """

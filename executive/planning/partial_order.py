@@ -1,5 +1,5 @@
-"""A plan as the plan executer runs it: steps in a partial order, with ground conditions
-and effects (thesis 5.1.2, "the plan executer turns the plan into a partial order").
+"""A plan as the plan executor runs it: steps in a partial order, with ground conditions
+and effects (thesis 5.1.2, "the plan executor turns the plan into a partial order").
 
 Pure data: :mod:`executive.planning.stn` builds it from a unified-planning plan. A step may start
 when every step it comes after has reached the named timepoint (started or ended) and
@@ -89,7 +89,7 @@ class Precedence:
 
 @dataclass(frozen=True)
 class Step:
-    """One ground action of a plan and what the executer checks and applies for it.
+    """One ground action of a plan and what the executor checks and applies for it.
 
     ``start`` and ``duration`` are the planner's estimates (seconds from the plan's
     start); ``duration`` is ``None`` for an instantaneous or classical action, whose

@@ -1,9 +1,9 @@
 """One plan under way: which of its steps may start, what starting and ending one does
 to the facts, when one times out, and how the plan fails.
 
-The plan executer (:mod:`executive.planning.plan_executer`) keeps one :class:`PlanRun`
+The plan executor (:mod:`executive.planning.plan_executor`) keeps one :class:`PlanRun`
 for the plan it executes and drives it from its thread; this module holds the rules for
-steps, the executer the commands, the pause, the goals and the thread.
+steps, the executor the commands, the pause, the goals and the thread.
 """
 
 from __future__ import annotations
@@ -32,11 +32,11 @@ from knowledge.records import Fact, PlanState
 
 @dataclass(frozen=True)
 class RunContext:
-    """What every plan run of one executer shares.
+    """What every plan run of one executor shares.
 
     Args:
-        post: run a function on the executer's thread, later.
-        report: where a runner's reports go (posts them to the executer's thread).
+        post: run a function on the executor's thread, later.
+        report: where a runner's reports go (posts them to the executor's thread).
         tell: report a plan state change to its owner.
         on_replan: ask for a new plan, with the reason.
         tokens: numbers that tell a step's current task from earlier ones.

@@ -10,7 +10,7 @@ robot time, so a noisy value does not flap; a value is written when it moved by 
 least ``min_change`` (and at most once per ``hold`` seconds). Each change is one
 transaction with a ``STATE_SET`` or ``STATE_UNSET`` event whose data names the rule
 (``{"source": "sensing", "rule": ..., "topic": ..., "value": ...}``), and goes where a
-user's ``dura state set`` goes: the plan executer, the goal planner and the integrity
+user's ``dura state set`` goes: the plan executor, the goal planner and the integrity
 goals.
 
 All rule state lives on one worker thread; bus and ROS 2 handlers only post to it.

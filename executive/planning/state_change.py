@@ -1,6 +1,6 @@
-"""Goal and plan state changes the plan executer reports to their owner.
+"""Goal and plan state changes the plan executor reports to their owner.
 
-The goal planner's thread is the one writer of goal and plan states. The plan executer
+The goal planner's thread is the one writer of goal and plan states. The plan executor
 runs on a thread of its own, so it never writes them: it reports what it saw (a plan
 started, ended or failed; a goal executing, achieved, or past its deadline) as a
 :class:`GoalChange` or :class:`PlanChange`, and the owner applies it with
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import GoalState, PlanState
 
-log = logging.getLogger("dura.plan_executer")
+log = logging.getLogger("dura.plan_executor")
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
-"""One step of the plan being executed, as the plan executer tracks it.
+"""One step of the plan being executed, as the plan executor tracks it.
 
-Pure bookkeeping on the executer's thread: the step's state, the task carrying it out,
+Pure bookkeeping on the executor's thread: the step's state, the task carrying it out,
 what its at-start effects changed (to take them back), and the stretch of its run that
 counts towards its timeout.
 """
@@ -55,7 +55,7 @@ class ExecutionLimits:
 
 @dataclass
 class StepRun:
-    """What the executer knows about one step of the current plan.
+    """What the executor knows about one step of the current plan.
 
     ``id`` is the identity of the step's run: the id of the DISPATCH event that began
     it. Every later event of the run (START, ADOPT, END, FAIL, CANCEL) names it as
@@ -104,7 +104,7 @@ class StepRun:
 def start_timer(
     seconds: float, post: Callable[[Callable[[], None]], None], fn: Callable[[], None]
 ) -> threading.Timer:
-    """Run ``fn`` through ``post`` (on the executer's thread) after ``seconds``."""
+    """Run ``fn`` through ``post`` (on the executor's thread) after ``seconds``."""
     timer = threading.Timer(max(0.0, seconds), lambda: post(fn))
     timer.daemon = True
     timer.start()

@@ -1,4 +1,4 @@
-"""Turn a unified-planning plan into the partial order the plan executer runs.
+"""Turn a unified-planning plan into the partial order the plan executor runs.
 
 A time-triggered plan becomes a simple temporal network with UP's own conversion
 (``convert_to(PlanKind.STN_PLAN)``), whose constraints between the start points of

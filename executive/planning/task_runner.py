@@ -1,6 +1,6 @@
-"""The plan executer's port to whatever carries out plan steps (the task executor).
+"""The plan executor's port to whatever carries out plan steps (the task executor).
 
-The executer asks a :class:`TaskRunner` to run a step and gets a :class:`StepTask` it
+The executor asks a :class:`TaskRunner` to run a step and gets a :class:`StepTask` it
 may pause, resume or cancel; the runner reports how the step goes through the
 :class:`StepReport` it was given, from any thread. Planning never imports the task
 executor: :mod:`executive.tasks.plan_tasks` implements this port on top of it, and unit

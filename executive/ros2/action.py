@@ -28,7 +28,7 @@ from executive.ros2.discovery import Discovery
 from executive.ros2.names import action_names, dds_topic
 from executive.ros2.participant import Participant, Reader
 from executive.ros2.qos import dds_qos
-from executive.ros2.service import ServiceClient
+from executive.ros2.service_client import ServiceClient
 from executive.ros2.types import TypeLibrary
 from knowledge.ros2_spec import PROFILES
 
@@ -38,8 +38,8 @@ CANCEL_GOAL = "action_msgs/srv/CancelGoal"
 Feedback = Callable[[dict[str, Any]], None]
 
 
-class GoalStatus(enum.IntEnum):
-    """The states of a goal (action_msgs/msg/GoalStatus)."""
+class ActionGoalStatus(enum.IntEnum):
+    """The states of a ROS 2 action goal (action_msgs/msg/GoalStatus)."""
 
     UNKNOWN = 0
     ACCEPTED = 1
@@ -63,7 +63,7 @@ class CancelReturn(enum.IntEnum):
 class ActionResult:
     """How a goal ended: its final status and the result message as a dict."""
 
-    status: GoalStatus
+    status: ActionGoalStatus
     result: dict[str, Any] = field(default_factory=dict)
 
 
@@ -93,15 +93,15 @@ class ActionGoal:
             BusError: the client was closed, or the reply was malformed.
         """
         if self._result is None:
-            return ActionResult(GoalStatus.UNKNOWN)
+            return ActionResult(ActionGoalStatus.UNKNOWN)
         try:
             reply = self._result.result(timeout)
         except FutureTimeout:
             return None
         try:
-            status = GoalStatus(int(reply["status"]))
+            status = ActionGoalStatus(int(reply["status"]))
         except ValueError:
-            status = GoalStatus.UNKNOWN
+            status = ActionGoalStatus.UNKNOWN
         return ActionResult(status, dict(reply.get("result") or {}))
 
     def cancel(self, timeout: float) -> CancelReturn:

@@ -4,7 +4,7 @@ One facade over three concerns, each in a module of its own:
 
 - :mod:`executive.runtime.processes` — the launcher thread that forks every component
   process, pumps its output into its log file and reaps it;
-- :mod:`executive.runtime.lifecycle` — starting, stopping and commanding components,
+- :mod:`executive.runtime.component_lifecycle` — starting, stopping and commanding components,
   and their states (recorded by :mod:`executive.runtime.states`), on this computer or
   through the host agents of others (:mod:`executive.runtime.process_host`,
   :mod:`executive.runtime.remote_host`), alike;
@@ -25,7 +25,7 @@ from executive.bus.security import Credentials
 from executive.bus.session import Bus
 from executive.bus.states import Command
 from executive.runtime.behavior_goals import BehaviorGoals, GoalHandle
-from executive.runtime.lifecycle import LifecycleControl, local_endpoint
+from executive.runtime.component_lifecycle import LifecycleControl, local_endpoint
 from executive.runtime.process_host import ProcessHost
 from executive.runtime.remote_host import HostListener
 from executive.runtime.states import Listener

@@ -1,6 +1,6 @@
 """Where a component's process runs: on this computer, or on another one's host agent.
 
-The lifecycle (:mod:`executive.runtime.lifecycle`) decides what a process's start and
+The lifecycle (:mod:`executive.runtime.component_lifecycle`) decides what a process's start and
 end mean; a :class:`ProcessHost` only starts processes, signals them and tells of their
 ends, with the same exit codes and signals wherever they ran. :class:`LocalHost` forks
 them here (:mod:`executive.runtime.processes`); a remote host

@@ -8,7 +8,7 @@ process group, which ends the component's whole tree, grandchildren included, wh
 component ends or the executive dies. The thread waits on a pidfd per child, so an exit
 is known at once: it kills whatever is left of the child's process group, reaps the
 child, drains its output and hands the exit to the owner of the process
-(:mod:`executive.runtime.lifecycle`). Each child's stdout and stderr go through a pipe
+(:mod:`executive.runtime.component_lifecycle`). Each child's stdout and stderr go through a pipe
 into ``<name>.log``, rotated by size.
 
 What a process means (ready, stopping, failed) is not decided here: this module knows

@@ -27,8 +27,8 @@ from typing import Any
 
 from rosbags.interfaces import Nodetype
 
-from executive.ros2.action import ActionClient, ActionGoal, GoalStatus
-from executive.ros2.service import ServiceClient
+from executive.ros2.action import ActionClient, ActionGoal, ActionGoalStatus
+from executive.ros2.service_client import ServiceClient
 from executive.ros2.types import TypeLibrary
 from executive.sdk import Behavior, GoalCancelled, GoalFailed
 from knowledge.errors import BusError, ConfigError
@@ -139,14 +139,14 @@ class ActionGoals:
                 with self._lock:
                     self._active = None
                 handle.forget()
-            if result.status is GoalStatus.SUCCEEDED:
+            if result.status is ActionGoalStatus.SUCCEEDED:
                 return {"status": "succeeded", "result": result.result}
             with self._lock:
                 interrupted = self._interrupted
-            if result.status is GoalStatus.CANCELED and interrupted:
+            if result.status is ActionGoalStatus.CANCELED and interrupted:
                 self.log.info("goal %s cancelled for the pause; sent again", handle.goal_id.hex())
                 continue  # checkpoint() waits for the resume
-            verb = {GoalStatus.ABORTED: "aborted", GoalStatus.CANCELED: "cancelled"}
+            verb = {ActionGoalStatus.ABORTED: "aborted", ActionGoalStatus.CANCELED: "cancelled"}
             raise GoalFailed(_reason(verb.get(result.status, "lost"), action, result.result))
 
     def _wait(self, handle: ActionGoal, behavior: Behavior) -> Any:

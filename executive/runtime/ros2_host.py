@@ -38,9 +38,9 @@ from typing import Any
 from executive.bus import keys
 from executive.ros2.action import ActionClient
 from executive.ros2.discovery import Discovery
-from executive.ros2.lifecycle import LifecycleClient, TransitionOutcome
+from executive.ros2.lifecycle_node import LifecycleClient, TransitionOutcome
 from executive.ros2.participant import Participant
-from executive.ros2.service import ServiceClient
+from executive.ros2.service_client import ServiceClient
 from executive.ros2.types import TypeLibrary
 from executive.runtime.ros2_goals import ActionGoals, ServiceGoals
 from executive.runtime.ros2_launch import ENV_CONFIG, HostConfig

@@ -8,9 +8,9 @@ and availability to a schedule and configuration changes), the scheduler (clingo
 executor's one worker thread: the ledger of tasks (``ledger``), configuration changes
 on the launcher (``configurator``), the diagnosis model (``diagnosis_model``),
 supervision of behaviors (``supervision``), fault handling (``fault_handling``), the
-decisions carried out (``dispatch``); the service with its bus API and status snapshot
+decisions carried out (``enactment``); the service with its bus API and status snapshot
 (``executor``, ``snapshot``); and the adapter that runs plan steps as tasks
 (``plan_tasks``), also for a high level in another process over the bus
 (``step_service``). It may import :mod:`executive.bus`, :mod:`executive.runtime`, the
-plan executer's port in :mod:`executive.planning` and :mod:`knowledge`.
+plan executor's port in :mod:`executive.planning` and :mod:`knowledge`.
 """

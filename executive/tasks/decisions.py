@@ -9,7 +9,7 @@ decision says which waiting tasks start now (and on which providers), which star
 later (and when to decide again), which wait for a running task to end, which the
 scheduler cancelled (and why), which running tasks change providers, and the
 configuration to run with the steps from the running one. The executor
-(:mod:`executive.tasks.dispatch`) carries the decision out.
+(:mod:`executive.tasks.enactment`) carries the decision out.
 
 :func:`keep_running` then keeps functionalities running that no task holds any more but
 that are still wanted: those the plan's upcoming steps need (consecutive steps on the

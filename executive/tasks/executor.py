@@ -12,7 +12,7 @@ is cancelled (:mod:`executive.tasks.supervision`). Faults are counted and repair
 components (:mod:`executive.tasks.diagnosis_model`).
 
 This module is the service: one worker thread owns the tasks and runs every step
-(:mod:`executive.tasks.dispatch`); the public methods post to it, and the bus API
+(:mod:`executive.tasks.enactment`); the public methods post to it, and the bus API
 (:mod:`executive.bus.api.tasks`, :mod:`executive.bus.api.parameters`) calls them. Status queries (:meth:`TaskExecutor.tasks`,
 :meth:`TaskExecutor.schedule`) answer from a :class:`~executive.tasks.snapshot.Snapshot`
 the worker replaces after each job and before each component start, never from the
@@ -61,7 +61,7 @@ from executive.bus.service import Context, Service
 from executive.bus.worker import Worker
 from executive.runtime.launcher import Launcher
 from executive.tasks.arguments import check_objects
-from executive.tasks.dispatch import Dispatcher
+from executive.tasks.enactment import Enactor
 from executive.tasks.snapshot import Snapshot
 from executive.tasks.task import Listener, Task, TaskEnd, TaskHandle, TaskPhase
 from knowledge.domain import DomainInfo, read_domain
@@ -89,7 +89,7 @@ class TaskExecutor(Service):
         sequential: change configurations one component after another, stopping first
             (by default the new components start all at once, before the old stop).
         clock: robot time (default: this process's): a failed plan step's
-            functionalities wait :data:`~executive.tasks.dispatch.REPLAN_GRACE` of it
+            functionalities wait :data:`~executive.tasks.enactment.REPLAN_GRACE` of it
             for the new plan.
     """
 
@@ -114,7 +114,7 @@ class TaskExecutor(Service):
         self.robot = context.robot
         self.kb = context.kb
         self._worker = Worker("task executor", after_each=self._publish)
-        self._dispatcher: Dispatcher | None = None
+        self._enactor: Enactor | None = None
         self._declared: list[Any] = []
         # tasks asked for but not yet taken up by the worker, and the snapshot; the lock
         # keeps a new task from being lost between a request and the worker's next picture
@@ -126,7 +126,7 @@ class TaskExecutor(Service):
     # --- lifecycle -----------------------------------------------------------------------
 
     def start(self) -> None:
-        dispatcher = self._dispatcher = Dispatcher(
+        enactor = self._enactor = Enactor(
             self.context,
             self.launcher,
             self,
@@ -142,12 +142,12 @@ class TaskExecutor(Service):
                 if not task.state.is_final:
                     reason = "the executive stopped before it ended"
                     self.kb.set_task_state(task.id, TaskState.FAILED, reason=reason)
-        self._snapshot = Snapshot(faulty=dispatcher.faults.faulty())
-        self.launcher.add_listener(dispatcher.repairs.on_component_state)
-        self.launcher.add_host_listener(dispatcher.repairs.on_host)
+        self._snapshot = Snapshot(faulty=enactor.faults.faulty())
+        self.launcher.add_listener(enactor.repairs.on_component_state)
+        self.launcher.add_host_listener(enactor.repairs.on_host)
         self._worker.start()
         if any(f.standby for f in self.robot.functionalities.values()):
-            self._worker.post(lambda: dispatcher.reschedule("warm spares start"))
+            self._worker.post(lambda: enactor.reschedule("warm spares start"))
         self._declared = self._serve()
 
     def stop(self) -> None:
@@ -157,10 +157,10 @@ class TaskExecutor(Service):
             with contextlib.suppress(Exception):
                 entity.undeclare()
         self._declared = []
-        dispatcher = self._running
-        self.launcher.remove_listener(dispatcher.repairs.on_component_state)
-        self.launcher.remove_host_listener(dispatcher.repairs.on_host)
-        self._call(dispatcher.shutdown, timeout=STOP_TIMEOUT)
+        enactor = self._running
+        self.launcher.remove_listener(enactor.repairs.on_component_state)
+        self.launcher.remove_host_listener(enactor.repairs.on_host)
+        self._call(enactor.shutdown, timeout=STOP_TIMEOUT)
         self._worker.stop()
 
     # --- the API -------------------------------------------------------------------------
@@ -185,7 +185,7 @@ class TaskExecutor(Service):
             DuraError: the robot has no such behavior, a constraint is invalid, or the
                 executor is not started.
         """
-        dispatcher = self._running
+        enactor = self._running
         spec = self.robot.behaviors.get(behavior)
         if spec is None:
             known = ", ".join(sorted(self.robot.behaviors)) or "none"
@@ -209,7 +209,7 @@ class TaskExecutor(Service):
         def take() -> None:
             with self._lock:
                 del self._arrivals[task.id]
-            dispatcher.request(task)
+            enactor.request(task)
 
         self._worker.post(take)
         return TaskHandle(self, task)
@@ -217,47 +217,47 @@ class TaskExecutor(Service):
     def expect(self, behaviors: Sequence[str]) -> None:
         """The behaviors of the plan's steps still to come, in order (none: no plan):
         what they need keeps running between the steps. Returns at once."""
-        dispatcher = self._running
+        enactor = self._running
         upcoming = tuple(behaviors)
-        self._worker.post(lambda: dispatcher.expect(upcoming))
+        self._worker.post(lambda: enactor.expect(upcoming))
 
     def pause(self, task_id: str) -> None:
-        dispatcher = self._running
-        self._call(lambda: dispatcher.supervisor.pause(dispatcher.ledger.get(task_id)))
+        enactor = self._running
+        self._call(lambda: enactor.supervisor.pause(enactor.ledger.get(task_id)))
 
     def resume(self, task_id: str) -> None:
-        dispatcher = self._running
-        self._call(lambda: dispatcher.supervisor.resume(dispatcher.ledger.get(task_id)))
+        enactor = self._running
+        self._call(lambda: enactor.supervisor.resume(enactor.ledger.get(task_id)))
 
     def cancel(self, task_id: str, reason: str = "cancelled") -> None:
         """End a task for its requester (:attr:`TaskEnd.REQUESTER`); returns at once."""
-        dispatcher = self._running
-        self._worker.post(lambda: dispatcher.cancel(task_id, TaskEnd.REQUESTER, reason))
+        enactor = self._running
+        self._worker.post(lambda: enactor.cancel(task_id, TaskEnd.REQUESTER, reason))
 
     def fault(self, name: str, reason: str, *, permanent: bool = False) -> FaultReply:
         """A fault of a component reported by a repair rule or a user (restart / faulty)."""
         self._check_component(name)
-        dispatcher = self._running
+        enactor = self._running
         return self._call(
-            lambda: dispatcher.repairs.fault(name, reason, permanent=permanent, restart=True)
+            lambda: enactor.repairs.fault(name, reason, permanent=permanent, restart=True)
         )
 
     def reset(self, name: str) -> list[str]:
         """Clear a component's faults after maintenance; the functionalities usable again."""
         self._check_component(name)
-        dispatcher = self._running
-        return self._call(lambda: dispatcher.repairs.reset(name))
+        enactor = self._running
+        return self._call(lambda: enactor.repairs.reset(name))
 
     def start_by_hand(self, name: str) -> ComponentState:
         """Start a component for a user (``dura component start``) and wait until it is
         ready: supervised like the others (its exit is a fault), kept running until a
         stop by hand."""
         self.launcher.kind(name)  # refuses an unknown name, as the launcher words it
-        dispatcher = self._running
+        enactor = self._running
 
         def start() -> ComponentState:
-            dispatcher.repairs.started_by_hand(name)
-            return dispatcher.configurator.start_by_hand(name)
+            enactor.repairs.started_by_hand(name)
+            return enactor.configurator.start_by_hand(name)
 
         return self._call(start, timeout=HAND_TIMEOUT)
 
@@ -268,12 +268,12 @@ class TaskExecutor(Service):
             DuraError: a task holds it (it stops when no task needs it).
         """
         self.launcher.kind(name)
-        dispatcher = self._running
+        enactor = self._running
 
         def stop() -> ComponentState:
             users = sorted(
                 t.id
-                for t in dispatcher.ledger.holding()
+                for t in enactor.ledger.holding()
                 if t.behavior == name or name in t.providers.values()
             )
             if users:
@@ -282,7 +282,7 @@ class TaskExecutor(Service):
                     f"'{name}' serves task {ids}: it stops when no task needs it "
                     f"(or stop the task: dura task stop {users[0]})"
                 )
-            return dispatcher.configurator.stop_by_hand(name, held=False)
+            return enactor.configurator.stop_by_hand(name, held=False)
 
         return self._call(stop, timeout=HAND_TIMEOUT)
 
@@ -293,8 +293,8 @@ class TaskExecutor(Service):
         Raises:
             DuraError: no such component, or a value of the wrong type (the reason).
         """
-        dispatcher = self._running
-        return self._call(lambda: dispatcher.parameters.set(name, key, value), timeout=HAND_TIMEOUT)
+        enactor = self._running
+        return self._call(lambda: enactor.parameters.set(name, key, value), timeout=HAND_TIMEOUT)
 
     def tasks(self) -> list[dict[str, Any]]:
         """Every task with its phase and configuration (newest last), from the snapshot."""
@@ -308,10 +308,10 @@ class TaskExecutor(Service):
     # --- the worker ----------------------------------------------------------------------
 
     @property
-    def _running(self) -> Dispatcher:
-        if self._dispatcher is None:
+    def _running(self) -> Enactor:
+        if self._enactor is None:
             raise DuraError("the task executor is not started")
-        return self._dispatcher
+        return self._enactor
 
     def _call(self, fn: Callable[[], T], timeout: float = CALL_TIMEOUT) -> T:
         """Run ``fn`` on the worker and return its result (or raise)."""
@@ -319,10 +319,10 @@ class TaskExecutor(Service):
 
     def _publish(self) -> None:
         """Take a new snapshot (on the worker: after each job, before each component start)."""
-        dispatcher = self._running
-        views = dispatcher.ledger.views()
-        running = dispatcher.configurator.configuration.functionalities
-        faulty = dispatcher.faults.faulty()
+        enactor = self._running
+        views = enactor.ledger.views()
+        running = enactor.configurator.configuration.functionalities
+        faulty = enactor.faults.faulty()
         with self._lock:
             arrived = [t.view() for t in self._arrivals.values()]
             self._snapshot = Snapshot((*views, *arrived), running, faulty)
@@ -336,24 +336,24 @@ class TaskExecutor(Service):
 
     def _serve(self) -> list[Any]:
         bus = self.context.bus
-        dispatcher = self._running
+        enactor = self._running
 
         def stop(task: Task) -> None:
-            dispatcher.end(task, TaskEnd.USER, "stopped by the user")
+            enactor.end(task, TaskEnd.USER, "stopped by the user")
 
         return [
             TASK_START.serve(bus, self._start_request),
             TASK_LIST.serve(bus, lambda _: TasksReply(self.tasks())),
             TASK_STOP.serve(bus, lambda r: self._on_task(r, stop)),
-            TASK_PAUSE.serve(bus, lambda r: self._on_task(r, dispatcher.supervisor.pause)),
-            TASK_RESUME.serve(bus, lambda r: self._on_task(r, dispatcher.supervisor.resume)),
+            TASK_PAUSE.serve(bus, lambda r: self._on_task(r, enactor.supervisor.pause)),
+            TASK_RESUME.serve(bus, lambda r: self._on_task(r, enactor.supervisor.resume)),
             SCHEDULE_SHOW.serve(bus, lambda _: self._schedule_reply()),
             COMPONENT_RESTART.serve(bus, self._restart_request),
             COMPONENT_FAULT.serve(bus, self._fault_request),
             COMPONENT_RESET.serve(bus, self._reset_request),
             PARAMETER_SET.serve(bus, lambda r: self.set_parameter(r.component, r.key, r.value)),
-            PARAMETER_GET.serve(bus, lambda r: dispatcher.parameters.get(r.component, r.key)),
-            PARAMETER_LIST.serve(bus, lambda r: dispatcher.parameters.list(r.component)),
+            PARAMETER_GET.serve(bus, lambda r: enactor.parameters.get(r.component, r.key)),
+            PARAMETER_LIST.serve(bus, lambda r: enactor.parameters.list(r.component)),
         ]
 
     def _start_request(self, request: TaskStart) -> TaskStarted:

@@ -24,7 +24,7 @@ from executive.runtime.launcher import Launcher
 from executive.tasks.configurator import Configurator
 from executive.tasks.faults import Faults, TaskAction
 from executive.tasks.ledger import TaskLedger
-from executive.tasks.supervision import End, Post, Supervisor
+from executive.tasks.supervision import BehaviorSupervisor, End, Post
 from executive.tasks.task import TaskEnd
 from knowledge.description import Kind, RobotDescription
 from knowledge.knowledge_base import KnowledgeBase
@@ -47,7 +47,7 @@ class FaultHandler:
         ledger: TaskLedger,
         launcher: Launcher,
         configurator: Configurator,
-        supervisor: Supervisor,
+        supervisor: BehaviorSupervisor,
         faults: Faults,
         end: End,
         reschedule: Callable[[str], None],

@@ -1,10 +1,10 @@
-"""Plan steps as tasks: the plan executer's runner on the task executor.
+"""Plan steps as tasks: the plan executor's runner on the task executor.
 
 A step of action ``a`` runs the task the robot description maps ``a`` to: its behavior,
 with a goal whose fields are filled in from the step's objects (``move_to(dock, lab)``
 → ``{start: dock, target: lab}``), for the planned duration. The task executor reports
 back; a task the scheduler cancels fails the step with the reason, and the planner
-replans. A task the plan executer cancels itself (:attr:`TaskEnd.REQUESTER`) reports
+replans. A task the plan executor cancels itself (:attr:`TaskEnd.REQUESTER`) reports
 nothing more.
 """
 

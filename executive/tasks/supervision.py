@@ -31,7 +31,7 @@ End = Callable[[Task, TaskEnd, str], None]
 Post = Callable[[Callable[[], None]], None]
 
 
-class Supervisor:
+class BehaviorSupervisor:
     """Starts, watches, restarts, pauses and resumes the tasks' behaviors.
 
     Args:

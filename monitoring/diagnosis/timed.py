@@ -1,7 +1,7 @@
 """The diagnosis service's decisions on a clock that someone else drives: when to
 diagnose, and which results to publish (the offline replay's diagnosis).
 
-As :class:`monitoring.diagnosis.service.DiagnosisService` does on its thread: it
+As :class:`monitoring.diagnosis.diagnosis_service.DiagnosisService` does on its thread: it
 learns observers from their observations and keeps the model's nodes as it is told;
 it diagnoses ``settle`` seconds after a verdict or the model changed (what changes
 meanwhile is diagnosed with it), publishes a result that differs from the last one
@@ -17,10 +17,10 @@ from dataclasses import dataclass
 from executive.bus.payloads import ObservationInfo
 from knowledge.errors import ConfigError, DuraError
 from monitoring.diagnosis import learning
+from monitoring.diagnosis.diagnosis_service import PERIOD, SETTLE
 from monitoring.diagnosis.engine import DiagnosisEngine
 from monitoring.diagnosis.model import ModelUpdate, Node, UpdateAction
 from monitoring.diagnosis.result import DiagnosisResult, Status
-from monitoring.diagnosis.service import PERIOD, SETTLE
 
 log = logging.getLogger("dura.diagnosis")
 

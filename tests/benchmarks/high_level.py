@@ -12,9 +12,9 @@
 2. **Watching the plan ahead.** The same delivery, real time: a road the plan takes
    later, ``(road store hall0)``, is blocked while the robot drives to the store.
    Without the block, the robot gets to that road (the step is dispatched) some
-   seconds after the plan started; with it, the executer replans right after the
+   seconds after the plan started; with it, the executor replans right after the
    block. The table shows both, and how much earlier the replan comes than the robot
-   would have found the road blocked (the executer without watching ahead replans
+   would have found the road blocked (the executor without watching ahead replans
    only then: the step cannot start).
 """
 
@@ -117,7 +117,7 @@ def ahead(runs: int) -> None:
                 f"{n + 1:>3} {there:>20.2f} {blocked:>8.2f} {replan:>9.2f} {there - replan:>10.2f}"
             )
     print("(seconds after the plan started; 'earlier': when the robot would have found the")
-    print(" road blocked, minus when the executer watching ahead replanned)")
+    print(" road blocked, minus when the executor watching ahead replanned)")
 
 
 def main() -> None:

@@ -207,10 +207,10 @@ def serve(domain: int) -> None:
 
 def round_trips(domain: int, count: int) -> list[tuple[str, list[float]]]:
     """Milliseconds of each kind of call to the stand-in nodes in another process."""
-    from executive.ros2.action import ActionClient, GoalStatus
-    from executive.ros2.lifecycle import LifecycleClient
+    from executive.ros2.action import ActionClient, ActionGoalStatus
+    from executive.ros2.lifecycle_node import LifecycleClient
     from executive.ros2.participant import Participant
-    from executive.ros2.service import ServiceClient
+    from executive.ros2.service_client import ServiceClient
     from knowledge.ros2_messages import message_store
     from tests.conftest import ROOT
 
@@ -246,7 +246,7 @@ def round_trips(domain: int, count: int) -> list[tuple[str, list[float]]]:
             far = {"pose": {"pose": {"position": {"x": 50.0}}}}
             for _ in range(max(1, count // 4)):
                 back = action.send(here, timeout=5).result(10)  # where the last one stopped
-                assert back is not None and back.status is GoalStatus.SUCCEEDED
+                assert back is not None and back.status is ActionGoalStatus.SUCCEEDED
                 goal = timed(
                     "action goal accepted (send_goal)", lambda: action.send(far, timeout=5)
                 )
@@ -254,14 +254,14 @@ def round_trips(domain: int, count: int) -> list[tuple[str, list[float]]]:
                 # the stand-in looks for a cancellation ten times a second; the answer is at once
                 timed("action cancel answered (cancel_goal)", lambda g=goal: g.cancel(5))
                 cancelled = goal.result(10)
-                assert cancelled is not None and cancelled.status is GoalStatus.CANCELED
+                assert cancelled is not None and cancelled.status is ActionGoalStatus.CANCELED
                 action.send(here, timeout=5).result(10)
                 began = time.perf_counter()
                 result = action.send(here, timeout=5).result(10)
                 out.setdefault("action goal to its result (nothing to do)", []).append(
                     (time.perf_counter() - began) * 1000
                 )
-                assert result is not None and result.status is GoalStatus.SUCCEEDED
+                assert result is not None and result.status is ActionGoalStatus.SUCCEEDED
             action.close()
             node.close()
             trigger.close()

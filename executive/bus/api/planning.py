@@ -9,7 +9,7 @@ from typing import Annotated, Any
 from executive.bus.keys import api
 from executive.bus.schema import Between, Payload, Text, payload
 from executive.bus.verb import Empty, Verb
-from knowledge.lifecycle import GoalState
+from knowledge.transitions import GoalState
 
 Count = Annotated[int, Between(0, 2**63 - 1)]
 Priority = Annotated[int, Between(-(10**9), 10**9)]  # what the CLI accepts too

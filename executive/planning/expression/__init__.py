@@ -1,7 +1,7 @@
 """Ground PDDL expressions over the knowledge base's facts: goals, conditions, effects.
 
 - :mod:`.nodes` — the tree: frozen nodes (``Atom``, ``And``, ``Compare``, ...) with no
-  unified-planning objects in them, so the plan executer and the CLI evaluate them
+  unified-planning objects in them, so the plan executor and the CLI evaluate them
   without loading a planner;
 - :mod:`.world_state` — :class:`WorldState`, evaluating them over facts;
 - :mod:`.reader` — reading them from PDDL text against a :class:`Signature`, with a

@@ -2,7 +2,7 @@
 
 Goals, the conditions of plan steps and the conditions of integrity rules are all
 ground expressions: a small tree of frozen nodes with no unified-planning objects in
-it, so the plan executer and the CLI evaluate them without loading a planner.
+it, so the plan executor and the CLI evaluate them without loading a planner.
 """
 
 from __future__ import annotations

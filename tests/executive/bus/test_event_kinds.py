@@ -10,7 +10,7 @@ from collections.abc import Iterator
 from executive.bus.event_kinds import FAMILIES, KINDS, NAMED, known
 from executive.bus.states import GoalStatus, Lifecycle
 from executive.tasks.task import TaskPhase
-from knowledge.lifecycle import GoalState
+from knowledge.transitions import GoalState
 from tests.conftest import ROOT
 
 PACKAGES = ("executive", "monitoring", "knowledge")

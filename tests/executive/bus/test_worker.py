@@ -1,4 +1,4 @@
-"""The worker thread the task executor and the plan executer run on."""
+"""The worker thread the task executor and the plan executor run on."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""A scripted task runner: the plan executer's collaborator in unit tests.
+"""A scripted task runner: the plan executor's collaborator in unit tests.
 
 It stands in for the task executor (a separate part with its own tests), not for
 robot hardware: each step is started at once and, unless the script says otherwise,
@@ -14,7 +14,7 @@ from collections.abc import Collection, Mapping
 from dataclasses import dataclass, field
 
 from executive.planning.partial_order import Step
-from executive.planning.plan_executer import StepReport, StepTask, TaskRunner
+from executive.planning.plan_executor import StepReport, StepTask, TaskRunner
 
 
 @dataclass

@@ -1,4 +1,4 @@
-"""The goal planner with a real planner, the plan executer and a scripted task runner."""
+"""The goal planner with a real planner, the plan executor and a scripted task runner."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 from executive.planning.goal_planner import GoalPlanner
 from executive.planning.goals import submit
 from executive.planning.partial_order import Step
-from executive.planning.plan_executer import PlanExecuter, StepReport, StepTask
+from executive.planning.plan_executor import PlanExecutor, StepReport, StepTask
 from executive.planning.planner import Planner
 from knowledge.errors import KnowledgeError
 from knowledge.knowledge_base import KnowledgeBase
@@ -26,11 +26,11 @@ from tests.executive.planning.planning_cases import (
     usecase_kb_fixture,  # noqa: F401 (a fixture)
 )
 from tests.executive.planning.scripted_runner import ScriptedRunner
-from tests.executive.planning.test_plan_executer import TASKS, eventually
+from tests.executive.planning.test_plan_executor import TASKS, eventually
 
 
 class Executive:
-    """The high level of an executive: goal planner and plan executer on one KB."""
+    """The high level of an executive: goal planner and plan executor on one KB."""
 
     def __init__(
         self,
@@ -43,16 +43,16 @@ class Executive:
         self.kb = kb
         self.runner = runner
         self.blocked = dict(blocked or {})
-        self.executer = PlanExecuter(kb, runner, TASKS, self._replan)
+        self.executor = PlanExecutor(kb, runner, TASKS, self._replan)
         self.goals = GoalPlanner(
             kb,
             usecase_domain(),
             planner,
-            self.executer,
+            self.executor,
             max_attempts=attempts,
             blocked=lambda: self.blocked,
         )
-        self.executer.start()
+        self.executor.start()
         self.goals.start()
 
     def _replan(self, reason: str) -> None:
@@ -71,7 +71,7 @@ class Executive:
 
     def stop(self) -> None:
         self.goals.stop()
-        self.executer.stop()
+        self.executor.stop()
 
 
 @pytest.fixture
@@ -295,7 +295,7 @@ def test_a_cancelled_goal_stays_cancelled_and_a_second_cancel_says_so(
     assert kinds[-1] == "GOAL_CANCELLED" and kinds.count("GOAL_CANCELLED") == 1
 
 
-def test_the_executer_reports_and_the_goal_planner_writes_every_goal_state(
+def test_the_executor_reports_and_the_goal_planner_writes_every_goal_state(
     executive: Callable[..., Executive],
 ) -> None:
     ex = executive()

@@ -1,4 +1,4 @@
-"""Recovery after a crash: the plan executer on a real knowledge base, "killed" by
+"""Recovery after a crash: the plan executor on a real knowledge base, "killed" by
 copying the committed database at a chosen moment, and the copy recovered as a
 restarted executive recovers it.
 
@@ -23,7 +23,7 @@ from executive.planning.partial_order import (
     Step,
     Timepoint,
 )
-from executive.planning.plan_executer import PlanExecuter, StepReport, StepTask
+from executive.planning.plan_executor import PlanExecutor, StepReport, StepTask
 from executive.planning.recovery import recover
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Event, Fact
@@ -84,23 +84,23 @@ def logged(kb: KnowledgeBase, kind: str, label: str) -> list[Event]:
     return [e for e in kb.events(kind=kind) if e.subject == label]
 
 
-class Executer:
-    """A plan executer on the use-case KB whose ``move_to`` steps wait to be finished."""
+class Executor:
+    """A plan executor on the use-case KB whose ``move_to`` steps wait to be finished."""
 
     def __init__(self, kb: KnowledgeBase) -> None:
         self.kb = kb
         kb.log_event("EXECUTIVE_STARTED", "usecase")  # as the executive does first
         self.runner = ScriptedRunner(held={"move_to"})
         self.replans: list[str] = []
-        self.executer = PlanExecuter(
+        self.executor = PlanExecutor(
             kb, self.runner, ("move_to", "take_picture"), self.replans.append
         )
-        self.executer.start()
+        self.executor.start()
 
     def execute(self, *steps: Step) -> int:
         plan = PartialOrderPlan(steps)
         plan_id = self.kb.store_plan(plan.records()).id
-        self.executer.execute(plan, plan_id, [])
+        self.executor.execute(plan, plan_id, [])
         return plan_id
 
     def started(self, label: str, count: int = 1) -> None:
@@ -108,27 +108,27 @@ class Executer:
 
 
 @pytest.fixture
-def executer(usecase_kb: KnowledgeBase) -> Iterator[Executer]:
-    made = Executer(usecase_kb)
+def executor(usecase_kb: KnowledgeBase) -> Iterator[Executor]:
+    made = Executor(usecase_kb)
     yield made
-    made.executer.stop()
+    made.executor.stop()
 
 
 def test_a_step_adopted_by_a_new_plan_and_ended_is_not_undone_after_a_crash(
-    executer: Executer, tmp_path: Path
+    executor: Executor, tmp_path: Path
 ) -> None:
     """The issue's robot in two places: plan 2 continues plan 1's drive to the lab,
     which ends; the crash comes while plan 2 drives on to the office."""
-    executer.execute(move(0, "dock", "lab"), picture(1, "lab", ended(0)))
-    executer.started("move_to(dock, lab)")
-    assert executer.executer.pause(timeout=10)
-    executer.execute(
+    executor.execute(move(0, "dock", "lab"), picture(1, "lab", ended(0)))
+    executor.started("move_to(dock, lab)")
+    assert executor.executor.pause(timeout=10)
+    executor.execute(
         move(0, "dock", "lab"), picture(1, "lab", ended(0)), move(2, "lab", "office", ended(1))
     )
-    executer.runner.wait_for("move_to(dock, lab)").end(None)
-    executer.started("move_to(lab, office)")
+    executor.runner.wait_for("move_to(dock, lab)").end(None)
+    executor.started("move_to(lab, office)")
 
-    kb = crashed(executer.kb, tmp_path)
+    kb = crashed(executor.kb, tmp_path)
     assert recover(kb) == ["move_to(lab, office)"]
 
     assert places(kb) == ["lab"]  # where the finished steps left the robot
@@ -138,17 +138,17 @@ def test_a_step_adopted_by_a_new_plan_and_ended_is_not_undone_after_a_crash(
 
 
 def test_a_step_the_new_plan_cancels_is_undone_once_and_logged_with_its_own_plan(
-    executer: Executer, tmp_path: Path
+    executor: Executor, tmp_path: Path
 ) -> None:
-    first = executer.execute(move(0, "dock", "lab"))
-    executer.started("move_to(dock, lab)")
-    assert executer.executer.pause(timeout=10)
-    second = executer.execute(move(0, "dock", "office"))
-    executer.started("move_to(dock, office)")
-    (cancel,) = logged(executer.kb, "CANCEL", "move_to(dock, lab)")
+    first = executor.execute(move(0, "dock", "lab"))
+    executor.started("move_to(dock, lab)")
+    assert executor.executor.pause(timeout=10)
+    second = executor.execute(move(0, "dock", "office"))
+    executor.started("move_to(dock, office)")
+    (cancel,) = logged(executor.kb, "CANCEL", "move_to(dock, lab)")
     assert cancel.data["plan"] == first
 
-    kb = crashed(executer.kb, tmp_path)
+    kb = crashed(executor.kb, tmp_path)
     assert recover(kb) == ["move_to(dock, office)"]
 
     assert places(kb) == ["dock"]
@@ -158,23 +158,23 @@ def test_a_step_the_new_plan_cancels_is_undone_once_and_logged_with_its_own_plan
 
 
 def test_every_event_of_a_step_run_names_the_run_whatever_plan_continues_it(
-    executer: Executer,
+    executor: Executor,
 ) -> None:
-    executer.execute(move(0, "dock", "lab"))
-    executer.started("move_to(dock, lab)")
-    assert executer.executer.pause(timeout=10)
-    executer.execute(picture(0, "lab"), move(1, "dock", "lab", ended(0)))
+    executor.execute(move(0, "dock", "lab"))
+    executor.started("move_to(dock, lab)")
+    assert executor.executor.pause(timeout=10)
+    executor.execute(picture(0, "lab"), move(1, "dock", "lab", ended(0)))
     # the drive is not a first step of plan 2: it is cancelled ...
-    eventually(lambda: bool(logged(executer.kb, "CANCEL", "move_to(dock, lab)")))
-    third = executer.execute(move(0, "dock", "lab"))  # ... and run again, then adopted
-    executer.started("move_to(dock, lab)", count=2)
-    assert executer.executer.pause(timeout=10)
-    fourth = executer.execute(move(0, "dock", "lab"), picture(1, "lab", ended(0)))
-    executer.runner.wait_for("move_to(dock, lab)").end(None)
-    eventually(lambda: bool(logged(executer.kb, "END", "move_to(dock, lab)")))
+    eventually(lambda: bool(logged(executor.kb, "CANCEL", "move_to(dock, lab)")))
+    third = executor.execute(move(0, "dock", "lab"))  # ... and run again, then adopted
+    executor.started("move_to(dock, lab)", count=2)
+    assert executor.executor.pause(timeout=10)
+    fourth = executor.execute(move(0, "dock", "lab"), picture(1, "lab", ended(0)))
+    executor.runner.wait_for("move_to(dock, lab)").end(None)
+    eventually(lambda: bool(logged(executor.kb, "END", "move_to(dock, lab)")))
 
     runs: dict[int, list[str]] = {}
-    for e in executer.kb.events():
+    for e in executor.kb.events():
         if e.subject == "move_to(dock, lab)":
             run = e.id if e.kind == "DISPATCH" else e.data["run"]
             runs.setdefault(run, []).append(e.kind)
@@ -182,19 +182,19 @@ def test_every_event_of_a_step_run_names_the_run_whatever_plan_continues_it(
         ["DISPATCH", "START", "CANCEL"],
         ["DISPATCH", "START", "ADOPT", "END"],
     ]
-    (adopt,) = logged(executer.kb, "ADOPT", "move_to(dock, lab)")
+    (adopt,) = logged(executor.kb, "ADOPT", "move_to(dock, lab)")
     assert (adopt.data["from_plan"], adopt.data["plan"]) == (third, fourth)
-    (end,) = logged(executer.kb, "END", "move_to(dock, lab)")
+    (end,) = logged(executor.kb, "END", "move_to(dock, lab)")
     assert end.data["plan"] == fourth
 
 
 def test_an_executive_killed_before_it_recovered_leaves_the_recovery_to_the_next(
-    executer: Executer, tmp_path: Path
+    executor: Executor, tmp_path: Path
 ) -> None:
-    executer.execute(move(0, "dock", "lab"))
-    executer.started("move_to(dock, lab)")
+    executor.execute(move(0, "dock", "lab"))
+    executor.started("move_to(dock, lab)")
 
-    kb = crashed(executer.kb, tmp_path)  # the second executive dies before it recovers
+    kb = crashed(executor.kb, tmp_path)  # the second executive dies before it recovers
     kb.log_event("EXECUTIVE_STARTED", "usecase")  # and a third one starts
 
     assert recover(kb) == ["move_to(dock, lab)"]
@@ -205,13 +205,13 @@ def test_an_executive_killed_before_it_recovered_leaves_the_recovery_to_the_next
 
 
 def test_a_recovered_step_shows_as_cancelled_in_its_plan(
-    executer: Executer, tmp_path: Path
+    executor: Executor, tmp_path: Path
 ) -> None:
-    plan_id = executer.execute(move(0, "dock", "lab"), picture(1, "lab", ended(0)))
-    executer.started("move_to(dock, lab)")
-    assert [s.state for s in executer.kb.plan(plan_id).steps] == ["running", "pending"]
+    plan_id = executor.execute(move(0, "dock", "lab"), picture(1, "lab", ended(0)))
+    executor.started("move_to(dock, lab)")
+    assert [s.state for s in executor.kb.plan(plan_id).steps] == ["running", "pending"]
 
-    kb = crashed(executer.kb, tmp_path)
+    kb = crashed(executor.kb, tmp_path)
     recover(kb)
 
     assert [s.state for s in kb.plan(plan_id).steps] == ["cancelled", "pending"]
@@ -230,16 +230,16 @@ def test_a_step_dispatched_but_not_started_is_cancelled_without_taking_anything_
     usecase_kb: KnowledgeBase, tmp_path: Path
 ) -> None:
     usecase_kb.log_event("EXECUTIVE_STARTED", "usecase")
-    executer = PlanExecuter(usecase_kb, Starting(), ("move_to",), lambda reason: None)
-    executer.start()
+    executor = PlanExecutor(usecase_kb, Starting(), ("move_to",), lambda reason: None)
+    executor.start()
     try:
         plan = PartialOrderPlan((move(0, "dock", "lab"),))
         plan_id = usecase_kb.store_plan(plan.records()).id
-        executer.execute(plan, plan_id, [])
+        executor.execute(plan, plan_id, [])
         eventually(lambda: bool(logged(usecase_kb, "DISPATCH", "move_to(dock, lab)")))
         kb = crashed(usecase_kb, tmp_path)
     finally:
-        executer.stop()
+        executor.stop()
 
     assert recover(kb) == ["move_to(dock, lab)"]
     (cancel,) = logged(kb, "CANCEL", "move_to(dock, lab)")

@@ -15,10 +15,10 @@ from examples.ros2.nodes.lidar import Lidar
 from examples.ros2.nodes.navigator import Navigator
 from examples.ros2.nodes.odometry import Odometry
 from examples.ros2.nodes.rosnode import Node
-from executive.ros2.action import ActionClient, CancelReturn, GoalStatus
-from executive.ros2.lifecycle import LifecycleClient
+from executive.ros2.action import ActionClient, ActionGoalStatus, CancelReturn
+from executive.ros2.lifecycle_node import LifecycleClient
 from executive.ros2.participant import Participant
-from executive.ros2.service import ServiceClient
+from executive.ros2.service_client import ServiceClient
 from executive.ros2.types import TypeLibrary
 from knowledge.errors import BusError
 from knowledge.ros2_messages import message_store
@@ -164,7 +164,7 @@ def test_an_action_goal_streams_feedback_and_succeeds(navigate: ActionClient, ac
     goal = navigate.send(goal_to(1.0), timeout=2.0, feedback=feedback.append)
     assert goal.accepted
     result = goal.result(10.0)
-    assert result is not None and result.status is GoalStatus.SUCCEEDED
+    assert result is not None and result.status is ActionGoalStatus.SUCCEEDED
     assert result.result == {"error_code": 0, "error_msg": ""}
     assert feedback and feedback[-1]["distance_remaining"] < feedback[0]["distance_remaining"]
     assert set(feedback[0]) == {"current_pose", "navigation_time", "estimated_time_remaining",
@@ -176,7 +176,7 @@ def test_an_action_goal_the_server_aborts_ends_aborted_with_the_servers_reason(
 ) -> None:
     goal = navigate.send(goal_to(500.0), timeout=10.0)
     result = goal.result(5.0)
-    assert result is not None and result.status is GoalStatus.ABORTED
+    assert result is not None and result.status is ActionGoalStatus.ABORTED
     assert result.result == {"error_code": 9000, "error_msg": "outside the map"}
 
 
@@ -185,7 +185,7 @@ def test_a_cancelled_action_goal_ends_cancelled(navigate: ActionClient, active: 
     assert goal.result(0.3) is None  # still driving
     assert goal.cancel(2.0) is CancelReturn.NONE
     result = goal.result(5.0)
-    assert result is not None and result.status is GoalStatus.CANCELED
+    assert result is not None and result.status is ActionGoalStatus.CANCELED
     assert goal.cancel(2.0) is CancelReturn.GOAL_TERMINATED
 
 

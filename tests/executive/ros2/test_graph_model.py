@@ -18,7 +18,7 @@ from executive.ros2.graph_model import Ros2GraphModel, observed
 from executive.ros2.link import Ros2Link
 from knowledge.description import RobotDescription
 from knowledge.ros2_components import Ros2ComponentSpec
-from monitoring.diagnosis.service import DiagnosisService
+from monitoring.diagnosis.diagnosis_service import DiagnosisService
 from tests.conftest import wait_for
 from tests.executive.ros2.messages import LaserScan, Twist
 from tests.executive.ros2.peer import RosPeer, streaming

@@ -18,7 +18,7 @@ import psutil
 import pytest
 
 from executive.bus.states import GoalStatus, Lifecycle
-from executive.ros2.lifecycle import LifecycleClient
+from executive.ros2.lifecycle_node import LifecycleClient
 from executive.ros2.names import dds_topic
 from executive.ros2.participant import Participant
 from executive.ros2.qos import ACTION_STATUS, dds_qos

@@ -12,7 +12,7 @@ import pytest
 
 from examples.ros2.nodes import interfaces as kit
 from executive.ros2.cdr import CdrError
-from executive.ros2.service import endpoint_id, unwrap, wrap
+from executive.ros2.service_client import endpoint_id, unwrap, wrap
 from executive.ros2.types import TypeLibrary
 from knowledge.ros2_messages import message_store
 from tests.conftest import ROOT

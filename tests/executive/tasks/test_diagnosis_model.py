@@ -18,7 +18,7 @@ from executive.bus.worker import Worker
 from executive.tasks.diagnosis_model import DiagnosisModelSync
 from knowledge.description import RobotDescription
 from knowledge.knowledge_base import KnowledgeBase
-from monitoring.diagnosis.service import DiagnosisService
+from monitoring.diagnosis.diagnosis_service import DiagnosisService
 from tests.conftest import wait_for
 from tests.executive.tasks.scheduling_cases import usecase_robot
 

@@ -1,7 +1,7 @@
 """The task executor's decisions carried out, on its worker thread.
 
 After every change that may move tasks (a request, a task's end, a permanent fault, a
-reset, a due start) the :class:`Dispatcher` asks :func:`~executive.tasks.decisions.decide`,
+reset, a due start) the :class:`Enactor` asks :func:`~executive.tasks.decisions.decide`,
 keeps running what the plan's upcoming steps need and what lingers
 (:func:`~executive.tasks.decisions.keep_running`), and carries the decision out in this
 order: it ends the tasks the scheduler cancelled,
@@ -21,7 +21,7 @@ other).
 
 It composes the parts that act: the :class:`~executive.tasks.ledger.TaskLedger`, the
 :class:`~executive.tasks.configurator.Configurator`, the
-:class:`~executive.tasks.supervision.Supervisor` and the
+:class:`~executive.tasks.supervision.BehaviorSupervisor` and the
 :class:`~executive.tasks.fault_handling.FaultHandler`.
 """
 
@@ -42,7 +42,7 @@ from executive.tasks.fault_handling import FaultHandler
 from executive.tasks.faults import Faults
 from executive.tasks.ledger import TaskLedger
 from executive.tasks.parameters import RuntimeParameters
-from executive.tasks.supervision import Post, Supervisor
+from executive.tasks.supervision import BehaviorSupervisor, Post
 from executive.tasks.task import Task, TaskControl, TaskEnd, TaskPhase
 
 REPLAN_GRACE = 3.0  # robot seconds a failed plan step's functionalities wait for the new plan
@@ -54,7 +54,7 @@ REPLANNED = frozenset(
 )
 
 
-class Dispatcher:
+class Enactor:
     """Schedules the tasks and carries the decisions out (worker thread only).
 
     Registers the robot's components in the knowledge base (:class:`Faults`).
@@ -105,7 +105,7 @@ class Dispatcher:
             before_start=publish,
             sequential=sequential,
         )
-        self.supervisor = Supervisor(
+        self.supervisor = BehaviorSupervisor(
             context.robot, ledger=self.ledger, launcher=launcher,
             configurator=self.configurator, faults=self.faults, end=self.end, post=post,
         )  # fmt: skip

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from executive.bus.api.planning import GoalAdd
-from executive.ros2.goals import replies_topic, submission
+from executive.ros2.goal_topic import replies_topic, submission
 
 
 def test_a_submission_is_an_expression_or_a_json_object_with_its_options() -> None:

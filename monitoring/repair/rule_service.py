@@ -87,9 +87,9 @@ class RuleService(Service):
         """Feed the engine one message, evaluate, and start the actions that fire."""
         with self._lock:
             feed()
-            self._dispatch(self.engine.evaluate())
+            self._act_on(self.engine.evaluate())
 
-    def _dispatch(self, fired: list[Fired]) -> None:
+    def _act_on(self, fired: list[Fired]) -> None:
         pool = self._pool
         for item in fired:
             log.info("rule '%s' fired: %s", item.rule.name, item.rule.action.describe())

@@ -191,7 +191,7 @@ class GoalTables(EventLog):
         return self.plan(plan_id)
 
     def set_step_state(self, plan_id: int, index: int, state: str) -> None:
-        """Record what happened to a plan's step (the plan executer's thread writes it).
+        """Record what happened to a plan's step (the plan executor's thread writes it).
 
         Raises:
             KnowledgeError: an unknown state, or no such step.

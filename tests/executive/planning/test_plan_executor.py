@@ -1,4 +1,4 @@
-"""The plan executer with a scripted task runner, a real knowledge base and real plans."""
+"""The plan executor with a scripted task runner, a real knowledge base and real plans."""
 
 from __future__ import annotations
 
@@ -12,9 +12,9 @@ import pytest
 from executive.planning.expression import Atom, Const
 from executive.planning.goals import GoalSpec, submit
 from executive.planning.partial_order import Effect, PartialOrderPlan, Step
-from executive.planning.plan_executer import (
+from executive.planning.plan_executor import (
     ExecutionLimits,
-    PlanExecuter,
+    PlanExecutor,
     StepReport,
     StepTask,
 )
@@ -44,20 +44,20 @@ def eventually(check: Callable[[], bool], timeout: float = 20.0) -> None:
 
 
 class Run:
-    """An executer on the use-case KB, with the replan requests it made."""
+    """An executor on the use-case KB, with the replan requests it made."""
 
     def __init__(self, kb: KnowledgeBase, runner: ScriptedRunner, **options: object) -> None:
         self.kb = kb
         self.runner = runner
         self.replans: list[str] = []
         tasks = options.pop("tasks", TASKS)
-        self.executer = PlanExecuter(kb, runner, tasks, self.replans.append, **options)  # type: ignore[arg-type]
-        self.executer.start()
+        self.executor = PlanExecutor(kb, runner, tasks, self.replans.append, **options)  # type: ignore[arg-type]
+        self.executor.start()
 
     def plan(self, kairos: Planner, *goals: str) -> tuple[PartialOrderPlan, int, list[GoalSpec]]:
         domain = usecase_domain()
         specs = [GoalSpec(submit(self.kb, domain, g).id, expr(g)) for g in goals]
-        world = World(self.kb.objects(), tuple(self.executer.planning_facts()))
+        world = World(self.kb.objects(), tuple(self.executor.planning_facts()))
         result = kairos.solve(PlanningTask(USECASE_DOMAIN, world, tuple(specs)))
         assert result.plan is not None, result.log
         stored = self.kb.store_plan(
@@ -70,7 +70,7 @@ class Run:
     def execute(self, kairos: Planner, *goals: str) -> tuple[PartialOrderPlan, int, list[GoalSpec]]:
         """Plan for goals and run the plan."""
         plan, plan_id, specs = self.plan(kairos, *goals)
-        self.executer.execute(plan, plan_id, specs)
+        self.executor.execute(plan, plan_id, specs)
         return plan, plan_id, specs
 
     def kinds(self) -> list[tuple[str, str]]:
@@ -92,7 +92,7 @@ def run(usecase_kb: KnowledgeBase) -> Iterator[Callable[..., Run]]:
 
     yield make
     for r in made:
-        r.executer.stop()
+        r.executor.stop()
 
 
 def test_steps_run_in_order_their_effects_change_the_facts_and_the_goals_are_achieved(
@@ -134,7 +134,7 @@ def test_a_running_step_whose_over_all_condition_breaks_fails(
     _plan, _plan_id, _goals = r.execute(kairos, "(robot_at lab)")
     task = runner.wait_for("move_to(dock, lab)")
     r.kb.unset_fact(Fact("connected", ("dock", "lab")))
-    r.executer.facts_changed()
+    r.executor.facts_changed()
     eventually(lambda: bool(r.replans))
     assert r.replans == ["over-all condition (connected dock lab) no longer holds"]
     assert task.calls == ["cancel"]
@@ -148,7 +148,7 @@ def test_a_step_running_past_its_duration_and_the_margin_times_out(
     step = Step(0, "move_to", ("dock", "lab"), ("from", "to"), 0.0, 0.1,
                 at_start=Atom("robot_at", ("dock",)))  # fmt: skip
     plan_id = r.kb.store_plan(PartialOrderPlan((step,)).records()).id
-    r.executer.execute(PartialOrderPlan((step,)), plan_id, [])
+    r.executor.execute(PartialOrderPlan((step,)), plan_id, [])
     eventually(lambda: bool(r.replans))
     assert r.replans == [
         "step move_to(dock, lab) timed out: still running after 0.3 s (expected 0.1 s)"
@@ -163,25 +163,25 @@ def test_pausing_pauses_interruptible_tasks_and_waits_for_critical_ones(
     r = run(runner)
     _, plan_id, _ = r.execute(kairos, "(robot_at lab)")
     move = runner.wait_for("move_to(dock, lab)")
-    assert r.executer.pause(timeout=10)
+    assert r.executor.pause(timeout=10)
     assert move.calls == ["pause"]
-    status = r.executer.status()
+    status = r.executor.status()
     assert (status["plan"], status["paused"]) == (plan_id, True)
     assert [s["state"] for s in status["steps"]] == ["paused"]
     # the planner sees the robot where the paused step started
-    assert Fact("robot_at", ("dock",)) in r.executer.planning_facts()
+    assert Fact("robot_at", ("dock",)) in r.executor.planning_facts()
     assert Fact("robot_at", ("dock",)) not in r.kb.facts()
-    r.executer.resume()
+    r.executor.resume()
     assert move.calls == ["pause", "resume"]
     move.end(None)
     eventually(lambda: r.kb.plan(plan_id).state is PlanState.SUCCEEDED)
 
     _plan, plan_id, _goals = r.execute(kairos, "(picture_taken lab)")
     picture = runner.wait_for("take_picture(lab)")
-    assert not r.executer.pause(timeout=0.3)  # a critical task is not interrupted
+    assert not r.executor.pause(timeout=0.3)  # a critical task is not interrupted
     assert picture.calls == []
     picture.end(None)
-    assert r.executer.pause(timeout=10)
+    assert r.executor.pause(timeout=10)
     assert r.kb.plan(plan_id).state is PlanState.SUCCEEDED
 
 
@@ -192,7 +192,7 @@ def test_a_new_plan_continues_a_paused_task_that_is_its_first_step_and_cancels_t
     r = run(runner)
     _plan, _plan_id, _goals = r.execute(kairos, "(robot_at lab)")
     move = runner.wait_for("move_to(dock, lab)")
-    assert r.executer.pause(timeout=10)
+    assert r.executor.pause(timeout=10)
     # replanned for the same goal: the same first step continues
     _plan2, plan2_id, _goals2 = r.execute(kairos, "(robot_at lab)")
     assert move.calls == ["pause", "resume"]
@@ -203,9 +203,9 @@ def test_a_new_plan_continues_a_paused_task_that_is_its_first_step_and_cancels_t
     # now a plan that starts elsewhere: the paused step is cancelled and undone
     plan3, _plan3_id, _goals3 = r.execute(kairos, "(robot_at office)")
     first = runner.wait_for(plan3.steps[0].label)
-    assert r.executer.pause(timeout=10)
+    assert r.executor.pause(timeout=10)
     plan4 = PartialOrderPlan(())
-    r.executer.execute(plan4, r.kb.store_plan(()).id, [])
+    r.executor.execute(plan4, r.kb.store_plan(()).id, [])
     assert first.calls == ["pause", "cancel"]
     assert Fact("robot_at", ("lab",)) in r.kb.facts()  # its at-start effect was undone
     assert ("CANCEL", plan3.steps[0].label) in r.kinds()
@@ -220,7 +220,7 @@ def test_an_action_without_a_task_completes_at_once_with_its_effects(
                 start_effects=(Effect("robot_at", ("dock",), Const(False)),),
                 end_effects=(Effect("robot_at", ("lab",), Const(True)),))  # fmt: skip
     plan_id = r.kb.store_plan(PartialOrderPlan((step,)).records()).id
-    r.executer.execute(PartialOrderPlan((step,)), plan_id, [])
+    r.executor.execute(PartialOrderPlan((step,)), plan_id, [])
     eventually(lambda: r.kb.plan(plan_id).state is PlanState.SUCCEEDED)
     assert r.runner.tasks == []
     assert Fact("robot_at", ("lab",)) in r.kb.facts()
@@ -232,7 +232,7 @@ def test_a_step_that_cannot_start_makes_the_plan_fail(
     r = run()
     plan, plan_id, goals = r.plan(kairos, "(robot_at lab)")
     r.kb.update_facts(remove=[Fact("robot_at", ("dock",))], add=[Fact("robot_at", ("office",))])
-    r.executer.execute(plan, plan_id, goals)
+    r.executor.execute(plan, plan_id, goals)
     eventually(lambda: bool(r.replans))
     assert r.replans == ["step move_to(dock, lab) cannot start: (robot_at dock) does not hold"]
     assert r.runner.tasks == []
@@ -252,34 +252,34 @@ class Blocking(ScriptedRunner):
         return super().run(step, plan_id, report)
 
 
-def test_status_answers_from_a_snapshot_while_the_executer_is_busy(
+def test_status_answers_from_a_snapshot_while_the_executor_is_busy(
     run: Callable[..., Run], kairos: Planner
 ) -> None:
     runner = Blocking()
     r = run(runner)
     plan, plan_id, goals = r.plan(kairos, "(robot_at lab)")
-    handing_over = threading.Thread(target=r.executer.execute, args=(plan, plan_id, goals))
+    handing_over = threading.Thread(target=r.executor.execute, args=(plan, plan_id, goals))
     handing_over.start()
     try:
-        assert runner.entered.wait(10)  # the executer's thread waits in the runner
-        status = r.executer.status()  # answered while its thread is held in the runner
+        assert runner.entered.wait(10)  # the executor's thread waits in the runner
+        status = r.executor.status()  # answered while its thread is held in the runner
         assert status["plan"] is None  # as of the last job: the plan is not handed over yet
     finally:
         runner.release.set()
         handing_over.join(10)
-    eventually(lambda: r.executer.status()["plan"] == plan_id)
+    eventually(lambda: r.executor.status()["plan"] == plan_id)
     eventually(lambda: r.kb.plan(plan_id).state is PlanState.SUCCEEDED)
-    assert r.executer.status()["steps"] == [
+    assert r.executor.status()["steps"] == [
         {"index": 0, "step": "move_to(dock, lab)", "state": "ended"}
     ]
 
 
-def test_an_executer_with_an_owner_reports_goal_and_plan_changes_instead_of_writing_them(
+def test_an_executor_with_an_owner_reports_goal_and_plan_changes_instead_of_writing_them(
     run: Callable[..., Run], kairos: Planner
 ) -> None:
     r = run()
     told: list[Change] = []
-    r.executer.report_to(told.append)
+    r.executor.report_to(told.append)
     _plan, plan_id, goals = r.execute(kairos, "(robot_at lab)")
     eventually(lambda: PlanChange(plan_id, PlanState.SUCCEEDED) in told)
     goal = goals[0].id

@@ -1,4 +1,4 @@
-"""The plan executer (thesis 5.1.2): run a partial-order plan, event by event.
+"""The plan executor (thesis 5.1.2): run a partial-order plan, event by event.
 
 A step is dispatched as soon as the steps it comes after have reached their
 timepoints and its at-start condition holds in the knowledge base's facts; nothing
@@ -14,7 +14,7 @@ Actions without a task complete at once with their effects (the rules for steps:
 A failed, timed-out or violated step stops dispatching and asks for replanning; its
 at-start effects are taken back (the world is as it was before the step, as far as the
 executive knows); the steps still running go on until the goal planner has a new plan.
-The goal planner pauses the executer before it plans: interruptible tasks pause, the
+The goal planner pauses the executor before it plans: interruptible tasks pause, the
 others finish first (thesis Figures 5.7, 5.8). A new plan adopts a paused or running
 step that is one of its first steps (same action and objects); the others are cancelled
 and their at-start effects undone, as the planner assumed when it planned.
@@ -24,15 +24,15 @@ continues it), END, FAIL, CANCEL, REPLAN. A step's events name its plan and inde
 its run (the id of its DISPATCH event, kept by the plan that adopts it); each change a
 step makes to the facts is one transaction with its event, and the old plan's steps
 end as its own before the new plan takes over: crash recovery relies on both
-(:mod:`executive.planning.recovery`). Each stored plan step keeps what happened to it. Goal and plan states are not the executer's to write: it reports each change
+(:mod:`executive.planning.recovery`). Each stored plan step keeps what happened to it. Goal and plan states are not the executor's to write: it reports each change
 (a plan executing, succeeded or failed; a goal executing, achieved, or past its
 deadline) to their owner, the goal planner, which applies them on its own thread
-(:meth:`PlanExecuter.report_to`, :mod:`executive.planning.state_change`); an executer
+(:meth:`PlanExecutor.report_to`, :mod:`executive.planning.state_change`); an executor
 without an owner (on its own, as in its unit tests) writes them itself.
 
 All work happens on one thread that takes jobs from a queue, so the state needs no
 locks; the public methods post to the queue (and some wait for the answer).
-:meth:`PlanExecuter.status` never waits: it answers from a snapshot taken after each job.
+:meth:`PlanExecutor.status` never waits: it answers from a snapshot taken after each job.
 """
 
 from __future__ import annotations
@@ -70,7 +70,7 @@ from knowledge.records import Fact, GoalState, PlanState, to_plain
 __all__ = [
     "ExecutionLimits",
     "ExecutionStatus",
-    "PlanExecuter",
+    "PlanExecutor",
     "StepReport",
     "StepState",
     "StepTask",
@@ -96,7 +96,7 @@ class GoalProgress:
 
 @dataclass(frozen=True)
 class ExecutionStatus:
-    """How the execution stands, as of the executer's last job (for ``dura status``)."""
+    """How the execution stands, as of the executor's last job (for ``dura status``)."""
 
     plan: int | None = None
     paused: bool = False
@@ -114,14 +114,14 @@ class _Goal:
     timer: threading.Timer | None = None
 
 
-class PlanExecuter:
+class PlanExecutor:
     """Runs one plan at a time (see the module docstring).
 
     Args:
         kb: the knowledge base whose facts conditions are checked against.
         runner: carries out steps whose action has a task.
         tasks: the actions that have a task; the others complete at once.
-        on_replan: called (on the executer's thread) with the reason when a new plan
+        on_replan: called (on the executor's thread) with the reason when a new plan
             is needed; the goal planner wakes up on it.
         clock: robot time (step timeouts and goal deadlines are robot seconds).
         watch_ahead: check the rest of the plan when facts change outside it
@@ -146,7 +146,7 @@ class PlanExecuter:
         self.tasks = frozenset(tasks)
         self.on_replan = on_replan
         self.limits = limits or ExecutionLimits()
-        self._worker = Worker("plan executer", after_each=self._after_each)
+        self._worker = Worker("plan executor", after_each=self._after_each)
         self._tell: Callable[[Change], object] = functools.partial(apply_change, kb)
         self._context = RunContext(
             kb,
@@ -174,7 +174,7 @@ class PlanExecuter:
     def report_to(self, owner: Callable[[Change], object]) -> None:
         """Report goal and plan state changes to ``owner`` instead of writing them.
 
-        ``owner`` is called on the executer's thread and must not wait for anything
+        ``owner`` is called on the executor's thread and must not wait for anything
         (the goal planner posts the change to its own thread).
         """
 
@@ -221,7 +221,7 @@ class PlanExecuter:
             self.runner.upcoming(upcoming[0], steps)
 
     def _call(self, fn: Callable[[], T], timeout: float | None = None) -> T:
-        """Run ``fn`` on the executer's thread and return its result, with the snapshot
+        """Run ``fn`` on the executor's thread and return its result, with the snapshot
         already up to date."""
 
         def job() -> T:
@@ -254,7 +254,7 @@ class PlanExecuter:
         self._call(lambda: self._abandon(reason))
 
     def facts_changed(self, changed: Collection[Key] = ()) -> None:
-        """Facts changed outside the executer: check the running steps' conditions, and
+        """Facts changed outside the executor: check the running steps' conditions, and
         the rest of the plan for a ``changed`` fact (:mod:`.look_ahead`)."""
 
         def react() -> None:
@@ -270,10 +270,10 @@ class PlanExecuter:
 
     def status(self) -> dict[str, Any]:
         """The current plan and the state of each step (for ``dura status``), as of the
-        last job: it never waits for the executer's thread."""
+        last job: it never waits for the executor's thread."""
         return dict(to_plain(self._snapshot))
 
-    # --- work on the executer's thread --------------------------------------------------
+    # --- work on the executor's thread --------------------------------------------------
 
     def _execute(self, plan: PartialOrderPlan, plan_id: int, goals: Sequence[GoalSpec]) -> None:
         old = self._run
@@ -343,7 +343,7 @@ class PlanExecuter:
 
     def _cancel_all(self) -> None:
         if self._run is not None:
-            self._run.cancel_active("the executer stops")
+            self._run.cancel_active("the executor stops")
         for g in self._goals:
             cancel_timer(g.timer)
 

@@ -25,7 +25,7 @@ from executive.ros2.discovery import Discovery
 from executive.ros2.names import dds_topic
 from executive.ros2.participant import Participant, Reader
 from executive.ros2.qos import dds_qos
-from executive.ros2.service import ServiceClient
+from executive.ros2.service_client import ServiceClient
 from executive.ros2.types import TypeLibrary
 from knowledge.ros2_spec import PROFILES
 

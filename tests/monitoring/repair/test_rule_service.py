@@ -15,7 +15,7 @@ from executive.bus.session import Bus
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.robot import load_robot
 from monitoring.repair.rule import read_rules
-from monitoring.repair.service import RuleService
+from monitoring.repair.rule_service import RuleService
 from tests.conftest import USECASE
 
 RULES = """

@@ -17,7 +17,7 @@ from executive.bus.service import Context
 from executive.bus.session import Bus, Message
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.robot import load_robot
-from monitoring.diagnosis.service import DiagnosisService
+from monitoring.diagnosis.diagnosis_service import DiagnosisService
 from tests.conftest import USECASE
 from tests.monitoring.diagnosis.cases import THESIS_NODES, THESIS_OBSERVERS
 
