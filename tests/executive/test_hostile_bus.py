@@ -70,10 +70,8 @@ def test_the_executive_survives_malformed_messages_and_requests(robot: RobotProc
         Bus(robot.robot.name, name="hostile", endpoint=robot.endpoint, login=login) as bus,
         zenoh.open(config) as session,
     ):
-        for key in KEYS:
-            assert bus.wait_for_subscriber(key, timeout=0.5 if key in UNHEARD else 5.0) == (
-                key not in UNHEARD
-            ), f"who listens to {key}?"
+        for key in [k for k in KEYS if k not in UNHEARD]:  # what is sent reaches someone
+            assert bus.wait_for_subscriber(key), f"nobody listens to {key}"
         for key in KEYS:
             for payload in GARBAGE:
                 bus.publish_raw(key, payload)
