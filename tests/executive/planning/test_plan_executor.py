@@ -271,8 +271,10 @@ def test_status_answers_from_a_snapshot_while_the_executor_is_busy(
     eventually(lambda: r.kb.plan(plan_id).state is PlanState.SUCCEEDED)
     # the snapshot follows the job that ended the plan (it is taken after each job)
     eventually(
-        lambda: r.executor.status()["steps"]
-        == [{"index": 0, "step": "move_to(dock, lab)", "state": "ended"}]
+        lambda: (
+            r.executor.status()["steps"]
+            == [{"index": 0, "step": "move_to(dock, lab)", "state": "ended"}]
+        )
     )
 
 
