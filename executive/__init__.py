@@ -1,4 +1,23 @@
-"""dura's executive: high level, task executor, runtime, bus and CLI."""
+"""dura's executive: high level, task executor, runtime, bus and CLI.
+
+Its packages are layers: an upper one imports a lower one, never the reverse (the
+README's "Architecture" says which may import which; ``tests/test_layers.py`` checks).
+
+- :mod:`.bus` — the bottom layer: the Zenoh session, keys, payloads, each service's API
+  declared once;
+- :mod:`.sdk` — what a component author imports;
+- :mod:`.ros2` — ROS 2 over DDS;
+- :mod:`.bags` — recordings: ROS 2 bags and dura's MCAP files, read and written;
+- :mod:`.runtime` — component processes: the launcher, host agents, translators;
+- :mod:`.tasks` — the task executor;
+- :mod:`.planning` — the high level: goals, plans and their execution;
+- :mod:`.dashboard` — the live web page and the pictures;
+- :mod:`.testing` — the pytest fixtures and the robot harness;
+- :mod:`.executive` — the composition root: the services of the executive process;
+- :mod:`.cli` — the ``dura`` command.
+
+Beside it, :mod:`monitoring` sits on the bus and :mod:`knowledge` under everything.
+"""
 
 from __future__ import annotations
 

@@ -66,10 +66,25 @@ def shoot(browser: Browser, folder: Path, moment: str) -> list[Path]:
     saved = []
     for view in VIEWS:
         browser.evaluate(f"location.hash = '#{view}'")
-        time.sleep(0.4)
+        browser.wait_for(f"document.body.dataset.view === '{view}'")
+        browser.evaluate(PAINTED)
         saved.append(browser.screenshot(folder / f"{moment}-{view}.png"))
     browser.evaluate("location.hash = '#all'")
     return saved
+
+
+# a promise kept once the page has painted what it shows now (two frames later)
+PAINTED = "new Promise((done) => requestAnimationFrame(() => requestAnimationFrame(done)))"
+
+
+def shown(browser: Browser, kind: str, text: str = "") -> None:
+    """Wait until the page lists an event of ``kind`` that mentions ``text``, and the
+    highlight of its row (a new row's, 1.5 s) has faded."""
+    rows = f"document.querySelectorAll('#event-table tr[data-kind=\"{kind}\"]')"
+    row = f"[...{rows}].find((r) => r.textContent.includes({text!r}))"
+    browser.wait_for(f"Boolean({row})", timeout=30)
+    faded = f"({row}).getAnimations({{subtree: true}}).map((a) => a.finished)"
+    browser.evaluate(f"Promise.allSettled({faded}).then(() => true)")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -95,11 +110,11 @@ def main(argv: list[str] | None = None) -> int:
             browser.open(url)
             wait_for(lines, r"FAULT\s+lidar")
             wait_for(lines, r"TASK_RESTARTED\s+task \d+ move_to")
-            time.sleep(1.5)
+            shown(browser, "TASK_RESTARTED", "move_to")
             saved = shoot(browser, folder, "1-after-a-fault")
             wait_for(lines, r"PERMANENT_FAULT\s+lidar")
             wait_for(lines, r"CONFIGURATION\s+.*cam_to_lidar")
-            time.sleep(1.5)
+            shown(browser, "CONFIGURATION", "cam_to_lidar")
             if args.readme:  # first: the demo ends a few seconds after the switch
                 shutil.copy(browser.screenshot(folder / "readme.png"), README)
                 saved.append(README)

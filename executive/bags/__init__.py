@@ -1,10 +1,15 @@
 """Recordings: ROS 2 bags and dura's own MCAP recordings, read and written.
 
-:func:`executive.bags.reader.open_bag` opens a rosbag2 (MCAP or sqlite3 storage) or an
-MCAP file and yields its messages as bus messages (:mod:`executive.bags.bag`: topics,
-routes to a robot's topics, caller ids), ROS 2 messages decoded to plain dicts when
-read (:mod:`executive.bags.ros_messages`). :mod:`executive.bags.recording` writes a
-robot's bus traffic to MCAP with JSON schemas (:mod:`executive.bags.schemas`), rotated
-by size. The offline replay itself is :mod:`monitoring.replay`; ``dura replay``
-composes the two.
+It may import :mod:`executive.bus`, ROS 2's message and decoder
+(:mod:`executive.ros2.message`, :mod:`executive.ros2.cdr`) and :mod:`knowledge`. The
+offline replay itself is :mod:`monitoring.replay`; ``dura replay`` composes the two.
+
+- :mod:`.reader` — :func:`~.reader.open_bag`: open a recording, whatever it is;
+- :mod:`.bag` — an opened recording: its topics, its messages as bus messages, and how
+  its topics map to a robot's;
+- :mod:`.mcap_bag` — MCAP files: rosbag2's MCAP storage and dura's recordings;
+- :mod:`.rosbag2_bag` — rosbag2's sqlite3 storage and compressed folders;
+- :mod:`.ros_messages` — a bag's ROS 2 messages as the plain dicts observers read;
+- :mod:`.recording` — a robot's bus traffic written to MCAP, rotated by size;
+- :mod:`.schemas` — JSON schemas of the recorded payloads, made from their dataclasses.
 """

@@ -1,7 +1,23 @@
 """The bus: the bottom layer of the executive.
 
-It owns the Zenoh session (:mod:`session`), the key expressions (:mod:`keys`), the
-payloads every service publishes (:mod:`payloads`), each service's request API declared
-once (:mod:`api`), and the pieces services are built from (:mod:`service`,
-:mod:`worker`). It imports nothing of dura but :mod:`knowledge`.
+It owns the Zenoh session and what every service agrees on. It imports nothing of dura
+but :mod:`knowledge`.
+
+- :mod:`.session` — one Zenoh session under ``dura/<robot>/``: publish, subscribe,
+  requests, liveliness, and waiting for a subscriber;
+- :mod:`.security` — per-robot credentials and Zenoh's access control;
+- :mod:`.keys` — the key expressions, and the environment of a component process;
+- :mod:`.payloads` — what is published on those keys, as typed frozen dataclasses;
+- :mod:`.schema` — payload dataclasses read from JSON by their annotations;
+- :mod:`.verb` — a request declared once: key, request and reply types;
+  :mod:`.api` — each service's verbs, one module per service;
+- :mod:`.states` — the states and verbs of components and their goals;
+- :mod:`.event_kinds` — the kinds of event the knowledge base logs;
+  :mod:`.event_text` — an event as one readable line; :mod:`.wording` — counts,
+  numbers, durations and values as every view writes them;
+- :mod:`.clock` — robot time, possibly faster than the wall clock;
+- :mod:`.topic_source` — topics whose messages do not travel on the bus (ROS 2's);
+- :mod:`.service` — the extension point of the executive's services, and what each
+  gets (:class:`~.service.Context`); :mod:`.worker` — the one thread that touches an
+  object's state.
 """

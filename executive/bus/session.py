@@ -258,13 +258,44 @@ class Bus:
         """Publish bytes that already are a JSON object (hot paths)."""
         publisher = self._publishers.get(key)
         if publisher is None:
-            with self._lock:
-                publisher = self._publishers.get(key)
-                if publisher is None:
-                    publisher = self._session.declare_publisher(self.key(key))
-                    self._publishers[key] = publisher
-                    self._declared.append(publisher)
+            publisher = self._publisher(key)
         publisher.put(data, attachment=self._attachment, timestamp=self._session.new_timestamp())
+
+    def wait_for_subscriber(self, key: str, *, timeout: float = 5.0) -> bool:
+        """Wait until a subscriber of ``dura/<robot>/<key>`` is there for this session to
+        publish to; whether one was within ``timeout`` seconds.
+
+        A subscription reaches the other sessions a moment after it is declared, and
+        what is published on its key before that arrives nowhere. Once this returns
+        ``True`` a message published on ``key`` reaches a subscriber (in this process or
+        another: Zenoh's matching status of the key's publisher). It does not tell which
+        subscriber, nor wait for the others.
+        """
+        publisher = self._publisher(key)
+        matched = threading.Event()
+
+        def on_status(status: zenoh.MatchingStatus) -> None:
+            if status.matching:
+                matched.set()
+
+        listener = publisher.declare_matching_listener(on_status)
+        try:
+            # the listener tells changes from now on; one already there is the status
+            status: Any = publisher.matching_status  # a MatchingStatus (the stubs: bool)
+            return bool(getattr(status, "matching", status)) or matched.wait(timeout)
+        finally:
+            with contextlib.suppress(zenoh.ZError):
+                listener.undeclare()  # type: ignore[no-untyped-call]
+
+    def _publisher(self, key: str) -> zenoh.Publisher:
+        """This session's publisher of ``dura/<robot>/<key>``, declared on first use."""
+        with self._lock:
+            publisher = self._publishers.get(key)
+            if publisher is None:
+                publisher = self._session.declare_publisher(self.key(key))
+                self._publishers[key] = publisher
+                self._declared.append(publisher)
+        return publisher
 
     def subscribe(self, key: str, handler: Handler, *, decoded: bool = True) -> Any:
         """Call ``handler`` for every message on ``dura/<robot>/<key>`` (wildcards allowed).

@@ -1,4 +1,18 @@
-"""The ``dura`` command line: one module per command group, registered here."""
+"""The ``dura`` command line: one module per command group, registered here.
+
+- a module per command of :data:`COMMANDS`, named as it (``register`` adds its parser,
+  which sets ``run``); :mod:`.demo_ros2` and :mod:`.demo_timeline` belong to ``demo``;
+- :mod:`.client` — how a command finds the running executive and asks it;
+- :mod:`.arguments` — argument types: a bad value is a usage error saying what is
+  allowed;
+- :mod:`.output` — tables for people, JSON for scripts; :mod:`.progress` — one live line
+  of what a long command does; :mod:`.stopping` — waiting for Ctrl-C or SIGTERM;
+- :mod:`.deferred`, :mod:`.reader_environment` — for a quick start: standard modules
+  imported at first use, a unified-planning environment that reads PDDL and never
+  plans.
+
+It may import every other part of dura; it talks to a running robot over the bus.
+"""
 
 from __future__ import annotations
 

@@ -59,9 +59,12 @@ def run_events(args: argparse.Namespace) -> int:
     import queue  # only to follow: not for 'dura status'
 
     arrived: queue.Queue[dict[str, Any]] = queue.Queue()
+    newest: list[dict[str, Any]] = []
     with connect(args) as bus:
-        if args.follow:  # before the history: nothing falls between the two
+        if args.follow:  # before the history, so that nothing falls between the two: the
+            # stream has every event logged after the newest one read here
             bus.subscribe(EVENTS, lambda m: arrived.put(m.payload) if _is_event(m) else None)
+            newest = api.EVENTS.call(bus, api.EventQuery(limit=1)).events
         past = api.EVENTS.call(bus, api.EventQuery(limit=args.lines, kind=args.kind)).events
         if args.json and not args.follow:
             print_json({"events": past})
@@ -69,7 +72,6 @@ def run_events(args: argparse.Namespace) -> int:
         for event in past:
             _show(event, args.json)
         if args.follow:
-            newest = api.EVENTS.call(bus, api.EventQuery(limit=1)).events
             _follow(bus, arrived, max((int(e["id"]) for e in newest + past), default=0), args)
     return 0
 

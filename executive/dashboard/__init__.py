@@ -1,10 +1,15 @@
 """The dashboard: a live web page of a running robot, and pictures (SVG) of plans and
 component graphs.
 
-The pictures are drawn by :mod:`executive.dashboard.gantt` (a plan as a Gantt chart)
-and :mod:`executive.dashboard.graph` (the component/capability/topic graph), pure
-functions from data to SVG text used alike by the command line (``--svg FILE``) and by
-the page. :mod:`executive.dashboard.live` keeps what the page shows, fed from the bus by
-:mod:`executive.dashboard.feed`; :mod:`executive.dashboard.app` serves it (Starlette,
-server-sent events) and :mod:`executive.dashboard.server` runs it (uvicorn).
+It may import :mod:`executive.bus`, :mod:`executive.planning` and :mod:`knowledge`.
+
+- :mod:`.gantt`, :mod:`.graph` — a plan as a Gantt chart, the component/capability/topic
+  graph: pure functions from data to SVG text, for the command line (``--svg FILE``)
+  and the page alike (:mod:`.svg`: the small SVG writer both use);
+- :mod:`.live` — what the page shows of a running robot, plain data;
+- :mod:`.feed` — the link to the robot: bus subscriptions in, server-sent events out;
+- :mod:`.app` — the web application (Starlette): the page (``static/``), the stream,
+  the pictures, adding and cancelling goals;
+- :mod:`.access` — who may open the page;
+- :mod:`.server` — uvicorn serving the application on a thread of its own.
 """

@@ -3,11 +3,17 @@
     from executive.sdk import Functionality, Behavior, GoalFailed
 
 An author subclasses :class:`Functionality` or :class:`Behavior` and overrides the
-``on_*`` hooks (and ``execute``); :mod:`.component` and :mod:`.behavior` hold those and
-the helpers an author calls. The framework side of a component process (taking
-lifecycle commands, the main loop, running goals) is :mod:`.framework` and
-:mod:`.goal`; fault injection for tests is :mod:`.fault_injection`. It may import
-:mod:`executive.bus` and :mod:`knowledge`.
+``on_*`` hooks (and ``execute``). It may import :mod:`executive.bus` and
+:mod:`knowledge`.
+
+- :mod:`.component` — what every component has: the ``on_*`` hooks and the helpers an
+  author calls (publish, subscribe, parameters, facts, rates); :class:`Functionality`;
+- :mod:`.behavior` — :class:`Behavior`: ``execute`` and its helpers;
+- :mod:`.framework` — the framework side of a component process: lifecycle commands,
+  the main loop (an author never calls it);
+- :mod:`.goal` — a behavior's goals, one at a time, each on a thread of its own
+  (:class:`GoalFailed`, :class:`GoalCancelled`);
+- :mod:`.fault_injection` — a component made to misbehave on purpose, for tests.
 """
 
 from __future__ import annotations

@@ -20,6 +20,16 @@ repair rules, with the recording's time as the clock, and returns the timeline
     def test_the_lidar_dropout_is_diagnosed(dura_replay):
         timeline = dura_replay("bags/lidar_dropout", "robot.yaml")
         assert timeline.diagnosed() == [("lidar",)]
+
+- :mod:`.harness` — a robot run by a real ``dura run`` process, driven over the bus
+  (:class:`~.harness.RobotProcess`, and :class:`~.harness.ServiceGroupProcess` for a
+  service group in a process of its own);
+- :mod:`.replay` — a recording replayed through a robot's monitoring;
+- :mod:`.hosts` — host agents as child processes, and network namespaces to put them
+  in.
+
+It may import :mod:`executive.bus`, :mod:`executive.sdk`, :mod:`executive.bags`,
+:mod:`monitoring` and :mod:`knowledge`.
 """
 
 from __future__ import annotations

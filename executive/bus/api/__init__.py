@@ -8,6 +8,9 @@
   launcher);
 - :mod:`.component_commands` — the lifecycle commands each component process serves
   (the launcher sends them, the SDK answers);
+- :mod:`.hosts` — component processes on another computer: started, signalled, their
+  logs read (a host agent serves them, the launcher calls them);
+- :mod:`.parameters` — component parameters at run time (the task executor);
 - :mod:`.monitoring` — observers at run time and the diagnosis model;
 - :mod:`.steps` — plan steps run on the task executor for a high level in another
   process (the task executor's side serves them).

@@ -1,4 +1,5 @@
-"""A second process on the bus: answers `echo`, publishes on `topic/chatter` when asked.
+"""A second process on the bus: answers `echo`, publishes on `topic/chatter` when asked,
+subscribes to a key when asked (`listen`) and tells how many messages it heard there.
 
 Usage: python -m tests.executive.bus.bus_peer ROBOT ENDPOINT
 """
@@ -28,12 +29,22 @@ def main() -> None:
                 bus.publish("topic/chatter", {"i": i, "run": request.get("run", "")})
             return {"sent": request["count"]}
 
+        heard: dict[str, int] = {}
+
+        def listen(request: dict[str, Any]) -> dict[str, Any]:
+            key = str(request["key"])
+            heard[key] = 0
+            bus.subscribe(key, lambda message: heard.update({key: heard[key] + 1}))
+            return {}
+
         def stop(request: dict[str, Any]) -> dict[str, Any]:
             done.set()
             return {}
 
         bus.serve("test/echo", echo)
         bus.serve("test/chatter", chatter)
+        bus.serve("test/listen", listen)
+        bus.serve("test/heard", lambda request: {"count": heard.get(str(request["key"]), 0)})
         bus.serve("test/stop", stop)
         print("ready", flush=True)
         done.wait(60)

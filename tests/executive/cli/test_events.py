@@ -8,7 +8,6 @@ import signal
 import subprocess
 import sys
 import threading
-import time
 from pathlib import Path
 
 from executive.bus.api import planning
@@ -21,7 +20,7 @@ EVENTS = 400  # fact changes made while following, each an event, as fast as the
 def test_following_events_misses_none_under_load(tmp_path: Path) -> None:
     with RobotProcess(USECASE, tmp_path / "robot") as robot:
         follower = subprocess.Popen(
-            [sys.executable, "-m", "executive.cli", "events", "--follow", "--json", "-n", "0",
+            [sys.executable, "-m", "executive.cli", "events", "--follow", "--json", "-n", "1",
              "--robot", str(USECASE), "--endpoint", robot.endpoint],
             cwd=robot.folder, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
             env={**os.environ, "PYTHONPATH": str(ROOT)},
@@ -30,7 +29,8 @@ def test_following_events_misses_none_under_load(tmp_path: Path) -> None:
         reader = threading.Thread(target=_read, args=(follower, printed), daemon=True)
         reader.start()
         try:
-            time.sleep(2.0)  # the follower subscribed and read the history
+            # the newest event printed: the follower prints every event from there on
+            assert wait_for(lambda: bool(printed), timeout=30)
             writers = [
                 threading.Thread(target=_change_facts, args=(robot, n, EVENTS // 4))
                 for n in range(4)

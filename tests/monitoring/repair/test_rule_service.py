@@ -71,7 +71,7 @@ def test_rules_fire_on_bus_messages_and_a_failing_action_stops_nothing(
     service: tuple[Bus, KnowledgeBase], tmp_path: Path
 ) -> None:
     bus, kb = service
-    time.sleep(0.3)  # let the subscriptions reach the executive's session
+    assert bus.wait_for_subscriber(DIAGNOSES) and bus.wait_for_subscriber(OBSERVATIONS)
     bus.publish(DIAGNOSES, DiagnosisInfo("DIAGNOSED", (("lidar",), ("cam",))).to_payload())
     lines = wait_for_lines(tmp_path / "repair.log", 1)
     assert lines[0].endswith("lidar_down: cam, lidar")
