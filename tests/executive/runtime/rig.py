@@ -76,7 +76,7 @@ class Recorder:
         with self._lock:
             self._messages.clear()
 
-    def wait(self, predicate: Callable[[dict[str, Any]], bool], timeout: float = 10.0) -> bool:
+    def wait(self, predicate: Callable[[dict[str, Any]], bool], timeout: float = 30.0) -> bool:
         """Wait for a message whose payload satisfies ``predicate``."""
         return wait_for(lambda: any(predicate(p) for p in self.payloads), timeout)
 
