@@ -8,7 +8,8 @@ constructor and has the lifecycle of a ROS 2 managed node::
 
     UNCONFIGURED --configure--> INACTIVE --activate--> ACTIVE
                                 INACTIVE <-deactivate- ACTIVE
-    any of them --shutdown--> FINALIZED;  a failure --> ERROR (with its reason) --shutdown--> FINALIZED
+    any state --shutdown--> FINALIZED
+    any state --a failure--> ERROR (with its reason) --shutdown--> FINALIZED
 
 Configured, a service holds what it needs and answers what it serves at once (the high
 level's API); active, it works (threads, subscriptions, components). While a transition
@@ -68,17 +69,16 @@ _GONE = frozenset({_S.ERROR, _S.SHUTTING_DOWN, _S.FINALIZED})  # never active ag
 _LEAVING = _GONE | {_S.DEACTIVATING}  # not on the way to ACTIVE
 _WAS_ACTIVE = frozenset({_S.ACTIVATING, _S.ACTIVE, _S.DEACTIVATING})
 
-# every hook's name, by the framework method a subclass must not define instead
-FRAMEWORK_METHODS = {
+# the framework's methods a subclass must not define: the hook to override instead
+HOOKS = {
     "configure": "on_configure",
     "activate": "on_activate",
     "deactivate": "on_deactivate",
     "shutdown": "on_shutdown",
-    "fail": "on_shutdown",
-    "wait_for": "on_activate",
     "start": "on_activate",  # the services' methods before the lifecycle
     "stop": "on_deactivate",
 }
+FINAL = ("state", "reason", "fail", "add_failure_listener", "wait_for", "_activated")
 
 
 class Service:
@@ -96,9 +96,12 @@ class Service:
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
-        for method, hook in FRAMEWORK_METHODS.items():
+        for method, hook in HOOKS.items():
             if method in vars(cls):
                 raise TypeError(f"{cls.__name__} defines {method}(): override {hook}() instead")
+        for method in FINAL:
+            if method in vars(cls):
+                raise TypeError(f"{cls.__name__} defines {method}(): it is the framework's")
 
     def __init__(self, context: Context) -> None:
         self.context = context

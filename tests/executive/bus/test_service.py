@@ -161,6 +161,12 @@ def test_a_service_that_defines_a_framework_method_is_refused() -> None:
             def start(self) -> None:
                 pass
 
+    with pytest.raises(TypeError, match=r"^Sly defines wait_for\(\): it is the framework's$"):
+
+        class Sly(Service):
+            def wait_for(self) -> None:
+                pass
+
 
 def test_the_manager_configures_all_then_activates_all_and_stops_in_reverse(
     context: Context,
