@@ -13,7 +13,9 @@ README's "Architecture" says which may import which; ``tests/test_layers.py`` ch
 - :mod:`.planning` — the high level: goals, plans and their execution;
 - :mod:`.dashboard` — the live web page and the pictures;
 - :mod:`.testing` — the pytest fixtures and the robot harness;
-- :mod:`.executive` — the composition root: the services of the executive process;
+- :mod:`.executive` — the composition root: the executive process, and a group of its
+  services in a process of its own; :mod:`.service_groups` — one builder per group of
+  services, used by both;
 - :mod:`.cli` — the ``dura`` command.
 
 Beside it, :mod:`monitoring` sits on the bus and :mod:`knowledge` under everything.

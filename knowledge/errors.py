@@ -49,6 +49,10 @@ class ComponentError(DuraError):
     """A component process refused a command, or could not be started or reached."""
 
 
+class ServiceError(DuraError):
+    """A service of the executive was asked for a change its lifecycle does not allow."""
+
+
 def located(path: object, line: int | None, message: str) -> str:
     """Format ``file:line: message`` (or ``file: message`` without a line)."""
     return f"{path}:{line}: {message}" if line else f"{path}: {message}"

@@ -42,7 +42,7 @@ def serve_observers(manager: ObserverManager, bus: Bus) -> list[Any]:
         return request
 
     def deactivate(request: api.ObserverId) -> api.ObserverActive:
-        manager.deactivate(request.id)
+        manager.deactivate_observer(request.id)
         return api.ObserverActive(request.id, False)
 
     return [
@@ -53,7 +53,7 @@ def serve_observers(manager: ObserverManager, bus: Bus) -> list[Any]:
         api.OBSERVER_CHANGE.serve(bus, change),
         api.OBSERVER_REMOVE.serve(bus, remove),
         api.OBSERVER_ACTIVATE.serve(
-            bus, lambda r: api.ObserverActive(r.id, manager.activate(r.id))
+            bus, lambda r: api.ObserverActive(r.id, manager.activate_observer(r.id))
         ),
         api.OBSERVER_DEACTIVATE.serve(bus, deactivate),
         api.OBSERVER_LATEST.serve(bus, lambda _: api.LatestReply(manager.latest())),

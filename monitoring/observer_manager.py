@@ -5,8 +5,8 @@ It loads the observers of every component of the robot description (ids
 changed, removed, activated and deactivated while it runs, through its methods or
 its bus API (:func:`executive.bus.keys.observers_api`).
 
-An observer observes (is *active*) while it is enabled (:meth:`ObserverManager.activate`,
-the default) and its component's last state from the launcher
+An observer observes (is *active*) while it is enabled
+(:meth:`ObserverManager.activate_observer`, the default) and its component's last state from the launcher
 (``component/<name>/state``) is READY; an observer without a component only needs to
 be enabled. So a stopped, paused or crashed component never produces fault reports,
 and an observer starts afresh (start-up time, empty filters) each time it becomes
@@ -128,12 +128,12 @@ class ObserverManager(Service):
         self._latest: dict[tuple[str, str, tuple[str, ...], tuple[str, ...]], dict[str, Any]] = {}
         self._declared: list[Any] = []
         self._thread: threading.Thread | None = None
-        self._stopping = False
+        self._stopping = True  # observers observe only while the manager is active
 
     # --- lifecycle ------------------------------------------------------------------
 
-    def start(self) -> None:
-        """Load the robot's observers, listen to component states, serve the API, loop.
+    def on_configure(self) -> None:
+        """Load the robot's observers (they observe once active).
 
         Raises:
             ConfigError: an observer of the robot description is invalid.
@@ -147,13 +147,20 @@ class ObserverManager(Service):
         with self._lock:
             for observer_id, owner, observer in observers:
                 self._register(_Slot(observer_id, owner, observer, observer.inputs()))
+
+    def on_activate(self) -> None:
+        """Listen to component states, serve the API, loop."""
+        with self._lock:
+            self._stopping = False
+            for slot in self._slots.values():
+                self._refresh(slot)
         bus = self.context.bus
         self._declared.append(bus.subscribe(component("*", "state"), self._on_component_state))
         self._declared.extend(serve_observers(self, bus))
         self._thread = threading.Thread(target=self._run, name="observer-manager", daemon=True)
         self._thread.start()
 
-    def stop(self) -> None:
+    def on_deactivate(self) -> None:
         with self._lock:
             self._stopping = True
             self._lock.notify_all()
@@ -161,16 +168,16 @@ class ObserverManager(Service):
             self._thread.join()
             self._thread = None
         with self._lock:
-            entities = [f.subscriber for f in self._feeds.values()] + self._declared
-            self._feeds.clear()
-            self._declared.clear()
+            entities, self._declared = self._declared, []
             for slot in self._slots.values():
-                slot.active = False
-        for entity in entities:
-            try:
-                entity.undeclare()
-            except Exception as e:  # already closed with the bus
-                log.debug("undeclare: %s", e)
+                self._refresh(slot)  # stopping: none observes
+        _undeclare(entities)
+
+    def on_shutdown(self) -> None:
+        with self._lock:
+            entities = [f.subscriber for f in self._feeds.values()]
+            self._feeds.clear()
+        _undeclare(entities)
 
     # --- the Python API -------------------------------------------------------------
 
@@ -224,7 +231,7 @@ class ObserverManager(Service):
         with self._lock:
             self._unregister(self._slot(observer_id))
 
-    def activate(self, observer_id: str) -> bool:
+    def activate_observer(self, observer_id: str) -> bool:
         """Enable an observer; returns whether it observes now (its component is READY)."""
         with self._lock:
             slot = self._slot(observer_id)
@@ -232,7 +239,7 @@ class ObserverManager(Service):
             self._refresh(slot)
             return slot.active
 
-    def deactivate(self, observer_id: str) -> None:
+    def deactivate_observer(self, observer_id: str) -> None:
         """Disable an observer until it is activated again."""
         with self._lock:
             slot = self._slot(observer_id)
@@ -396,3 +403,11 @@ class ObserverManager(Service):
                 self._latest[(slot.id, info.type, info.resource, info.callerids)] = payload
                 payloads.append(payload)
         return payloads
+
+
+def _undeclare(entities: list[Any]) -> None:
+    for entity in entities:
+        try:
+            entity.undeclare()
+        except Exception as e:  # already closed with the bus
+            log.debug("undeclare: %s", e)

@@ -57,11 +57,11 @@ class ResourceMonitor(Service):
     def hostname(self) -> str:
         return self.sampler.hostname
 
-    def start(self) -> None:
+    def on_activate(self) -> None:
         self._subscriber = self.context.bus.subscribe(component("*", "state"), self._on_state)
         self.sampler.start()
 
-    def stop(self) -> None:
+    def on_deactivate(self) -> None:
         self.sampler.stop()
         if self._subscriber is not None:
             with contextlib.suppress(Exception):

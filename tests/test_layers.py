@@ -49,7 +49,19 @@ ALLOWED: dict[str, set[str]] = {
         "knowledge",
     },
     "executive.dashboard": {"executive.bus", "executive.planning", "knowledge"},
+    # the builders of the groups of services, for the composition root
+    "executive.service_groups": {
+        "executive.bus",
+        "executive.runtime",
+        "executive.ros2",
+        "executive.bags",
+        "executive.tasks",
+        "executive.planning",
+        "monitoring",
+        "knowledge",
+    },
     "executive.executive": {
+        "executive.service_groups",
         "executive.bus",
         "executive.runtime",
         "executive.sdk",

@@ -257,8 +257,9 @@ class BusRecording:
 
 
 class Recording(Service):
-    """The executive's own recording (``dura run --record``): it starts before the other
-    services, so it sees every component state from the first."""
+    """The executive's own recording (``dura run --record``): it records from its
+    configuration on, before the other services are configured, so it sees every
+    component state from the first."""
 
     name = "recording"
 
@@ -268,12 +269,12 @@ class Recording(Service):
         self.max_size = max_size
         self._recording: BusRecording | None = None
 
-    def start(self) -> None:
+    def on_configure(self) -> None:
         recorder = Recorder(self.path, self.context.robot.name, max_size=self.max_size)
         self._recording = BusRecording(self.context.bus, recorder)
         self._recording.start()
 
-    def stop(self) -> None:
+    def on_shutdown(self) -> None:
         if self._recording is not None:
             self._recording.stop()
             self._recording = None

@@ -17,7 +17,11 @@ but :mod:`knowledge`.
   numbers, durations and values as every view writes them;
 - :mod:`.clock` — robot time, possibly faster than the wall clock;
 - :mod:`.topic_source` — topics whose messages do not travel on the bus (ROS 2's);
-- :mod:`.service` — the extension point of the executive's services, and what each
-  gets (:class:`~.service.Context`); :mod:`.worker` — the one thread that touches an
-  object's state.
+- :mod:`.service` — the executive's services and their one lifecycle (that of a ROS 2
+  managed node), and what each gets (:class:`~.service.Context`);
+  :mod:`.lifecycle_manager` — the driver of a process's services: configure and activate
+  in order, deactivate and shut down in reverse;
+- :mod:`.event_relay` — the events every process logs, on the bus for all and handed to
+  the followers of each process;
+- :mod:`.worker` — the one thread that touches an object's state.
 """

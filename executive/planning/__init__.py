@@ -4,8 +4,11 @@ It owns the goals and plans. It may import :mod:`executive.bus` and :mod:`knowle
 it never imports the task executor (steps run through the
 :class:`~executive.planning.task_runner.TaskRunner` port).
 
-- :mod:`.high_level` — the service: composes the parts below and serves
-  :mod:`executive.bus.api.planning`;
+- :mod:`.high_level` — the service: a small shell over :mod:`.warm_up` (the planner
+  loads the domain in the background), :mod:`.goal_api` and :mod:`.world_api` (the verbs
+  of :mod:`executive.bus.api.planning`) and :mod:`.deliberation` (the parts below at
+  work: goal planner, plan executor, integrity goals with :mod:`.integrity_loop` and
+  :mod:`.blocked_tasks`, sensing);
 - :mod:`.goals` — goals as the planner reads them (:class:`~.goals.Refusal` for the rest);
 - :mod:`.goal_planner` — planning rounds; the one writer of goal and plan states
   (:mod:`.goal_keeper` and :mod:`.goal_watch`: unreachable goals looked at again,
@@ -14,7 +17,8 @@ it never imports the task executor (steps run through the
   are unreachable (:mod:`.reachability`: what no action can make true);
 - :mod:`.planner` (client) and :mod:`.planner_worker` (process) — the engines;
 - :mod:`.problem` — unified-planning problems from the domain and the knowledge base;
-- :mod:`.expression` — ground PDDL expressions: nodes, evaluation, reading;
+- :mod:`.expression` — ground PDDL expressions: nodes, evaluation, reading; names and
+  fact patterns;
 - :mod:`.stn`, :mod:`.partial_order` — plans as partial orders of steps;
 - :mod:`.plan_executor` — runs a plan (:mod:`.plan_run` its steps, :mod:`.step_run` one
   step, :mod:`.task_runner` the port, :mod:`.state_change` what it reports,
@@ -24,5 +28,8 @@ it never imports the task executor (steps run through the
 - :mod:`.integrity` — goals that keep the robot going;
 - :mod:`.sensing` — facts and values kept in step with topics (the ``sensing:`` rules);
 - :mod:`.dry_run` — what the planner would do now; :mod:`.domain_check` — diagnostics
-  for domain authors.
+  for domain authors; :mod:`.domain_description` — the domain as ``dura domain show``
+  gives it;
+- :mod:`.config_space` — a stand-in for ConfigSpace in the planner worker (see its
+  docstring).
 """

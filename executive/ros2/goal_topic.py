@@ -80,7 +80,7 @@ class Ros2Goals(Service):
         self._reader: Reader | None = None
         self._writer: Writer | None = None
 
-    def start(self) -> None:
+    def on_activate(self) -> None:
         """Read the goals topic and open the replies (nothing if ``goals`` is null).
 
         Raises:
@@ -98,7 +98,7 @@ class Ros2Goals(Service):
         self._thread = threading.Thread(target=self._run, name="ros2-goals", daemon=True)
         self._thread.start()
 
-    def stop(self) -> None:
+    def on_deactivate(self) -> None:
         if self._thread is not None:
             self._queue.put(None)
             self._thread.join()

@@ -71,7 +71,7 @@ class Ros2GraphModel(Service):
         self._thread: threading.Thread | None = None
         self._subscription: Any = None
 
-    def start(self) -> None:
+    def on_activate(self) -> None:
         if not self.nodes:
             return
         self._running = True
@@ -80,7 +80,7 @@ class Ros2GraphModel(Service):
         self._subscription = self.context.bus.subscribe(component("*", "state"), self._on_state)
         self.discovery.on_change(self._mark)
 
-    def stop(self) -> None:
+    def on_deactivate(self) -> None:
         if self._subscription is not None:
             try:
                 self._subscription.undeclare()

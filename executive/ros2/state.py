@@ -123,9 +123,10 @@ class Ros2StatePublisher(Service):
         self._diagnostics: Writer | None = None
         self._events: Writer | None = None
         self._subscriptions: list[Any] = []
+        self._node = ""  # dura's node in the ROS 2 graph, once configured
 
-    def start(self) -> None:
-        """Open the writers (and a link if none was given), listen to the bus.
+    def on_configure(self) -> None:
+        """Open the writers (and a link if none was given).
 
         Raises:
             BusError: DDS refused a writer or the participant.
@@ -134,14 +135,6 @@ class Ros2StatePublisher(Service):
         link = self._link
         if link is None:
             link = self._own_link = Ros2Link(self.spec)
-        try:
-            self._open(link)
-        except BaseException:
-            self.stop()
-            raise
-
-    def _open(self, link: Ros2Link) -> None:
-        node = link.discovery.node.strip("/")
         qos = dds_qos(PROFILES["default"])
         if self.spec.diagnostics is not None:
             self._diagnostics = link.participant.writer(
@@ -155,7 +148,14 @@ class Ros2StatePublisher(Service):
             self._writers.append(self._events)
         for writer in self._writers:
             link.discovery.declare(writer.guid, writer=True)
+        self._node = link.discovery.node.strip("/")
+
+    def on_activate(self) -> None:
+        """Listen to the bus."""
+        node = self._node
         bus = self.context.bus
+        with self._changed:
+            self._stopping = False
         if self._diagnostics is not None:
             self._subscriptions += [
                 bus.subscribe(OBSERVATIONS, lambda m: self._status(m, observation_status, node)),
@@ -166,7 +166,7 @@ class Ros2StatePublisher(Service):
         if self._events is not None:
             self._subscriptions.append(bus.subscribe(EVENTS, self._event, decoded=False))
 
-    def stop(self) -> None:
+    def on_deactivate(self) -> None:
         for subscription in self._subscriptions:
             try:
                 subscription.undeclare()
@@ -179,6 +179,8 @@ class Ros2StatePublisher(Service):
         if self._thread is not None:
             self._thread.join()
             self._thread = None
+
+    def on_shutdown(self) -> None:
         link = self._own_link or self._link
         for writer in self._writers:
             if link is not None and not link.participant.closed:

@@ -68,7 +68,7 @@ class ComponentApi(Service):
         self.by_hand = by_hand or _LauncherByHand(launcher)
         self._declared: list[Any] = []
 
-    def start(self) -> None:
+    def on_activate(self) -> None:
         bus = self.context.bus
         self._declared = [
             COMPONENT_LIST.serve(bus, self._list),
@@ -78,7 +78,7 @@ class ComponentApi(Service):
             COMPONENT_INJECT.serve(bus, self._inject),
         ]
 
-    def stop(self) -> None:
+    def on_deactivate(self) -> None:
         for entity in self._declared:
             with contextlib.suppress(Exception):
                 entity.undeclare()

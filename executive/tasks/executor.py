@@ -125,7 +125,7 @@ class TaskExecutor(Service):
 
     # --- lifecycle -----------------------------------------------------------------------
 
-    def start(self) -> None:
+    def on_activate(self) -> None:
         enactor = self._enactor = Enactor(
             self.context,
             self.launcher,
@@ -150,7 +150,7 @@ class TaskExecutor(Service):
             self._worker.post(lambda: enactor.reschedule("warm spares start"))
         self._declared = self._serve()
 
-    def stop(self) -> None:
+    def on_deactivate(self) -> None:
         if not self._worker.running:
             return
         for entity in self._declared:

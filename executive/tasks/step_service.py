@@ -9,6 +9,7 @@ nothing more; one cancelled by anybody else fails.
 
 from __future__ import annotations
 
+import contextlib
 import threading
 from typing import Any
 
@@ -52,7 +53,7 @@ class StepService(Service):
         self._lock = threading.Lock()
         self._declared: list[Any] = []
 
-    def start(self) -> None:
+    def on_activate(self) -> None:
         bus = self.context.bus
         self._declared = [
             STEP_RUN.serve(bus, self._run),
@@ -60,9 +61,10 @@ class StepService(Service):
             STEP_UPCOMING.serve(bus, self._upcoming),
         ]
 
-    def stop(self) -> None:
+    def on_deactivate(self) -> None:
         for entity in self._declared:
-            entity.undeclare()
+            with contextlib.suppress(Exception):  # already closed with the bus
+                entity.undeclare()
         self._declared = []
 
     def _run(self, request: StepRun) -> Empty:

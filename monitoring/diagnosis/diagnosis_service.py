@@ -79,7 +79,7 @@ class DiagnosisService(Service):
 
     # --- lifecycle ----------------------------------------------------------------------
 
-    def start(self) -> None:
+    def on_activate(self) -> None:
         bus = self.context.bus
         self._running = True
         self._thread = threading.Thread(target=self._loop, name="dura-diagnosis", daemon=True)
@@ -90,7 +90,7 @@ class DiagnosisService(Service):
             api.DIAGNOSIS_EXONERATE.serve(bus, self._on_exonerate),
         ]
 
-    def stop(self) -> None:
+    def on_deactivate(self) -> None:
         with self._changed:
             self._running = False
             self._changed.notify_all()

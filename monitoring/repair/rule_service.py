@@ -53,7 +53,7 @@ class RuleService(Service):
         self._pool: ThreadPoolExecutor | None = None
         self._entities: list[Any] = []
 
-    def start(self) -> None:
+    def on_activate(self) -> None:
         self._pool = ThreadPoolExecutor(max_workers=self._workers, thread_name_prefix="dura-repair")
         bus = self.context.bus
         self._entities = [
@@ -61,7 +61,7 @@ class RuleService(Service):
             bus.subscribe(DIAGNOSES, self._on_diagnosis),
         ]
 
-    def stop(self) -> None:
+    def on_deactivate(self) -> None:
         for entity in self._entities:
             entity.undeclare()
         self._entities = []

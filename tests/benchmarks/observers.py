@@ -121,7 +121,8 @@ def run(topics: int, duration: float, folder: Path) -> dict[str, float]:
         KnowledgeBase(folder / f"kb{topics}.db") as kb,
     ):
         manager = ObserverManager(Context(robot, bus, kb))
-        manager.start()
+        manager.configure()
+        manager.activate()
         try:
             for i in range(topics):
                 for config in observers(f"t{i}"):
@@ -150,7 +151,7 @@ def run(topics: int, duration: float, folder: Path) -> dict[str, float]:
             flood.wait(30)
             hang = hang_detected(manager, report["stopped"])
         finally:
-            manager.stop()
+            manager.shutdown()
     rates = report["rates"]
     errors = [abs(measured.get(f"t{i}", 0.0) - r) / r for i, r in enumerate(rates)]
     return {

@@ -123,7 +123,8 @@ def run_dds(topics: int, duration: float, folder: Path, domain: int) -> dict[str
         Ros2Link(robot.ros2) as link,
     ):
         manager = ObserverManager(Context(robot, bus, kb), sources=[link.topics])
-        manager.start()
+        manager.configure()
+        manager.activate()
         try:
             for i in range(topics):
                 for config in observers(f"t{i}"):
@@ -152,7 +153,7 @@ def run_dds(topics: int, duration: float, folder: Path, domain: int) -> dict[str
             flood.wait(30)
             hang = hang_detected(manager, report["stopped"])
         finally:
-            manager.stop()
+            manager.shutdown()
     assert callers == {"flood"}, callers  # the node's name, from ROS 2 discovery
     rates = report["rates"]
     errors = [abs(measured.get(f"t{i}", 0.0) - r) / r for i, r in enumerate(rates)]

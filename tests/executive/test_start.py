@@ -86,6 +86,7 @@ def test_the_executive_process_leaves_unified_planning_to_its_planner_worker(
     script = textwrap.dedent(f"""
         import sys
         from pathlib import Path
+        from executive.bus.service import ServiceState
         from executive.executive import Executive
         from knowledge.robot import load_robot
 
@@ -93,7 +94,7 @@ def test_the_executive_process_leaves_unified_planning_to_its_planner_worker(
         folder = Path({str(tmp_path)!r})
         with Executive(robot, endpoint={free_endpoint()!r}, kb_path=folder / "robot.db",
                        folder=folder) as executive:
-            assert executive.high_level.wait_ready(60)
+            assert executive.high_level.wait_for(ServiceState.ACTIVE, 60)
             print("unified_planning" in sys.modules, len(executive.kb.facts()) > 0)
     """)
     done = subprocess.run(

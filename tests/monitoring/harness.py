@@ -79,11 +79,12 @@ def bus(robot: RobotDescription) -> Iterator[Bus]:
 def running_manager(robot: RobotDescription, bus: Bus, folder: Path) -> Iterator[ObserverManager]:
     with KnowledgeBase(folder / "kb.db") as kb:
         started = ObserverManager(Context(robot, bus, kb))
-        started.start()
+        started.configure()
+        started.activate()
         try:
             yield started
         finally:
-            started.stop()
+            started.shutdown()
 
 
 @pytest.fixture

@@ -99,10 +99,10 @@ def test_observers_are_added_changed_deactivated_and_removed_at_run_time(
     assert observations.next(of(observer))["observation"] == 1
     manager.change(observer, frequency(low=40, high=60))
     assert observations.next(of(observer))["observation"] == NO_STATE_FITS
-    manager.deactivate(observer)
+    manager.deactivate_observer(observer)
     observations.during(0.3)
     assert not [o for o in observations.during(0.8) if o["observer"] == observer]
-    assert manager.activate(observer) is True
+    assert manager.activate_observer(observer) is True
     observations.next(of(observer))
     manager.remove(observer)
     assert manager.observers() == []

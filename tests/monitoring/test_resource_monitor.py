@@ -48,11 +48,12 @@ def watched(endpoint: str, tmp_path: Path) -> Iterator[tuple[Bus, Recorder]]:
     ):
         monitor = ResourceMonitor(Context(USECASE_ROBOT, bus, kb), rate=10.0)
         recorder = Recorder(bus, RESOURCES)
-        monitor.start()
+        monitor.configure()
+        monitor.activate()
         try:
             yield bus, recorder
         finally:
-            monitor.stop()
+            monitor.shutdown()
 
 
 def announce(bus: Bus, name: str, pid: int, state: Lifecycle = Lifecycle.READY) -> None:
@@ -112,7 +113,8 @@ def test_a_rate_that_is_not_positive_is_refused(tmp_path: Path, endpoint: str) -
 
 def monitored(r: Rig) -> ResourceMonitor:
     monitor = ResourceMonitor(Context(r.robot, r.bus, r.kb), rate=5.0)
-    monitor.start()
+    monitor.configure()
+    monitor.activate()
     return monitor
 
 
@@ -134,4 +136,4 @@ def test_high_cpu_and_growing_memory_faults_show_in_the_resources(
                 recorder, lambda n: n.name == "cam" and n.memory > baseline + (40 << 20)
             )
         finally:
-            monitor.stop()
+            monitor.shutdown()

@@ -44,11 +44,12 @@ def test_a_topic_ten_times_faster_on_the_wall_clock_is_at_its_rate_in_robot_time
     publish("lidar", [stream("topic/scan", {"rate": 50})])  # 5 Hz of robot time
     with KnowledgeBase(tmp_path / "kb.db") as kb:
         manager = ObserverManager(Context(robot, bus, kb), clock=Clock(10.0))
-        manager.start()
+        manager.configure()
+        manager.activate()
         try:
             observer = manager.add(frequency(low=3.5, high=6.5), name="scan rate")
             found = observations.next(of(observer))
         finally:
-            manager.stop()
+            manager.shutdown()
     assert found["observation"] == 1, found
     assert 3.5 <= found["values"]["frequency"] <= 6.5

@@ -5,7 +5,9 @@
   without loading a planner;
 - :mod:`.world_state` — :class:`WorldState`, evaluating them over facts;
 - :mod:`.reader` — reading them from PDDL text against a :class:`Signature`, with a
-  one-line reason for anything unknown or ill-typed.
+  one-line reason for anything unknown or ill-typed;
+- :mod:`.pattern` — names in PDDL text: what a PDDL name is, the objects an expression
+  names, fact patterns (``(robot_at *)``).
 
 Everything is importable from this package, as it was from the one module it grew from.
 """
@@ -28,6 +30,7 @@ from executive.planning.expression.nodes import (
     atoms,
     conjunction,
 )
+from executive.planning.expression.pattern import FactPattern, is_name, named_objects
 from executive.planning.expression.reader import Sexp, Signature, parse, parse_fact
 from executive.planning.expression.world_state import WorldState
 
@@ -41,6 +44,7 @@ __all__ = [
     "Compare",
     "Const",
     "Expression",
+    "FactPattern",
     "Not",
     "Or",
     "Sexp",
@@ -49,6 +53,8 @@ __all__ = [
     "WorldState",
     "atoms",
     "conjunction",
+    "is_name",
+    "named_objects",
     "parse",
     "parse_fact",
 ]

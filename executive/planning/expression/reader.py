@@ -75,7 +75,7 @@ _NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 Sexp = Union[str, list["Sexp"]]  # noqa: UP007 (runtime alias)
 
 
-def _sexp(text: str) -> Sexp:
+def read_sexp(text: str) -> Sexp:
     """One s-expression from text; raises ValueError with the reason."""
     tokens = [m.group(1) for m in _TOKEN.finditer(text)]
     stack: list[list[Sexp]] = [[]]
@@ -95,12 +95,12 @@ def _sexp(text: str) -> Sexp:
     if not top:
         raise ValueError("it is empty")
     if len(top) > 1:
-        raise ValueError(f"text after the expression: {_show(top[1])}")
+        raise ValueError(f"text after the expression: {show_sexp(top[1])}")
     return top[0]
 
 
-def _show(s: Sexp) -> str:
-    return s if isinstance(s, str) else "(" + " ".join(_show(x) for x in s) + ")"
+def show_sexp(s: Sexp) -> str:
+    return s if isinstance(s, str) else "(" + " ".join(show_sexp(x) for x in s) + ")"
 
 
 class _Reader:
@@ -118,7 +118,7 @@ class _Reader:
             raise ValueError("empty parentheses")
         head, rest = s[0], s[1:]
         if not isinstance(head, str):
-            raise ValueError(f"expected a predicate or a connective, not {_show(head)}")
+            raise ValueError(f"expected a predicate or a connective, not {show_sexp(head)}")
         key = head.lower()
         if key == "and":
             return conjunction(self.condition(x, env) for x in rest)
@@ -144,7 +144,7 @@ class _Reader:
             return Atom(head, self._args(head, self.sig.predicates[head], rest, env))
         if head in self.sig.functions:
             raise ValueError(
-                f"'{head}' is a function (a number); compare it, e.g. (>= {_show(s)} 1)"
+                f"'{head}' is a function (a number); compare it, e.g. (>= {show_sexp(s)} 1)"
             )
         raise ValueError(
             f"unknown predicate '{head}'{did_you_mean(head, sorted(self.sig.predicates))}"
@@ -156,7 +156,7 @@ class _Reader:
                 return Const(float(s))
             raise ValueError(f"expected a number or a function, not '{s}'")
         if not s or not isinstance(s[0], str):
-            raise ValueError(f"expected a number or a function, not {_show(s)}")
+            raise ValueError(f"expected a number or a function, not {show_sexp(s)}")
         head, rest = s[0], s[1:]
         if head in ("+", "-", "*", "/"):
             if not rest or (head != "-" and len(rest) < 2) or (head == "/" and len(rest) != 2):
@@ -181,7 +181,7 @@ class _Reader:
 
     def _term(self, s: Sexp, env: Mapping[str, str]) -> str:
         if not isinstance(s, str):
-            raise ValueError(f"expected an object, not {_show(s)}")
+            raise ValueError(f"expected an object, not {show_sexp(s)}")
         if s.startswith("?"):
             if s not in env:
                 raise ValueError(f"unbound variable '{s}'")
@@ -221,7 +221,7 @@ class _Reader:
         while items:
             item = items.pop(0)
             if not isinstance(item, str):
-                raise ValueError(f"expected a variable, not {_show(item)}")
+                raise ValueError(f"expected a variable, not {show_sexp(item)}")
             if item == "-":
                 if not items or not isinstance(items[0], str):
                     raise ValueError("'-' must be followed by a type")
@@ -272,7 +272,7 @@ def parse(text: str, signature: Signature, what: str = "goal") -> Expression:
     """
     shown = " ".join(text.split())
     try:
-        return _Reader(signature).condition(_sexp(text), {})
+        return _Reader(signature).condition(read_sexp(text), {})
     except (ValueError, RecursionError) as e:
         raise DomainError(f"{what} '{shown}': {e}") from e
 
@@ -286,7 +286,7 @@ def parse_fact(text: str, signature: Signature) -> Fact:
     shown = " ".join(text.split())
     reader = _Reader(signature)
     try:
-        s = _sexp(text)
+        s = read_sexp(text)
         if isinstance(s, list) and len(s) == 3 and s[0] == "=" and isinstance(s[1], list):
             target = reader.number(s[1], {})
             value = reader.number(s[2], {})

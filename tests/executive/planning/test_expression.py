@@ -10,9 +10,12 @@ from executive.planning.expression import (
     Atom,
     Compare,
     Const,
+    FactPattern,
     Value,
     WorldState,
     atoms,
+    is_name,
+    named_objects,
     parse,
     parse_fact,
 )
@@ -86,3 +89,53 @@ def test_facts_are_read_as_atoms_negations_and_numbers() -> None:
 def test_expressions_print_as_pddl() -> None:
     text = "(and (robot_at dock) (or (picture_taken lab) (not (picture_taken office))))"
     assert str(expr(text)) == text
+
+
+def test_the_objects_an_expression_names_are_its_arguments_not_its_words() -> None:
+    text = (
+        "(and (robot_at lab) (forall (?p - place) (picture_taken ?p)) "
+        "(>= (travel_time dock office) 2) (not (= ?x hall)))"
+    )
+    assert named_objects(text) == {"lab", "dock", "office", "hall"}
+    assert named_objects("(picture_taken lab") == frozenset()  # not an expression
+
+
+@pytest.mark.parametrize(
+    ("name", "ok"),
+    [("hall", True), ("hall-2_b", True), ("2hall", False), ("a b", False), ("", False)],
+)
+def test_a_pddl_name_is_a_letter_then_letters_digits_hyphens_or_underscores(
+    name: str, ok: bool
+) -> None:
+    assert is_name(name) is ok
+
+
+def test_a_fact_pattern_matches_a_name_and_leading_arguments() -> None:
+    facts = [Fact("robot_at", ("dock",)), Fact("travel_time", ("dock", "lab"), 3.0)]
+    for text, matched in [
+        ("", facts),
+        ("robot_at", facts[:1]),
+        ("(robot_at *)", facts[:1]),
+        ("(travel_time dock *)", facts[1:]),
+        ("travel_time lab", []),
+        ("(* dock)", facts),
+    ]:
+        pattern = FactPattern.read(text)
+        pattern.check(signature())
+        assert [f for f in facts if pattern.matches(f)] == matched, text
+
+
+@pytest.mark.parametrize(
+    ("text", "reason"),
+    [
+        ("(robot_at (lab))", "expected a name or *, not (lab)"),
+        ("(robot_at", "missing ')'"),
+        ("(robot_a *)", "unknown predicate or function 'robot_a' (did you mean 'robot_at'?)"),
+        ("(robot_at lob)", "unknown object 'lob' (did you mean 'lab'?)"),
+        ("(robot_at dock lab)", "'robot_at' takes 1 argument, not 2"),
+    ],
+)
+def test_a_fact_pattern_that_does_not_fit_the_domain_is_refused(text: str, reason: str) -> None:
+    with pytest.raises(DomainError) as e:
+        FactPattern.read(text).check(signature())
+    assert str(e.value).startswith("fact pattern '") and str(e.value).endswith(reason)

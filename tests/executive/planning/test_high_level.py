@@ -18,8 +18,10 @@ import pytest
 
 from executive.bus.api.planning import EVENTS as EVENTS_API
 from executive.bus.api.planning import GOAL_LIST, GOAL_SHOW, GoalQuery
+from executive.bus.event_relay import EventRelay
 from executive.bus.keys import EVENTS
-from executive.bus.service import Context
+from executive.bus.lifecycle_manager import LifecycleManager
+from executive.bus.service import Context, ServiceState
 from executive.bus.session import Bus
 from executive.planning.goals import submit
 from executive.planning.high_level import HighLevel
@@ -52,17 +54,16 @@ def robot(tmp_path: Path, endpoint: str) -> Iterator[Robot]:
         Bus(description.name, name="executive", endpoint=endpoint, listen=True) as bus,
         KnowledgeBase(tmp_path / "kb.db") as kb,
     ):
-        high = HighLevel(Context(description, bus, kb), runner)
-        high.start()
-        assert high.wait_ready(60)
-        try:
+        context = Context(description, bus, kb)
+        relay = EventRelay(context)
+        high = HighLevel(context, runner, events=relay)
+        with LifecycleManager([relay, high]):
+            assert high.wait_for(ServiceState.ACTIVE, 60)
 
             def dura(*args: str) -> subprocess.CompletedProcess[str]:
                 return run_dura(*args, "--robot", str(USECASE), "--endpoint", endpoint)
 
             yield Robot(kb, bus, runner, high, dura)
-        finally:
-            high.stop()
 
 
 def state_of(robot: Robot, goal_id: int) -> GoalState:
@@ -174,6 +175,16 @@ def test_facts_and_objects_are_read_and_changed_through_the_cli(robot: Robot) ->
     assert "shelf" not in robot.kb.objects()
 
 
+def test_a_fact_pattern_with_a_misspelt_name_is_refused_with_a_suggestion(robot: Robot) -> None:
+    wrong = robot.dura("state", "get", "(robot_a *)")
+    assert wrong.returncode == 1
+    assert wrong.stderr.strip() == (
+        "dura: fact pattern '(robot_a *)': unknown predicate or function 'robot_a' "
+        "(did you mean 'robot_at'?)"
+    )
+    assert robot.dura("state", "get", "(robot_at lab)").stdout.splitlines()[1:] == []
+
+
 def test_a_failed_task_is_replanned_and_the_goal_still_achieved(robot: Robot) -> None:
     robot.runner.fail_once["move_to(dock, lab)"] = "the base stalled"
     goal = json.loads(robot.dura("goal", "add", "(robot_at lab)", "--json").stdout)
@@ -247,29 +258,28 @@ def slow_robot(tmp_path: Path, endpoint: str, monkeypatch: pytest.MonkeyPatch) -
         Bus(description.name, name="executive", endpoint=endpoint, listen=True) as bus,
         KnowledgeBase(tmp_path / "kb.db") as kb,
     ):
-        high = HighLevel(Context(description, bus, kb), runner)
-        high.start()
-        assert high.wait_ready(60)
-        try:
+        context = Context(description, bus, kb)
+        relay = EventRelay(context)
+        high = HighLevel(context, runner, events=relay)
+        with LifecycleManager([relay, high]):
+            assert high.wait_for(ServiceState.ACTIVE, 60)
 
             def dura(*args: str) -> subprocess.CompletedProcess[str]:
                 return run_dura(*args, "--robot", str(USECASE), "--endpoint", endpoint)
 
             yield Robot(kb, bus, runner, high, dura)
-        finally:
-            high.stop()
 
 
 def test_a_goal_cancelled_while_its_plan_is_computed_is_never_planned_or_executed(
     slow_robot: Robot,
 ) -> None:
     robot = slow_robot
-    domain = robot.high.domain
+    domain = robot.high.deliberation.domain
     with robot.kb.transaction():  # both goals in the same round
         office = submit(robot.kb, domain, "(picture_taken office)", priority=5)
         lab = submit(robot.kb, domain, "(robot_at lab)")
-    robot.high.goals.wake("two goals added")
-    assert wait_for(lambda: robot.high.goals.status()["phase"] == "searching", 30)
+    robot.high.deliberation.goals.wake("two goals added")
+    assert wait_for(lambda: robot.high.deliberation.goals.status()["phase"] == "searching", 30)
     assert robot.kb.events(kind="PLANNING")[0].data["goals"] == [office.id, lab.id]
 
     cancel = robot.dura("goal", "cancel", str(office.id))  # while kairos-slow plans

@@ -98,11 +98,12 @@ def context(ros2_robot: RobotDescription, bus: Bus, tmp_path: Path) -> Iterator[
 def manager(context: Context, link: Ros2Link) -> Iterator[ObserverManager]:
     """An observer manager that reads the robot's ROS 2 topics through the link."""
     started = ObserverManager(context, sources=[link.topics])
-    started.start()
+    started.configure()
+    started.activate()
     try:
         yield started
     finally:
-        started.stop()
+        started.shutdown()
 
 
 @pytest.fixture

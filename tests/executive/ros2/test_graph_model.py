@@ -46,13 +46,15 @@ def graph(node_robot: RobotDescription, context: Context, link: Ros2Link) -> Ite
     own = Context(node_robot, context.bus, context.kb)
     diagnosis = DiagnosisService(own, learn=True)
     model = Ros2GraphModel(own, link.discovery)
-    diagnosis.start()
-    model.start()
+    diagnosis.configure()
+    diagnosis.activate()
+    model.configure()
+    model.activate()
     try:
         yield own
     finally:
-        model.stop()
-        diagnosis.stop()
+        model.shutdown()
+        diagnosis.shutdown()
 
 
 def model_nodes(context: Context) -> dict[str, tuple[list[str], list[str]]]:

@@ -14,9 +14,10 @@ from cyclonedds.sub import DataReader
 
 from executive.bus.keys import DIAGNOSES, EVENTS, OBSERVATIONS
 from executive.bus.payloads import TIMEOUT, DiagnosisInfo, ObservationInfo
-from executive.bus.service import Context
+from executive.bus.service import Context, ServiceState
 from executive.ros2.link import Ros2Link
 from executive.ros2.state import ERROR, OK, Ros2StatePublisher
+from knowledge.errors import ServiceError
 from knowledge.ros2_messages import standard_store
 from tests.conftest import wait_for
 from tests.executive.ros2.messages import DiagnosticArray, String
@@ -29,11 +30,12 @@ ANY = SampleState.Any | ViewState.Any | InstanceState.Any
 def state(context: Context, link: Ros2Link) -> Iterator[Ros2StatePublisher]:
     assert context.robot.ros2 is not None
     service = Ros2StatePublisher(context, context.robot.ros2, link=link, interval=0.05)
-    service.start()
+    service.configure()
+    service.activate()
     try:
         yield service
     finally:
-        service.stop()
+        service.shutdown()
 
 
 class Heard:
@@ -117,12 +119,15 @@ def test_the_service_opens_and_closes_a_link_of_its_own_when_given_none(
 ) -> None:
     assert context.robot.ros2 is not None
     service = Ros2StatePublisher(context, context.robot.ros2)
-    service.start()
+    service.configure()
+    service.activate()
     heard = Heard(peer.subscriber("monitor", "/dura/events", String))
     try:
         assert wait_for(heard.matched)
         context.bus.publish(EVENTS, {"id": 1, "kind": "EXECUTIVE_STARTED"})
         assert wait_for(heard.take)
     finally:
-        service.stop()
-    service.stop()  # idempotent
+        service.shutdown()
+    assert service.state is ServiceState.FINALIZED
+    with pytest.raises(ServiceError, match="cannot shutdown while finalized"):
+        service.shutdown()  # refused: a service shuts down once

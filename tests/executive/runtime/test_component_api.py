@@ -28,7 +28,8 @@ def test_components_are_listed_started_stopped_and_their_logs_read_through_the_v
 ) -> None:
     with rig(robot(usecase("lidar")), endpoint, tmp_path) as r:
         api = ComponentApi(Context(r.robot, r.bus, r.kb), r.launcher)
-        api.start()
+        api.configure()
+        api.activate()
         try:
             started = COMPONENT_START.call(r.bus, ComponentName("lidar"))
             assert started.state is Lifecycle.READY
@@ -46,7 +47,7 @@ def test_components_are_listed_started_stopped_and_their_logs_read_through_the_v
             logs = COMPONENT_LOGS.call(r.bus, LogQuery("lidar", lines=1))
             assert logs.lines[0].startswith("--- dura: stopped: exited with code 0")
         finally:
-            api.stop()
+            api.shutdown()
 
 
 @pytest.mark.parametrize(
@@ -76,14 +77,15 @@ def test_a_request_with_a_bad_field_is_refused_by_its_declared_type_with_the_key
 ) -> None:
     with rig(robot(usecase("lidar")), endpoint, tmp_path) as r:
         api = ComponentApi(Context(r.robot, r.bus, r.kb), r.launcher)
-        api.start()
+        api.configure()
+        api.activate()
         try:
             with pytest.raises(BusError) as refused:
                 r.bus.request(key, request_)
             assert str(refused.value) == f"{key}: {reason}"
             assert r.launcher.state("lidar").state is Lifecycle.STOPPED  # nothing was done
         finally:
-            api.stop()
+            api.shutdown()
 
 
 def test_achievements_are_stored_by_the_launcher_for_known_components_only(

@@ -44,8 +44,9 @@ def executor(
     with rig(description, endpoint, folder) as r:
         context = Context(description, r.bus, r.kb)
         tasks = TaskExecutor(context, r.launcher, linger=linger, sequential=sequential, clock=clock)
-        tasks.start()
+        tasks.configure()
+        tasks.activate()
         try:
             yield tasks, r
         finally:
-            tasks.stop()
+            tasks.shutdown()

@@ -55,7 +55,8 @@ def test_a_refused_model_update_is_a_warning_with_the_reason_and_others_go_on(
     robot = with_reserved_topic()
     with KnowledgeBase(tmp_path / "kb.db") as kb:
         diagnosis = DiagnosisService(Context(robot, bus, kb))
-        diagnosis.start()
+        diagnosis.configure()
+        diagnosis.activate()
         try:
             sync = DiagnosisModelSync(bus, robot)
             with caplog.at_level(logging.WARNING, logger="dura.task_executor"):
@@ -71,7 +72,7 @@ def test_a_refused_model_update_is_a_warning_with_the_reason_and_others_go_on(
             assert model_nodes(bus) == set()
             assert len(caplog.records) == 1
         finally:
-            diagnosis.stop()
+            diagnosis.shutdown()
 
 
 def test_a_model_update_nobody_answers_is_a_warning(
@@ -98,11 +99,12 @@ def test_changes_nobody_answered_reach_a_diagnosis_engine_that_comes_later(
                 worker.call(lambda: sync.remove("cam"))  # never added: nothing to ask
             assert caplog.records  # nobody answered: a warning
             diagnosis = DiagnosisService(Context(robot, bus, kb))  # monitoring comes now
-            diagnosis.start()
+            diagnosis.configure()
+            diagnosis.activate()
             try:
                 assert wait_for(lambda: model_nodes(bus) == {"lidar"}, 15)
             finally:
-                diagnosis.stop()
+                diagnosis.shutdown()
         finally:
             worker.call(sync.close)
 
@@ -113,19 +115,21 @@ def test_a_monitoring_process_that_joins_gets_the_nodes_of_what_runs(
     robot = usecase_robot()
     with KnowledgeBase(tmp_path / "kb.db") as kb:
         first = DiagnosisService(Context(robot, bus, kb))
-        first.start()
+        first.configure()
+        first.activate()
         sync = DiagnosisModelSync(bus, robot, worker.post)
         try:
             worker.call(lambda: sync.add("lidar"))
             assert model_nodes(bus) == {"lidar"}
-            first.stop()  # the monitoring process ends, and another one starts
+            first.shutdown()  # the monitoring process ends, and another one starts
             second = DiagnosisService(Context(robot, bus, kb))
-            second.start()
+            second.configure()
+            second.activate()
             token = bus.declare_alive(service_alive("monitoring"))
             try:
                 assert wait_for(lambda: model_nodes(bus) == {"lidar"}, 15)
             finally:
                 token.undeclare()
-                second.stop()
+                second.shutdown()
         finally:
             worker.call(sync.close)

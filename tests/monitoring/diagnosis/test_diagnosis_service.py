@@ -71,11 +71,12 @@ def running(endpoint: str, tmp_path: Path) -> Iterator[tuple[DiagnosisService, P
         Bus(robot.name, name="tester", endpoint=endpoint) as client,
     ):
         service = DiagnosisService(Context(robot, bus, kb), period=0.2)
-        service.start()
+        service.configure()
+        service.activate()
         try:
             yield service, Peer(client)
         finally:
-            service.stop()
+            service.shutdown()
 
 
 def add_thesis_model(peer: Peer) -> dict[str, Any]:

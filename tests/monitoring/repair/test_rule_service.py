@@ -50,11 +50,12 @@ def service(endpoint: str, tmp_path: Path) -> Iterator[tuple[Bus, KnowledgeBase]
         Bus(robot.name, name="observer", endpoint=endpoint) as client,
     ):
         rules = RuleService(Context(robot, bus, kb), [read_rules(path)])
-        rules.start()
+        rules.configure()
+        rules.activate()
         try:
             yield client, kb
         finally:
-            rules.stop()
+            rules.shutdown()
 
 
 def wait_for_lines(path: Path, count: int, timeout: float = 10.0) -> list[str]:

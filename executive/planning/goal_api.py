@@ -1,0 +1,180 @@
+"""The high level's goal verbs on the bus (:mod:`executive.bus.api.planning`): goals,
+plans and dry runs, the domain, events and status.
+
+``status``, ``goal/list``, ``plan/show`` and ``events`` answer at once, from the
+knowledge base and the snapshots the plan executor and the goal planner keep: they never
+wait behind a step being dispatched or a plan being computed, nor for the planner to
+warm up. A request that needs the domain (a goal, a dry run, the domain) waits for the
+high level to plan.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from executive.bus.api import planning as api
+from executive.bus.service import Context
+from executive.bus.verb import Empty
+from executive.planning.blocked_tasks import blocked_now
+from executive.planning.deliberation import Deliberation
+from executive.planning.domain_description import describe
+from executive.planning.dry_run import dry_run
+from executive.planning.goal_planner import PlannerStatus
+from executive.planning.goals import submit
+from executive.planning.plan_executor import ExecutionStatus
+from knowledge.errors import DuraError
+from knowledge.records import Event, to_plain
+
+SECTIONS = ("tasks", "components")  # what other services add to ``status``
+MAX_EVENTS = 10_000  # the most events one request returns
+
+
+class GoalApi:
+    """Serves goals, plans, the domain, events and status.
+
+    Args:
+        context: the robot, bus and knowledge base.
+        planning: the high level at work, once it plans (waits for it; raises
+            :class:`~knowledge.errors.DuraError` with the reason if it does not).
+        current: the high level at work now, or ``None`` (never waits).
+        diagnoses: the latest diagnosis result (``{}`` before the first).
+        status: the sections other services add to ``status`` (``tasks`` from the task
+            executor, ``components`` from the launcher), by name.
+    """
+
+    def __init__(
+        self,
+        context: Context,
+        *,
+        planning: Callable[[], Deliberation],
+        current: Callable[[], Deliberation | None],
+        diagnoses: Callable[[], dict[str, Any]],
+        status: Mapping[str, Callable[[], Any]],
+    ) -> None:
+        self.context = context
+        self.planning = planning
+        self.current = current
+        self.diagnoses = diagnoses
+        self.extra_status = dict(status)
+        unknown = sorted(set(self.extra_status) - set(SECTIONS))
+        if unknown:
+            raise ValueError(f"status has no section {', '.join(unknown)} (only {SECTIONS})")
+
+    def serve(self) -> list[Any]:
+        """Answer the verbs; returns the queryables."""
+        bus = self.context.bus
+        return [
+            api.GOAL_ADD.serve(bus, self._goal_add),
+            api.GOAL_LIST.serve(bus, self._goal_list),
+            api.GOAL_SHOW.serve(bus, self._goal_show),
+            api.GOAL_CANCEL.serve(bus, self._goal_cancel),
+            api.PLAN_SHOW.serve(bus, self._plan_show),
+            api.PLAN_DRY_RUN.serve(bus, self._plan_dry_run),
+            api.DOMAIN_SHOW.serve(bus, self._domain_show),
+            api.EVENTS.serve(bus, self._events),
+            api.STATUS.serve(bus, self._status),
+        ]
+
+    def _goal_add(self, request: api.GoalAdd) -> api.GoalReply:
+        planning = self.planning()
+        goal = submit(
+            self.context.kb,
+            planning.domain,
+            request.expression,
+            priority=request.priority,
+            deadline=request.deadline,
+            source=request.source,
+            keep=request.keep,
+        )
+        planning.goals.wake(f"goal {goal.id} added")
+        return api.GoalReply(to_plain(goal))
+
+    def _goal_list(self, request: api.GoalQuery) -> api.GoalsReply:
+        return api.GoalsReply(to_plain(self.context.kb.goals(request.states)))
+
+    def _goal_show(self, request: api.GoalId) -> api.GoalHistory:
+        kb = self.context.kb
+        goal = kb.goal(request.id)
+        subject = f"goal {goal.id}"
+        events = [e for e in kb.events() if e.subject == subject or _names_goal(e, goal.id)]
+        return api.GoalHistory(to_plain(goal), to_plain(events))
+
+    def _goal_cancel(self, request: api.GoalId) -> api.GoalReply:
+        """Cancelled by the goal planner's thread, which owns goal states; the reply is
+        the goal as it left that thread (or the reason it could not be cancelled)."""
+        planning = self.planning()
+        return api.GoalReply(to_plain(planning.goals.cancel(request.id)))
+
+    def _plan_show(self, request: Empty) -> api.PlanReply:
+        plan = self.context.kb.latest_plan()
+        return api.PlanReply(None if plan is None else to_plain(plan), self._execution())
+
+    def _plan_dry_run(self, request: api.DryRun) -> api.DryRunReply:
+        """Plan for the open goals and those asked about on the live state; nothing
+        changes."""
+        planning = self.planning()
+        return dry_run(
+            self.context.kb,
+            planning.domain,
+            planning.planner,
+            planning.executor.planning_facts(),
+            blocked_now(self.context.kb, self.context.robot),
+            clock=planning.executor.clock,
+            timeout=request.timeout,
+            asked=request.goals,
+        )
+
+    def _domain_show(self, request: Empty) -> api.DomainReply:
+        planning = self.planning()
+        blocked = blocked_now(self.context.kb, self.context.robot)
+        return describe(planning.domain, self.context.robot, blocked)
+
+    def _events(self, request: api.EventQuery) -> api.EventsReply:
+        events = self.context.kb.events(
+            after=request.after,
+            kind=request.kind,
+            limit=min(request.limit, MAX_EVENTS),
+            oldest=request.oldest,
+        )
+        return api.EventsReply(to_plain(events))
+
+    def _status(self, request: Empty) -> api.StatusReply:
+        kb = self.context.kb
+        plan = kb.latest_plan()
+        current = self.current()
+        return api.StatusReply(
+            robot=self.context.robot.name,
+            goals=to_plain(kb.goals()),
+            plan=None if plan is None else to_plain(plan),
+            execution=self._execution(),
+            diagnoses=self.diagnoses(),
+            faults=to_plain([c for c in kb.components() if c.fault_count or c.permanent_fault]),
+            tasks=self._section("tasks"),
+            components=self._section("components"),
+            planning=current.status() if current is not None else _STARTING,
+        )
+
+    def _execution(self) -> dict[str, Any]:
+        current = self.current()
+        return (
+            current.executor.status() if current is not None else dict(to_plain(ExecutionStatus()))
+        )
+
+    def _section(self, name: str) -> Any:
+        """A section another service adds to ``status``; its error if it did not answer."""
+        section = self.extra_status.get(name)
+        if section is None:
+            return None
+        try:
+            return section()
+        except DuraError as e:
+            return {"error": str(e)}
+
+
+_STARTING = to_plain(PlannerStatus(starting=True))  # the planner is warming up
+
+
+def _names_goal(event: Event, goal_id: int) -> bool:
+    goals = event.data.get("goals") if isinstance(event.data, dict) else None
+    return isinstance(goals, list) and goal_id in goals
