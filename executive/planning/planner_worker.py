@@ -86,9 +86,9 @@ class _Worker:
     def setup(self) -> None:
         import warnings
 
-        from executive.planning import config_space
+        from executive import fast_start
 
-        config_space.defer()  # before unified-planning loads
+        fast_start.import_unified_planning()  # before anything else imports it
         from unified_planning.environment import get_environment
 
         warnings.simplefilter("ignore")  # UP warns about what it cannot establish; we check
