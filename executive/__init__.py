@@ -16,7 +16,9 @@ README's "Architecture" says which may import which; ``tests/test_layers.py`` ch
 - :mod:`.executive` — the composition root: the executive process, and a group of its
   services in a process of its own; :mod:`.service_groups` — one builder per group of
   services, used by both;
-- :mod:`.cli` — the ``dura`` command.
+- :mod:`.cli` — the ``dura`` command;
+- :mod:`.fast_start` — every trick that makes dura's processes start fast, measured (it
+  imports nothing of dura: the command line and the planner worker both use it).
 
 Beside it, :mod:`monitoring` sits on the bus and :mod:`knowledge` under everything.
 """

@@ -14,6 +14,7 @@ kind (two objects ``depot``), reported at the second declaration's line.
 from __future__ import annotations
 
 import re
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -108,8 +109,9 @@ def _error_text(error: BaseException) -> str:
 
 def _reader() -> Any:
     """UP's PDDL reader, in an environment where names of different kinds may be equal."""
-    import warnings
-
+    # here, not at the top: the executive's process imports this module (DomainInfo) and
+    # leaves unified-planning to its planner worker, and a process that reads PDDL sets
+    # unified-planning up before it loads (executive.fast_start)
     from unified_planning.environment import get_environment
     from unified_planning.io import PDDLReader
 

@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 from knowledge.description import Kind
 from knowledge.errors import ConfigError
 from knowledge.finding import Report
+from knowledge.ros2_messages import message_store
 from knowledge.yamlsource import Section, did_you_mean
 
 if TYPE_CHECKING:
@@ -218,8 +219,6 @@ def _declared(robot: RobotDescription, path: str) -> bool:
 
 
 def _fielddefs(robot: RobotDescription) -> dict[str, Any] | None:
-    from knowledge.ros2_messages import message_store
-
     if robot.ros2 is None:
         return None
     try:

@@ -12,6 +12,10 @@ bad definition is a ``file:line:`` error like any other input. A service becomes
 
 Definitions use rosbags' field descriptions (``(Nodetype, details)``), so a store with
 custom messages serialises them too: that is what tests compare dura's bytes with.
+
+``rosbags`` (a twentieth of a second to import) is imported in the functions that use
+it: every robot description is validated through this module, and only one with ROS 2
+needs it.
 """
 
 from __future__ import annotations
@@ -62,7 +66,7 @@ def standard_store(distribution: str) -> Typestore:
     Raises:
         ConfigError: not a ROS 2 distribution rosbags knows.
     """
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import Stores, get_typestore  # here: see the module's docstring
 
     if distribution not in DISTRIBUTIONS:
         raise ConfigError(
@@ -77,7 +81,7 @@ def standard_store(distribution: str) -> Typestore:
 @functools.cache
 def bundled_definitions() -> dict[str, Definition]:
     """Read the service definitions dura bundles (every distribution has them alike)."""
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import Stores, get_typestore  # here: see the module's docstring
 
     known = get_typestore(Stores.ROS2_JAZZY).fielddefs
     definitions, findings = read_definitions([BUNDLED], known)
@@ -103,7 +107,7 @@ def message_store(distribution: str, paths: Sequence[Path] = ()) -> Typestore:
 
 def register(store: Typestore, definitions: Mapping[str, Definition]) -> None:
     """Add definitions to a store (rosbags generates their classes)."""
-    from rosbags.interfaces import Nodetype
+    from rosbags.interfaces import Nodetype  # here: see the module's docstring
 
     def typed(desc: tuple[int, Any]) -> tuple[Nodetype, Any]:
         kind, details = desc

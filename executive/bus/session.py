@@ -184,7 +184,8 @@ class Bus:
         access: Mapping[str, Any] | None = None,
         lease: float | None = None,
     ) -> None:
-        if endpoint is None:  # the robot description's module: only when needed
+        if endpoint is None:
+            # here: the robot description's module is not on a quick command's path
             from knowledge.description import DEFAULT_ENDPOINT
 
             endpoint = DEFAULT_ENDPOINT

@@ -80,7 +80,7 @@ def offline(description: Path) -> api.DomainReply:
     Raises:
         ConfigError: the description or its domain is invalid (the first problem).
     """
-    from executive.cli.reader_environment import use_reader_environment
+    from executive.fast_start import use_reader_environment
     from executive.planning.domain_description import describe
     from knowledge.validation import validate
 

@@ -18,6 +18,7 @@ from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, bar, print_json, shown, table
 from executive.cli.progress import LiveLine
 from executive.dashboard import gantt
+from executive.fast_start import use_reader_environment
 from executive.planning.expression import TRUE
 from executive.planning.goals import GoalSpec
 from executive.planning.partial_order import PartialOrderPlan, Step
@@ -95,6 +96,7 @@ def run(args: argparse.Namespace) -> int:
     if args.dry_run:
         return run_dry_run(args)
     domain, problem = args.offline
+    use_reader_environment()  # this process reads the PDDL; its planner worker plans
     with LiveLine(shown=not args.json) as line:
         line.doing(f"reading {shown(domain)} and {shown(problem)}")
         world, goal = read_world(domain, problem)

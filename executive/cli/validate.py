@@ -11,7 +11,7 @@ from executive.bus.wording import plural
 from executive.cli import exits_at_once
 from executive.cli.output import add_json_flag, print_json, shown
 from executive.cli.progress import LiveLine
-from executive.cli.reader_environment import use_reader_environment
+from executive.fast_start import use_reader_environment
 from executive.planning.integrity import read_rules as read_integrity_rules
 from executive.planning.problem import read_world
 from knowledge.description import RobotDescription

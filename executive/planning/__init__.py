@@ -15,7 +15,8 @@ it never imports the task executor (steps run through the
   maintenance goals re-posted, when the world changes);
 - :mod:`.oversubscription` — the best subset of goals by priority, and why the others
   are unreachable (:mod:`.reachability`: what no action can make true);
-- :mod:`.planner` (client) and :mod:`.planner_worker` (process) — the engines;
+- :mod:`.planner` (client), :mod:`.planner_worker` (process) and :mod:`.planner_jobs`
+  (its jobs, with unified-planning) — the engines;
 - :mod:`.problem` — unified-planning problems from the domain and the knowledge base;
 - :mod:`.expression` — ground PDDL expressions: nodes, evaluation, reading; names and
   fact patterns;

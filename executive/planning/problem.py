@@ -37,7 +37,7 @@ from executive.planning.expression import (
     conjunction,
 )
 from executive.planning.goals import GoalSpec
-from knowledge.domain import parse_problem
+from knowledge.domain import parse, parse_problem
 from knowledge.errors import DomainError, located
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Fact
@@ -187,6 +187,8 @@ def build(
     Raises:
         DomainError: an object, fact or goal does not fit the domain.
     """
+    # here, not at the top: the executive imports this module (World) and leaves
+    # unified-planning to its planner worker
     from unified_planning.model import Fluent, GlobalStartTiming, InstantaneousAction, Object
 
     problem = domain.clone()
@@ -256,7 +258,7 @@ _KIND = "_dura_kind"
 
 @functools.cache
 def _keep_kinds() -> None:
-    from unified_planning.model import Problem
+    from unified_planning.model import Problem  # here: as in build()
 
     computed = Problem.kind
 
@@ -295,8 +297,6 @@ def read_world(
     Raises:
         DomainError: the file cannot be read or does not fit the domain (``file:line``).
     """
-    from knowledge.domain import parse
-
     try:
         text = problem_file.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as e:

@@ -33,7 +33,7 @@ from executive.planning.expression import (
     Or,
     conjunction,
 )
-from executive.planning.problem import BOOKKEEPING, from_fnode
+from executive.planning.problem import BOOKKEEPING, bindings, from_fnode
 from knowledge.errors import DomainError
 
 if TYPE_CHECKING:
@@ -198,8 +198,6 @@ def _ground(problem: Problem, action: Any, env: dict[str, str]) -> GroundAction:
 
 def _adds(effects: Iterable[Any], problem: Problem, env: Mapping[str, str]) -> set[Key]:
     """Return the atoms effects may make true (conditions of conditional effects ignored)."""
-    from executive.planning.problem import bindings
-
     out: set[Key] = set()
     for effect in effects:
         for binding in bindings(effect.forall, problem) if effect.forall else [{}]:

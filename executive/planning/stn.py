@@ -19,6 +19,9 @@ from collections.abc import Mapping, Sequence
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
+from unified_planning.model.timing import TimepointKind
+from unified_planning.plans import PlanKind, SequentialPlan, TimeTriggeredPlan
+
 from executive.planning.expression import Atom, Expression, Value, conjunction
 from executive.planning.partial_order import (
     Effect,
@@ -44,8 +47,6 @@ def partial_order(problem: Problem, plan: Plan) -> PartialOrderPlan:
     Raises:
         DomainError: the plan has a kind or an expression dura cannot execute.
     """
-    from unified_planning.plans import SequentialPlan, TimeTriggeredPlan
-
     if isinstance(plan, TimeTriggeredPlan):
         return _from_timed(problem, plan)
     if isinstance(plan, SequentialPlan):
@@ -54,8 +55,6 @@ def partial_order(problem: Problem, plan: Plan) -> PartialOrderPlan:
 
 
 def _from_sequential(problem: Problem, plan: Any) -> PartialOrderPlan:
-    from unified_planning.plans import PlanKind
-
     instances = list(plan.actions)
     order = plan.convert_to(PlanKind.PARTIAL_ORDER_PLAN, problem)
     position = {id(ai): i for i, ai in enumerate(instances)}
@@ -68,9 +67,6 @@ def _from_sequential(problem: Problem, plan: Any) -> PartialOrderPlan:
 
 
 def _from_timed(problem: Problem, plan: Any) -> PartialOrderPlan:
-    from unified_planning.model.timing import TimepointKind
-    from unified_planning.plans import PlanKind
-
     timed = sorted(plan.timed_actions, key=lambda t: t[0])
     index = {id(ai): i for i, (_, ai, _) in enumerate(timed)}
     durations = [d for _, _, d in timed]

@@ -11,6 +11,7 @@ components (the task executor, in the executive), else straight to the launcher.
 from __future__ import annotations
 
 import contextlib
+import socket
 from typing import Any, Protocol
 
 from executive.bus.api.components import (
@@ -126,6 +127,4 @@ def listed(launcher: Launcher, state: ComponentState) -> dict[str, Any]:
 
 
 def _hostname() -> str:
-    import socket
-
     return socket.gethostname()

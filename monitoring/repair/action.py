@@ -85,7 +85,7 @@ class Action(ABC):
 
 
 def _builtins() -> dict[str, type[Action]]:
-    from monitoring.repair.actions import (
+    from monitoring.repair.actions import (  # here: each of them imports this module
         command,
         fault,
         goal,

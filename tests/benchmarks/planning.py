@@ -388,12 +388,13 @@ def worker_times(runs: int) -> dict[str, list[float]]:
 def worker_job(runs: int, cached: bool) -> dict[str, list[float]]:
     """The planner worker's job in this process, with what it caches or without (as
     before: the problem's kind recomputed at every look, a validator made per plan)."""
-    from executive.planning.planner_worker import _missing_features, _validate, _Worker
+    from executive.planning.planner_worker import warm_up
+
+    worker = warm_up(Path(tempfile.gettempdir()) / "engine-output.txt")  # as the worker does
+    from executive.planning.planner_jobs import _missing_features, _validate
     from executive.planning.problem import frozen
     from executive.planning.stn import partial_order
 
-    worker = _Worker(Path(tempfile.gettempdir()) / "engine-output.txt")
-    worker.setup()
     task = task_for(USECASE, ["(picture_taken lab)", "(robot_at office)"])
     engine = worker.engine("kairos")
     out: dict[str, list[float]] = {"search": [], "validation": [], "job": []}

@@ -18,6 +18,7 @@ import pytest
 
 from executive.testing.harness import RobotProcess
 from knowledge.knowledge_base import KnowledgeBase
+from tests.benchmarks.cli import unlisted
 from tests.conftest import ROOT, USECASE, run_dura
 
 # What no quick command may load: solvers, planners, graphs, the web and DDS stacks.
@@ -288,8 +289,13 @@ def test_the_log_of_a_running_robot_can_be_read_from_its_file(robot: RobotProces
 
 def imported(folder: Path, *args: str) -> set[str]:
     """The modules a dura command imports (``python -X importtime``), after it ran."""
+    return python_imports(folder, "-m", "executive.cli", *args)
+
+
+def python_imports(folder: Path, *argv: str) -> set[str]:
+    """The modules ``python -X importtime ARGV`` imports, after it ran."""
     done = subprocess.run(
-        [sys.executable, "-X", "importtime", "-m", "executive.cli", *args],
+        [sys.executable, "-X", "importtime", *argv],
         capture_output=True,
         text=True,
         cwd=folder,
@@ -310,11 +316,14 @@ def test_a_quick_command_imports_no_solver_planner_or_graph_library(
     modules = imported(robot.folder, *command)
     assert sorted(m for m in modules if m.split(".")[0] in HEAVY) == []
     # nor what it does not need: the robot description, the records, logging, and
-    # inspect with its parsers, copy (dataclasses names them: executive.cli.deferred
+    # inspect with its parsers, copy (dataclasses names them: executive.fast_start
     # defers them)
     unneeded = {"knowledge.description", "knowledge.records", "logging", "yaml", "inspect"}
     assert not modules & (unneeded | {"ast", "dis", "tokenize", "copy"})
     assert not modules & UNNEEDED[command]
+    # nor anything of the standard library or elsewhere it did not need before
+    # (tests/benchmarks/cli.py lists what it may)
+    assert unlisted(modules, python_imports(robot.folder, "-c", "pass")) == []
 
 
 def test_validate_reads_the_domain_without_any_planning_engine(tmp_path: Path) -> None:

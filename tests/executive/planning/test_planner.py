@@ -237,8 +237,8 @@ def test_a_new_worker_removes_the_folders_of_workers_killed_without_cleaning_up(
 WARM_WORKER = """
 import sys, tempfile
 from pathlib import Path
-from executive.planning.planner_worker import _Worker
-_Worker(Path(tempfile.mkdtemp()) / "out.txt").setup()
+from executive.planning.planner_worker import warm_up
+warm_up(Path(tempfile.mkdtemp()) / "out.txt")
 print("scipy" in sys.modules, "numpy" in sys.modules)
 from unified_planning.engines import Engine
 space = Engine.get_configuration_space()
