@@ -43,6 +43,7 @@ from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import to_plain
 
 if TYPE_CHECKING:
+    from executive.bus.reports import ComponentEntry, ExecutorTask
     from executive.bus.topic_source import TopicSource
     from executive.planning.bus_tasks import BusTasks
     from executive.planning.task_runner import TaskRunner
@@ -365,12 +366,12 @@ class Executive:
             raise DuraError("the task executor has not started")
         return PlanTasks(self.tasks, self.robot)
 
-    def _tasks(self) -> list[dict[str, Any]]:
+    def _tasks(self) -> list[ExecutorTask]:
         if self.tasks is None:
             raise DuraError("the task executor is starting")
         return self.tasks.tasks()
 
-    def _components(self) -> list[dict[str, Any]]:
+    def _components(self) -> list[ComponentEntry]:
         if self.launcher is None:
             raise DuraError("the launcher is starting")
         from executive.runtime.component_api import listed

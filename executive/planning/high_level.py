@@ -416,27 +416,27 @@ class HighLevel(Service):
             keep=request.keep,
         )
         self.goals.wake(f"goal {goal.id} added")
-        return api.GoalReply(to_plain(goal))
+        return api.GoalReply(goal)
 
     def _goal_list(self, request: api.GoalQuery) -> api.GoalsReply:
-        return api.GoalsReply(to_plain(self.context.kb.goals(request.states)))
+        return api.GoalsReply(self.context.kb.goals(request.states))
 
     def _goal_show(self, request: api.GoalId) -> api.GoalHistory:
         kb = self.context.kb
         goal = kb.goal(request.id)
         subject = f"goal {goal.id}"
         events = [e for e in kb.events() if e.subject == subject or _names_goal(e, goal.id)]
-        return api.GoalHistory(to_plain(goal), to_plain(events))
+        return api.GoalHistory(goal, events)
 
     def _goal_cancel(self, request: api.GoalId) -> api.GoalReply:
         """Cancelled by the goal planner's thread, which owns goal states; the reply is
         the goal as it left that thread (or the reason it could not be cancelled)."""
         self._planning()
-        return api.GoalReply(to_plain(self.goals.cancel(request.id)))
+        return api.GoalReply(self.goals.cancel(request.id))
 
     def _plan_show(self, request: Empty) -> api.PlanReply:
         plan = self.context.kb.latest_plan()
-        return api.PlanReply(None if plan is None else to_plain(plan), self._execution())
+        return api.PlanReply(plan, self._execution())
 
     def _plan_dry_run(self, request: api.DryRun) -> api.DryRunReply:
         """Plan for the open goals and those asked about on the live state; nothing
@@ -458,7 +458,7 @@ class HighLevel(Service):
         kb = self.context.kb
         words = request.pattern.strip("() ").split()
         facts = [f for f in kb.facts() if _matches(words, f.name, f.args)]
-        return api.StateReply([_fact(f) for f in facts], kb.objects())
+        return api.StateReply(facts, kb.objects())
 
     def _state_change(self, request: api.FactChange, *, unset: bool) -> api.FactReply:
         self._planning()
@@ -474,7 +474,7 @@ class HighLevel(Service):
         self.executor.facts_changed([(fact.name, fact.args)])
         by = "the user" if request.source == "user" else request.source
         self.goals.wake(f"{fact} {'unset' if unset else 'set'} by {by}")
-        return api.FactReply(_fact(fact))
+        return api.FactReply(fact)
 
     def _object_add(self, request: api.ObjectAdd) -> api.ObjectAdd:
         self._planning()
@@ -516,7 +516,7 @@ class HighLevel(Service):
             )
         self.executor.facts_changed()
         self.goals.wake(f"object {name} removed by the user")
-        return api.StateReply([_fact(f) for f in facts], {name: objects[name]})
+        return api.StateReply(facts, {name: objects[name]})
 
     def _naming(self, name: str) -> list[str]:
         """Who names an object: open goals, the current plan's steps, integrity rules."""
@@ -548,18 +548,20 @@ class HighLevel(Service):
             limit=min(request.limit, MAX_EVENTS),
             oldest=request.oldest,
         )
-        return api.EventsReply(to_plain(events))
+        return api.EventsReply(events)
 
     def _status(self, request: Empty) -> api.StatusReply:
         kb = self.context.kb
         plan = kb.latest_plan()
         return api.StatusReply(
             robot=self.context.robot.name,
-            goals=to_plain(kb.goals()),
-            plan=None if plan is None else to_plain(plan),
+            goals=kb.goals(),
+            plan=plan,
             execution=self._execution(),
-            diagnoses=self._diagnoses,
-            faults=to_plain([c for c in kb.components() if c.fault_count or c.permanent_fault]),
+            diagnoses=DiagnosisInfo.from_payload(self._diagnoses)
+            if self._diagnoses
+            else api.NoDiagnosis(),
+            faults=[c for c in kb.components() if c.fault_count or c.permanent_fault],
             tasks=self._section("tasks"),
             components=self._section("components"),
             planning=self.goals.status() if self._started() else _STARTING,
@@ -568,8 +570,8 @@ class HighLevel(Service):
     def _started(self) -> bool:
         return self._ready.is_set() and self._failure is None
 
-    def _execution(self) -> dict[str, Any]:
-        return self.executor.status() if self._started() else dict(to_plain(ExecutionStatus()))
+    def _execution(self) -> ExecutionStatus:
+        return self.executor.status() if self._started() else ExecutionStatus()
 
     def _section(self, name: str) -> Any:
         """A section another service adds to ``status``; its error if it did not answer."""
@@ -579,10 +581,10 @@ class HighLevel(Service):
         try:
             return section()
         except DuraError as e:
-            return {"error": str(e)}
+            return api.Unanswered(str(e))
 
 
-_STARTING = to_plain(PlannerStatus(starting=True))  # the planner is warming up
+_STARTING = PlannerStatus(starting=True)  # the planner is warming up
 
 
 def _names_goal(event: Event, goal_id: int) -> bool:
@@ -607,7 +609,3 @@ def _matches(words: list[str], name: str, args: tuple[str, ...]) -> bool:
     if words[0] not in ("*", name):
         return False
     return all(w in ("*", a) for w, a in zip(words[1:], args, strict=False))
-
-
-def _fact(fact: Fact) -> dict[str, Any]:
-    return {"name": fact.name, "args": list(fact.args), "value": fact.value, "text": str(fact)}

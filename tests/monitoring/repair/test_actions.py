@@ -15,7 +15,9 @@ from aiosmtpd.controller import Controller
 
 from executive.bus.api import planning, tasks
 from executive.bus.keys import api
+from executive.bus.payloads import ComponentState
 from executive.bus.session import Bus
+from executive.bus.states import Lifecycle
 from knowledge.errors import BusError, DuraError
 from monitoring.repair.action import ActionContext, Firing
 from monitoring.repair.rule import Rule, read_rules
@@ -139,7 +141,7 @@ def executive(endpoint: str) -> Iterator[tuple[Bus, list[tuple[str, dict[str, An
                 requests.append((key.removeprefix("executive/api/"), request.to_payload()))
                 if request.name == "unknown":
                     raise DuraError("no component 'unknown'")
-                return tasks.FaultReply({"component": request.name, "state": "ready"}, 1, False)
+                return tasks.FaultReply(ComponentState(request.name, Lifecycle.READY), 1, False)
 
             verb.serve(server, fault)
 
