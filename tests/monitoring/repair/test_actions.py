@@ -19,6 +19,7 @@ from executive.bus.payloads import ComponentState
 from executive.bus.session import Bus
 from executive.bus.states import Lifecycle
 from knowledge.errors import BusError, DuraError
+from knowledge.records import Goal, GoalState
 from monitoring.repair.action import ActionContext, Firing
 from monitoring.repair.rule import Rule, read_rules
 
@@ -147,7 +148,7 @@ def executive(endpoint: str) -> Iterator[tuple[Bus, list[tuple[str, dict[str, An
 
         def goal(request: planning.GoalAdd) -> planning.GoalReply:
             requests.append(("goal/add", request.to_payload()))
-            return planning.GoalReply({"id": 1, "expression": request.expression})
+            return planning.GoalReply(Goal(1, request.expression, GoalState.PENDING))
 
         planning.GOAL_ADD.serve(server, goal)
         for verb_name in ("parameter/set", "replan"):
