@@ -33,6 +33,7 @@ from knowledge.description import RobotDescription
 from knowledge.errors import ConfigError, DuraError
 
 if TYPE_CHECKING:
+    from executive.bus.reports import ComponentEntry, ExecutorTask
     from executive.bus.topic_source import TopicSource
     from executive.planning.bus_tasks import BusTasks
     from executive.planning.high_level import HighLevel
@@ -174,12 +175,12 @@ class TasksGroup:
         """The sections of ``status`` the task executor and the launcher answer."""
         return {"tasks": self._tasks, "components": self._components}
 
-    def _tasks(self) -> list[dict[str, Any]]:
+    def _tasks(self) -> list[ExecutorTask]:
         if self.executor.state is not ServiceState.ACTIVE:
             raise DuraError("the task executor is starting")
         return self.executor.tasks()
 
-    def _components(self) -> list[dict[str, Any]]:
+    def _components(self) -> list[ComponentEntry]:
         from executive.runtime.component_api import listed
 
         return [listed(self.launcher, s) for s in self.launcher.states()]

@@ -46,9 +46,7 @@ def serve_observers(manager: ObserverManager, bus: Bus) -> list[Any]:
         return api.ObserverActive(request.id, False)
 
     return [
-        api.OBSERVER_LIST.serve(
-            bus, lambda _: api.ObserversReply([s.to_payload() for s in manager.observers()])
-        ),
+        api.OBSERVER_LIST.serve(bus, lambda _: api.ObserversReply(manager.observers())),
         api.OBSERVER_ADD.serve(bus, add),
         api.OBSERVER_CHANGE.serve(bus, change),
         api.OBSERVER_REMOVE.serve(bus, remove),

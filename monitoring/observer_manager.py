@@ -27,6 +27,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from executive.bus.api.monitoring import ObserverStatus
 from executive.bus.clock import Clock, system_clock
 from executive.bus.keys import OBSERVATIONS, component
 from executive.bus.payloads import ComponentState
@@ -45,30 +46,6 @@ from monitoring.robot_time import RobotTime
 log = logging.getLogger("dura.observers")
 
 ObserverEntry = ObserverSpec | Mapping[str, Any]
-
-
-@dataclass(frozen=True)
-class ObserverStatus:
-    """What the manager says about one observer."""
-
-    id: str
-    type: str
-    component: str | None
-    enabled: bool
-    active: bool
-    main_loop_rate: float
-    start_up_time: float
-
-    def to_payload(self) -> dict[str, Any]:
-        return {
-            "id": self.id,
-            "type": self.type,
-            "component": self.component,
-            "enabled": self.enabled,
-            "active": self.active,
-            "main_loop_rate": self.main_loop_rate,
-            "start_up_time": self.start_up_time,
-        }
 
 
 @dataclass

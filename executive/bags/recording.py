@@ -278,9 +278,3 @@ class Recording(Service):
         if self._recording is not None:
             self._recording.stop()
             self._recording = None
-
-
-def state_payloads(components: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Extract the state payloads from the launcher's component list (``component/list``)."""
-    keys = ("component", "state", "pid", "exit_code", "signal", "reason", "stamp")
-    return [{k: c.get(k) for k in keys if k in c} for c in components]

@@ -8,6 +8,8 @@ but :mod:`knowledge`.
 - :mod:`.security` — per-robot credentials and Zenoh's access control;
 - :mod:`.keys` — the key expressions, and the environment of a component process;
 - :mod:`.payloads` — what is published on those keys, as typed frozen dataclasses;
+  :mod:`.reports` — the records services report (execution, planning, tasks, components,
+  diagnoses);
 - :mod:`.schema` — payload dataclasses read from JSON by their annotations;
 - :mod:`.verb` — a request declared once: key, request and reply types;
   :mod:`.api` — each service's verbs, one module per service;

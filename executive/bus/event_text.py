@@ -14,16 +14,22 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from executive.bus.event_kinds import WIDTH
+from executive.bus.reports import DiagnosisInfo
 from executive.bus.wording import clock, listed, number, pairs, plural, seconds, value
+from knowledge.records import Event
 
 Data = Mapping[str, Any]
 
 
-def describe(event: Mapping[str, Any]) -> str:
-    """What an event says, on one line, without its kind and time."""
-    kind = str(event.get("kind", ""))
-    subject = str(event.get("subject", ""))
-    data = event.get("data")
+def describe(event: Event | Mapping[str, Any]) -> str:
+    """What an event (a record, or its JSON form) says, on one line, without its kind and
+    time."""
+    data: Any
+    if isinstance(event, Event):
+        kind, subject, data = event.kind, event.subject, event.data
+    else:
+        kind, subject = str(event.get("kind", "")), str(event.get("subject", ""))
+        data = event.get("data")
     if not isinstance(data, Mapping):
         data = {} if data in (None, "") else {"data": data}
     text = _TEXTS.get(kind)
@@ -35,15 +41,20 @@ def describe(event: Mapping[str, Any]) -> str:
         return _generic(subject, data, kind)
 
 
-def line(event: Mapping[str, Any]) -> str:
+def line(event: Event | Mapping[str, Any]) -> str:
     """An event as a line of a log: its time of day, its kind, what it says."""
-    when = clock(float(event.get("stamp", 0.0)), millis=True)
-    return f"{when}  {event.get('kind', '?')!s:<{WIDTH}}  {describe(event)}".rstrip()
+    if isinstance(event, Event):
+        stamp, kind = event.stamp, event.kind
+    else:
+        stamp, kind = float(event.get("stamp", 0.0)), event.get("kind", "?")
+    return f"{clock(stamp, millis=True)}  {kind!s:<{WIDTH}}  {describe(event)}".rstrip()
 
 
-def diagnosis(payload: Mapping[str, Any]) -> str:
+def diagnosis(payload: DiagnosisInfo | Mapping[str, Any]) -> str:
     """A diagnosis result (a ``diagnoses`` payload) on one line, as ``dura replay``
     writes it: ``DIAGNOSED: lidar (failed: timeout[scan])``, ``OK: nothing is faulty``."""
+    if isinstance(payload, DiagnosisInfo):
+        payload = payload.to_payload()
     status = str(payload.get("status", "?"))
     if status == "OK":
         return "OK: nothing is faulty"

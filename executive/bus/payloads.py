@@ -1,12 +1,34 @@
 """The payloads every service agrees on: what is published on the bus keys of
-:mod:`executive.bus.keys`, as typed frozen dataclasses with their JSON forms."""
+:mod:`executive.bus.keys`, as typed frozen dataclasses with their JSON forms (an event
+on ``events`` is the knowledge base's :class:`~knowledge.records.Event`:
+:func:`read_event`; a diagnosis result on ``diagnoses`` is a report of the diagnosis
+engine, :class:`executive.bus.reports.DiagnosisInfo`, named here too)."""
 
 from __future__ import annotations
 
 from typing import Any
 
-from executive.bus.schema import Payload, Text, payload
+from executive.bus.reports import DIAGNOSIS_STATUSES, DiagnosisInfo
+from executive.bus.schema import Payload, PayloadError, Text, payload, read
 from executive.bus.states import GoalStatus, Lifecycle
+from knowledge.records import Event
+
+__all__ = [  # the diagnosis result is a report (executive.bus.reports), named here too
+    "DIAGNOSIS_STATUSES",
+    "GENERAL_ERROR",
+    "GENERAL_OK",
+    "NOT_AVAILABLE",
+    "NO_STATE_FITS",
+    "TIMEOUT",
+    "ComponentState",
+    "DiagnosisInfo",
+    "GoalFeedback",
+    "GoalResult",
+    "NodeInfo",
+    "ObservationInfo",
+    "ResourceInfo",
+    "read_event",
+]
 
 
 @payload
@@ -225,63 +247,11 @@ class GoalFeedback(Payload):
 # activated, hz, value, velocity), or a plugin's type.
 
 
-DIAGNOSIS_STATUSES = ("OK", "DIAGNOSED", "INCONSISTENT", "TIMEOUT")
-
-
-@payload
-class DiagnosisInfo:
-    """The payload of ``diagnoses``: the newest diagnosis result.
-
-    ``status`` is OK (the all-clear), DIAGNOSED, INCONSISTENT or TIMEOUT.
-    ``diagnoses`` lists subset-minimal sets of faulty nodes (or behaviors), each
-    sorted, smallest first. ``conflicts`` and ``failed`` are observers as
-    ``{type, resource, callerids}``: the observations that contradict each other
-    (INCONSISTENT) and those that failed.
-    """
-
-    status: str
-    diagnoses: tuple[tuple[str, ...], ...] = ()
-    conflicts: tuple[dict[str, Any], ...] = ()
-    failed: tuple[dict[str, Any], ...] = ()
-    elapsed: float = 0.0
-    stamp: float = 0.0
-
-    @property
-    def possibly_faulty(self) -> frozenset[str]:
-        """Every name that some diagnosis names."""
-        return frozenset(name for diagnosis in self.diagnoses for name in diagnosis)
-
-    def to_payload(self) -> dict[str, Any]:
-        return {
-            "status": self.status,
-            "diagnoses": [list(d) for d in self.diagnoses],
-            "conflicts": list(self.conflicts),
-            "failed": list(self.failed),
-            "elapsed": self.elapsed,
-            "stamp": self.stamp,
-        }
-
-    @classmethod
-    def from_payload(cls, payload: dict[str, Any]) -> DiagnosisInfo:
-        """Read a payload; raises ``KeyError``/``ValueError``/``TypeError`` if malformed
-        (a status that is none of the four, a diagnosis that is not a list of names)."""
-        status = payload["status"]
-        if status not in DIAGNOSIS_STATUSES:
-            raise ValueError(f"'status' must be one of {', '.join(DIAGNOSIS_STATUSES)}")
-        diagnoses = payload["diagnoses"]
-        if not isinstance(diagnoses, list) or not all(
-            isinstance(d, list) and all(isinstance(n, str) for n in d) for d in diagnoses
-        ):
-            raise TypeError("'diagnoses' must be a list of lists of names")
-        conflicts, failed = payload.get("conflicts", []), payload.get("failed", [])
-        for key, value in (("conflicts", conflicts), ("failed", failed)):
-            if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
-                raise TypeError(f"'{key}' must be a list of observers")
-        return cls(
-            status=status,
-            diagnoses=tuple(tuple(d) for d in diagnoses),
-            conflicts=tuple(conflicts),
-            failed=tuple(failed),
-            elapsed=float(payload.get("elapsed", 0.0)),
-            stamp=float(payload.get("stamp", 0.0)),
-        )
+def read_event(payload: object) -> Event | None:
+    """The payload of ``events`` (an event the knowledge base logged) as its record;
+    ``None`` if it is not one."""
+    try:
+        event: Event = read(Event, payload, "event")
+    except PayloadError:
+        return None
+    return event

@@ -11,10 +11,14 @@ comparison, hash and repr (by their fields) are shared, not written for each cla
 cost a fifth as much to create, and a command loads dozens.
 
 Supported annotations: ``str``, ``int`` (not ``bool``; within 64 bits), ``float``
-(finite; an integer is accepted), ``bool``, ``X | None``, ``list[X]``,
-``tuple[X, ...]``, ``dict[str, X]``, ``Any``, an :class:`enum.Enum` (by value), a
-nested :class:`Payload`, and ``Annotated[X, constraint]`` with :class:`NonEmpty` and
-:class:`Between`. A field with a default may be absent; ``None`` means absent too.
+(finite; an integer is accepted), ``bool``, ``X | None``, ``X | Y`` (the first that
+fits), ``list[X]``, ``tuple[X, ...]``, ``tuple[X, Y]``, ``dict[str, X]``,
+``Mapping[str, X]``, ``Any``, an :class:`enum.Enum` (by value), a nested
+:class:`Payload`, a nested record (a frozen dataclass, such as the knowledge base's
+:mod:`knowledge.records`: every field is written, ``None`` too, and a field it derives,
+``init=False``, is written and not read), and ``Annotated[X, constraint]`` with
+:class:`NonEmpty` and :class:`Between`. A field with a default may be absent; ``None``
+means absent too.
 """
 
 from __future__ import annotations
@@ -152,8 +156,7 @@ def _read(annotation: Any, value: Any, name: str) -> Any:
         options = typing.get_args(annotation)
         if value is None and type(None) in options:
             return None
-        (inner,) = [o for o in options if o is not type(None)]
-        return read(inner, value, name)
+        return _read_union([o for o in options if o is not type(None)], value, name)
     if annotation is str:
         if not isinstance(value, str):
             raise PayloadError(f"'{name}' must be a string, not {shown(value)}")
@@ -175,10 +178,15 @@ def _read(annotation: Any, value: Any, name: str) -> Any:
     if origin in (list, tuple):
         if not isinstance(value, list):
             raise PayloadError(f"'{name}' must be a list, not {shown(value)}")
-        inner = typing.get_args(annotation)[0]
-        items = [read(inner, item, f"{name}[{i}]") for i, item in enumerate(value)]
+        args = typing.get_args(annotation)
+        if origin is tuple and args[-1:] != (Ellipsis,):  # tuple[X, Y]: so many items
+            if len(value) != len(args):
+                raise PayloadError(f"'{name}' must be a list of {len(args)}, not {shown(value)}")
+            pairs = enumerate(zip(args, value, strict=True))
+            return tuple(read(a, item, f"{name}[{i}]") for i, (a, item) in pairs)
+        items = [read(args[0], item, f"{name}[{i}]") for i, item in enumerate(value)]
         return items if origin is list else tuple(items)
-    if origin is dict or annotation is dict:
+    if origin in (dict, Mapping) or annotation is dict:
         if not isinstance(value, dict):
             raise PayloadError(f"'{name}' must be an object, not {shown(value)}")
         args = typing.get_args(annotation)
@@ -195,7 +203,22 @@ def _read(annotation: Any, value: Any, name: str) -> Any:
         if not isinstance(value, dict):
             raise PayloadError(f"'{name}' must be an object, not {shown(value)}")
         return annotation.from_payload(value, prefix=f"{name}.")
+    if isinstance(annotation, type) and dataclasses.is_dataclass(annotation):  # a record
+        if not isinstance(value, dict):
+            raise PayloadError(f"'{name}' must be an object, not {shown(value)}")
+        return annotation(**_values(annotation, value, f"{name}."))
     raise TypeError(f"no reader for the annotation {annotation!r} of '{name}'")
+
+
+def _read_union(options: list[Any], value: Any, name: str) -> Any:
+    """The value as the first of ``options`` it fits; else why it does not fit the first."""
+    errors: list[PayloadError] = []
+    for option in options:
+        try:
+            return read(option, value, name)
+        except PayloadError as e:
+            errors.append(e)
+    raise errors[0]
 
 
 def plain(value: Any) -> Any:
@@ -204,9 +227,11 @@ def plain(value: Any) -> Any:
         return value.to_payload()
     if isinstance(value, enum.Enum):
         return value.value
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):  # a record
+        return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
     if isinstance(value, list | tuple):
         return [plain(v) for v in value]
-    if isinstance(value, dict):
+    if isinstance(value, Mapping):
         return {k: plain(v) for k, v in value.items()}
     return value
 
@@ -215,7 +240,8 @@ _FIELDS: dict[type, tuple[tuple[str, Any, bool], ...]] = {}
 
 
 def _fields(cls: type) -> tuple[tuple[str, Any, bool], ...]:
-    """Each field's name, annotation and whether it must be given (read once per class)."""
+    """Each field's name, annotation and whether it must be given (read once per class);
+    a field the class derives (``init=False``) is not read."""
     known = _FIELDS.get(cls)
     if known is not None:
         return known
@@ -227,8 +253,24 @@ def _fields(cls: type) -> tuple[tuple[str, Any, bool], ...]:
             f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING,
         )
         for f in dataclasses.fields(cls)
+        if f.init
     )
     return known
+
+
+def _values(cls: type, payload: Mapping[str, Any], prefix: str) -> dict[str, Any]:
+    """The fields of ``cls`` read from a JSON object; unknown keys are ignored.
+
+    Raises:
+        PayloadError: a field is missing or does not fit its annotation.
+    """
+    values: dict[str, Any] = {}
+    for name, annotation, required in _fields(cls):
+        value = payload.get(name)
+        if value is None and not required:
+            continue  # absent: the default
+        values[name] = read(annotation, value, prefix + name)
+    return values
 
 
 class Payload:
@@ -241,13 +283,7 @@ class Payload:
         Raises:
             PayloadError: a field is missing or does not fit its annotation.
         """
-        values: dict[str, Any] = {}
-        for name, annotation, required in _fields(cls):
-            value = payload.get(name)
-            if value is None and not required:
-                continue  # absent: the default
-            values[name] = read(annotation, value, prefix + name)
-        return cls(**values)
+        return cls(**_values(cls, payload, prefix))
 
     def to_payload(self) -> dict[str, Any]:
         """The JSON object; an optional field left at ``None`` is not sent (absent reads

@@ -97,8 +97,7 @@ def run_list(args: argparse.Namespace) -> int:
     table(
         ["name", "kind", "host", "state", "pid", "since", "reason"],
         [
-            [c["component"], c["kind"], c.get("host") or "-", c["state"], c["pid"],
-             _since(c["stamp"]), c["reason"]]
+            [c.component, c.kind, c.host or "-", c.state.value, c.pid, _since(c.stamp), c.reason]
             for c in reply.components
         ],
     )  # fmt: skip
@@ -133,11 +132,11 @@ def run_lifecycle(args: argparse.Namespace) -> int:
     if args.verb in ("restart", "fault"):
         faulting = tasks.COMPONENT_RESTART if args.verb == "restart" else tasks.COMPONENT_FAULT
         fault = ask(args, faulting, tasks.ComponentFault(name), timeout=timeout)
-        state = ComponentState.from_payload(fault.state)
+        state = fault.state
         faults = f", {plural(fault.faults, 'fault')}" + (
             ", permanently faulty" if fault.permanent else ""
         )
-        payload = {**fault.state, "faults": fault.faults, "permanent": fault.permanent}
+        payload = {**state.to_payload(), "faults": fault.faults, "permanent": fault.permanent}
     else:
         switch = components.COMPONENT_START if args.verb == "start" else components.COMPONENT_STOP
         state = ask(args, switch, components.ComponentName(name), timeout=timeout)

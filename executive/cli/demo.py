@@ -18,8 +18,10 @@ import time
 from pathlib import Path
 from typing import Any
 
+from executive.bus.api.planning import StatusReply
 from executive.bus.api.tasks import TASK_LIST
 from executive.bus.keys import DIAGNOSES, EVENTS
+from executive.bus.schema import plain
 from executive.bus.wording import plural, seconds
 from executive.cli.dashboard import port
 from executive.cli.demo_timeline import Timeline, replans
@@ -27,6 +29,7 @@ from executive.cli.output import add_json_flag, print_json, section, table
 from executive.dashboard.access import DEFAULT_PORT
 from executive.testing.harness import RobotProcess
 from knowledge.errors import DuraError
+from knowledge.records import Goal, GoalState
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "usecase" / "robot.yaml"
 GOALS = (
@@ -95,7 +98,7 @@ def _demo(args: argparse.Namespace, folder: Path) -> int:
 
 def _scenario(
     args: argparse.Namespace, folder: Path, timeline: Timeline
-) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+) -> tuple[list[Goal], StatusReply]:
     """Run the use case on a robot in ``folder``; the goals and the status at the end."""
     timeline.say("DEMO", f"starting the executive of the thesis use case in {folder}")
     with RobotProcess(EXAMPLE, folder) as robot, contextlib.ExitStack() as page:
@@ -130,8 +133,7 @@ def _scenario(
             timeline.wait("FAULT", "lidar")
         deadline = time.monotonic() + TIMEOUT
         while time.monotonic() < deadline:
-            goals = robot.goals()
-            if all(g["state"] not in ("pending", "planned", "executing") for g in goals):
+            if not any(g.state.is_open for g in robot.goals()):
                 break
             time.sleep(0.2)
         timeline.doing("stopping the executive")
@@ -139,18 +141,16 @@ def _scenario(
 
 
 def _outcome(
-    args: argparse.Namespace,
-    goals: list[dict[str, Any]],
-    status: dict[str, Any],
-    timeline: Timeline,
+    args: argparse.Namespace, goals: list[Goal], status: StatusReply, timeline: Timeline
 ) -> int:
-    ok = all(g["state"] == "achieved" for g in goals)
+    ok = all(g.state is GoalState.ACHIEVED for g in goals)
     elapsed = time.time() - timeline.start
     if args.json:
         print_json(
-            {"ok": ok, "elapsed": round(elapsed, 2), "goals": goals, "faults": status["faults"],
-             "plans": timeline.plans, "replans": len(replans(timeline.events)),
-             "events": timeline.events, "diagnoses": timeline.diagnoses}
+            {"ok": ok, "elapsed": round(elapsed, 2), "goals": plain(goals),
+             "faults": plain(status.faults), "plans": timeline.plans,
+             "replans": len(replans(timeline.events)), "events": plain(timeline.events),
+             "diagnoses": timeline.diagnoses}
         )  # fmt: skip
         return 0 if ok else 1
     summary(goals, status, timeline, elapsed)
@@ -160,40 +160,37 @@ def _outcome(
 def _driving_on_lidar(robot: RobotProcess) -> bool:
     tasks = TASK_LIST.call(robot.bus).tasks
     return any(
-        t["behavior"] == "move_to" and t["state"] == "running" and "lidar" in t["functionalities"]
+        t.behavior == "move_to" and t.state == "running" and "lidar" in t.functionalities
         for t in tasks
     )
 
 
-def summary(
-    goals: list[dict[str, Any]], status: dict[str, Any], timeline: Timeline, elapsed: float
-) -> None:
+def summary(goals: list[Goal], status: StatusReply, timeline: Timeline, elapsed: float) -> None:
     """The goals, the faults, what move_to drove on and the counts, after the timeline."""
     section("goals")
     table(
         ["id", "goal", "state", "took", "reason"],
         [
-            [g["id"], g["expression"], g["state"], seconds(round(g["updated"] - g["created"], 1)),
-             g["reason"]]
+            [g.id, g.expression, g.state.value, seconds(round(g.updated - g.created, 1)),
+             g.reason]
             for g in goals
         ],
     )  # fmt: skip
-    faults = status.get("faults") or []
-    if faults:
+    if status.faults:
         section("component faults")
         table(
             ["component", "faults", "permanently faulty", "reason"],
-            [[f["name"], f["fault_count"], f["permanent_fault"], f["reason"]] for f in faults],
+            [[f.name, f.fault_count, f.permanent_fault, f.reason] for f in status.faults],
         )
     switches: list[str] = []
     for e in timeline.events:
-        if e.get("kind") == "TASK_STARTED" and e.get("data", {}).get("behavior") == "move_to":
-            uses = " + ".join(sorted(set(e["data"].get("providers", {}).values())))
+        if e.kind == "TASK_STARTED" and e.data.get("behavior") == "move_to":
+            uses = " + ".join(sorted(set(e.data.get("providers", {}).values())))
             if not switches or switches[-1] != uses:
                 switches.append(uses)
     if switches:
         section("move_to drove on: " + "  ->  ".join(switches))
-    kinds = [e.get("kind") for e in timeline.events]
+    kinds = [e.kind for e in timeline.events]
     replanned = replans(timeline.events)
     which = f" (plan {', '.join(map(str, replanned))})" if replanned else ""
     section(
@@ -203,5 +200,5 @@ def summary(
         f"{plural(kinds.count('DISPATCH'), 'step')} dispatched, "
         f"{plural(len(timeline.diagnoses), 'diagnosis result')}, in {elapsed:.1f} s"
     )
-    achieved = sum(g["state"] == "achieved" for g in goals)
+    achieved = sum(g.state is GoalState.ACHIEVED for g in goals)
     print(f"{achieved} of {plural(len(goals), 'goal')} achieved", flush=True)

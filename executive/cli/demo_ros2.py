@@ -26,7 +26,9 @@ import time
 from pathlib import Path
 from typing import Any
 
+from executive.bus.api.planning import StatusReply
 from executive.bus.keys import DIAGNOSES, EVENTS
+from executive.bus.schema import plain
 from executive.cli.demo import summary
 from executive.cli.demo_timeline import Timeline, replans
 from executive.cli.output import print_json
@@ -37,6 +39,7 @@ from executive.ros2.service_client import ServiceClient
 from executive.ros2.types import TypeLibrary
 from executive.testing.harness import RobotProcess, robot_variant
 from knowledge.errors import DuraError
+from knowledge.records import Goal, GoalState
 from knowledge.ros2_messages import standard_store
 from knowledge.ros2_spec import PROFILES
 
@@ -76,13 +79,13 @@ def _demo(args: argparse.Namespace, folder: Path) -> int:
         goals, status, arrays = _scenario(folder, timeline)
     finally:
         timeline.close()
-    ok = all(g["state"] == "achieved" for g in goals)
+    ok = all(g.state is GoalState.ACHIEVED for g in goals)
     elapsed = time.time() - timeline.start
     if args.json:
         print_json(
-            {"ok": ok, "elapsed": round(elapsed, 2), "goals": goals, "faults": status["faults"],
-             "plans": timeline.plans, "replans": len(replans(timeline.events)),
-             "events": timeline.events,
+            {"ok": ok, "elapsed": round(elapsed, 2), "goals": plain(goals),
+             "faults": plain(status.faults), "plans": timeline.plans,
+             "replans": len(replans(timeline.events)), "events": plain(timeline.events),
              "diagnoses": timeline.diagnoses, "ros2_diagnostic_arrays": arrays}
         )  # fmt: skip
         return 0 if ok else 1
@@ -91,7 +94,7 @@ def _demo(args: argparse.Namespace, folder: Path) -> int:
     return 0 if ok else 1
 
 
-def _scenario(folder: Path, timeline: Timeline) -> tuple[list[dict[str, Any]], dict[str, Any], int]:
+def _scenario(folder: Path, timeline: Timeline) -> tuple[list[Goal], StatusReply, int]:
     """Run the patrol on a robot in ``folder``: the goals, the status and how many
     DiagnosticArrays ROS 2 heard."""
     say = timeline.say
@@ -134,11 +137,11 @@ def _scenario(folder: Path, timeline: Timeline) -> tuple[list[dict[str, Any]], d
     return goals, status, arrays
 
 
-def _wait_for_goals(robot: RobotProcess) -> list[dict[str, Any]]:
+def _wait_for_goals(robot: RobotProcess) -> list[Goal]:
     deadline = time.monotonic() + TIMEOUT
     while time.monotonic() < deadline:
         goals = robot.goals()
-        if goals and all(g["state"] not in ("pending", "planned", "executing") for g in goals):
+        if goals and not any(g.state.is_open for g in goals):
             return goals
         time.sleep(0.2)
     return robot.goals()

@@ -19,16 +19,19 @@ import shutil
 import sys
 import threading
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, TextIO
 
 from executive.bus.event_kinds import WIDTH
 from executive.bus.event_text import describe, diagnosis
+from executive.bus.payloads import read_event
+from executive.bus.schema import plain
 from executive.bus.session import Message
 from executive.bus.wording import listed, plural, seconds
 from executive.cli.output import bar, table
 from knowledge.errors import DuraError
+from knowledge.records import Event, Plan
 
 SETTLE = 0.3  # seconds a line waits for what happened before it to arrive
 TICK = 0.1  # seconds between two looks of the printer
@@ -44,17 +47,17 @@ SHOWN = {
 }  # fmt: skip
 
 
-def replans(events: Sequence[Mapping[str, Any]]) -> list[int]:
+def replans(events: Sequence[Event]) -> list[int]:
     """The plans (ids) that replaced another while it ran, or that came after a plan
     failed (REPLAN), from the event log in its order: the robot's replans."""
     replacing: set[int] = set()
     failed = False
     found = []
     for event in events:
-        kind, data = event.get("kind"), event.get("data") or {}
+        kind = event.kind
         if kind == "REPLAN":
             failed = True
-        elif kind == "PLAN_STORED" and data.get("replaces"):
+        elif kind == "PLAN_STORED" and event.data.get("replaces"):
             replacing.add(_plan_id(event))
         elif kind == "PLAN_START":
             plan = _plan_id(event)
@@ -64,8 +67,8 @@ def replans(events: Sequence[Mapping[str, Any]]) -> list[int]:
     return found
 
 
-def _plan_id(event: Mapping[str, Any]) -> int:
-    return int(str(event.get("subject", "plan 0")).removeprefix("plan "))
+def _plan_id(event: Event) -> int:
+    return int((event.subject or "plan 0").removeprefix("plan "))
 
 
 class Timeline:
@@ -83,18 +86,18 @@ class Timeline:
         self.quiet = quiet
         self.everything = everything
         self.live = not quiet and self.out.isatty()
-        self.events: list[dict[str, Any]] = []
+        self.events: list[Event] = []
         self.diagnoses: list[dict[str, Any]] = []
-        self.plans: list[dict[str, Any]] = []  # each executed plan, as it started
-        self.arrived: queue.Queue[dict[str, Any]] = queue.Queue()  # for wait()
+        self.plans: list[dict[str, Any]] = []  # each executed plan, as it started (JSON)
+        self.arrived: queue.Queue[Event] = queue.Queue()  # for wait()
         self.activity = "starting the executive"
         self._kb_path: Path | None = None
         self._lock = threading.Lock()
-        self._pending: list[tuple[float, int, str, dict[str, Any]]] = []  # a heap by stamp
+        self._pending: list[tuple[float, int, str, Event | str]] = []  # a heap by stamp
         self._order = itertools.count()
         self._last_diagnosis = ""
         self._states: dict[str, str] = {}  # component → its last COMPONENT_ kind
-        self._resumed: set[Any] = set()  # COMPONENT_READY events after a pause
+        self._resumed: set[int] = set()  # COMPONENT_READY events after a pause
         self._planning = ""  # the reason of the newest planning round
         self._why: dict[int, str] = {}  # plan → why it was made (replacing, or after a failure)
         self._replaces: dict[int, int] = {}
@@ -121,19 +124,21 @@ class Timeline:
 
     def say(self, kind: str, text: str) -> None:
         """A line of the demo's own (what it does to the robot), at once."""
-        self._push(time.time(), kind, {"text": text})
+        self._push(time.time(), kind, text)
 
     def doing(self, activity: str) -> None:
         """What the robot does now, for the live line."""
         self.activity = activity
 
     def on_event(self, message: Message) -> None:
-        event = message.payload
+        event = read_event(message.payload)
+        if event is None:
+            return
         with self._lock:
             self.events.append(event)
             self._follow(event)
         self.arrived.put(event)
-        self._push(float(event.get("stamp") or time.time()), "event", event)
+        self._push(event.stamp or time.time(), "event", event)
 
     def on_diagnoses(self, message: Message) -> None:
         payload = message.payload
@@ -143,9 +148,9 @@ class Timeline:
             if shown == self._last_diagnosis:
                 return
             self._last_diagnosis = shown
-        self._push(float(payload.get("stamp") or time.time()), "DIAGNOSIS", {"text": shown})
+        self._push(float(payload.get("stamp") or time.time()), "DIAGNOSIS", shown)
 
-    def wait(self, kind: str, subject: str = "", timeout: float = 60.0) -> dict[str, Any]:
+    def wait(self, kind: str, subject: str = "", timeout: float = 60.0) -> Event:
         """The next event of ``kind`` about ``subject``: a component (``lidar``, not
         ``lidar_filter``) or an action (``move_to`` for ``move_to(dock, lab)``)."""
         deadline = time.monotonic() + timeout
@@ -157,23 +162,22 @@ class Timeline:
                 event = self.arrived.get(timeout=left)
             except queue.Empty:
                 continue
-            about = str(event.get("subject", ""))
-            if event.get("kind") == kind and (
+            about = event.subject
+            if event.kind == kind and (
                 not subject or about == subject or about.startswith(subject + "(")
             ):
                 return event
 
-    def _push(self, stamp: float, kind: str, item: dict[str, Any]) -> None:
+    def _push(self, stamp: float, kind: str, item: Event | str) -> None:
         with self._lock:
             heapq.heappush(self._pending, (stamp, next(self._order), kind, item))
 
-    def _follow(self, event: Mapping[str, Any]) -> None:
+    def _follow(self, event: Event) -> None:
         """Keep up with what the robot does (in the log's order, under the lock)."""
-        kind, subject = str(event.get("kind", "")), str(event.get("subject", ""))
-        data = event.get("data") or {}
+        kind, subject, data = event.kind, event.subject, event.data
         if kind.startswith("COMPONENT_"):
             if kind == "COMPONENT_READY" and self._states.get(subject) == "COMPONENT_PAUSED":
-                self._resumed.add(event.get("id"))
+                self._resumed.add(event.id)
             self._states[subject] = kind
         if kind == "PLANNING":
             self._planning = str(data.get("reason", ""))
@@ -181,8 +185,9 @@ class Timeline:
         elif kind == "PLAN_STORED":
             plan = _plan_id(event)
             self._why[plan] = self._planning
-            if data.get("replaces"):
-                self._replaces[plan] = int(data["replaces"])
+            replaces = data.get("replaces")
+            if replaces:
+                self._replaces[plan] = int(replaces)
         elif kind == "REPLAN":
             self._failed = str(data.get("reason", "")) or "it failed"
         elif kind == "PLAN_START":  # why this plan, as things stood when it started
@@ -219,11 +224,11 @@ class Timeline:
                 stamp, _, kind, item = heapq.heappop(self._pending)
             self._show(stamp, kind, item)
 
-    def _show(self, stamp: float, kind: str, item: dict[str, Any]) -> None:
-        if kind != "event":
-            self._line(stamp, kind, item["text"])
+    def _show(self, stamp: float, kind: str, item: Event | str) -> None:
+        if not isinstance(item, Event):
+            self._line(stamp, kind, item)
             return
-        kind = str(item.get("kind", "?"))
+        kind = item.kind
         if kind == "PLAN_START":
             self._plan(stamp, item)
             return
@@ -231,35 +236,37 @@ class Timeline:
             return
         self._line(stamp, kind, describe(item))
 
-    def _repeated(self, event: Mapping[str, Any]) -> bool:
+    def _repeated(self, event: Event) -> bool:
         """A component ready again after a pause (the task's line says it resumed)."""
         with self._lock:
-            return event.get("id") in self._resumed
+            return event.id in self._resumed
 
-    def _plan(self, stamp: float, event: Mapping[str, Any]) -> None:
+    def _plan(self, stamp: float, event: Event) -> None:
         plan_id = _plan_id(event)
         with self._lock:
             why, replaces = self._why.get(plan_id, ""), self._replaces.get(plan_id)
         stored = self._stored(plan_id)
-        data = event.get("data") or {}
-        steps = stored.get("steps", [])
-        span = max((s["start"] + (s["duration"] or 0.0) for s in steps), default=0.0)
+        data = event.data
+        steps = stored.steps if stored is not None else ()
+        span = max((s.start + (s.duration or 0.0) for s in steps), default=0.0)
         goals = list(data.get("goals", []))
-        head = f"plan {plan_id} by {stored.get('engine') or '?'} for "
+        engine = stored.engine if stored is not None else ""
+        head = f"plan {plan_id} by {engine or '?'} for "
         head += (f"goal {goals[0]}" if len(goals) == 1 else f"goals {listed(goals)}") + ": "
         head += f"{plural(len(steps), 'step')}, {seconds(span)}"
         if replaces:
             head += f"; replaces plan {replaces}" + (f": {why}" if why else "")
         elif why:
             head += f"; the plan before failed: {why}"
-        self.plans.append({**stored, "goals": data.get("goals", []), "replaces": replaces,
+        shown = plain(stored) if stored is not None else {"id": plan_id}
+        self.plans.append({**shown, "goals": data.get("goals", []), "replaces": replaces,
                            "why": why})  # fmt: skip
         rows = io.StringIO()
         table(
             ["#", "start", "step", "timeline"],
             [
-                [s["index"], f"{s['start']:.1f}", f"{s['action']}({', '.join(s['args'])})",
-                 bar(s["start"], s["duration"], span)]
+                [s.index, f"{s.start:.1f}", f"{s.action}({', '.join(s.args)})",
+                 bar(s.start, s.duration, span)]
                 for s in steps
             ],
             rows,
@@ -268,18 +275,17 @@ class Timeline:
         for row in rows.getvalue().splitlines():
             self._write(INDENT + row)
 
-    def _stored(self, plan_id: int) -> dict[str, Any]:
-        """The plan as the knowledge base holds it (``{}`` if it cannot be read)."""
+    def _stored(self, plan_id: int) -> Plan | None:
+        """The plan as the knowledge base holds it (``None`` if it cannot be read)."""
         if self._kb_path is None:
-            return {"id": plan_id}
+            return None
         from knowledge.knowledge_base import KnowledgeBase
-        from knowledge.records import to_plain
 
         try:
             with KnowledgeBase(self._kb_path, readonly=True) as kb:
-                return dict(to_plain(kb.plan(plan_id)))
+                return kb.plan(plan_id)
         except DuraError:
-            return {"id": plan_id}
+            return None
 
     # --- output -------------------------------------------------------------------------
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import itertools
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -93,43 +94,40 @@ def offline(description: Path) -> api.DomainReply:
     return describe(result.domain, result.robot)
 
 
-def parameters(typed: list[list[str]]) -> str:
+def parameters(typed: Sequence[tuple[str, str]]) -> str:
     """PDDL's own way: ``?from ?to - place``."""
     groups = itertools.groupby(typed, key=lambda p: p[1])
     return " ".join(f"{' '.join(p[0] for p in group)} - {kind}" for kind, group in groups)
 
 
-def _task(action: dict[str, Any]) -> str:
-    if action["task"] is None:
+def _task(action: api.DomainAction) -> str:
+    if action.task is None:
         return "- (no task: it completes at once)"
-    fields = ", ".join(f"{k}={v}" for k, v in action["goal"].items())
-    return f"{action['behavior']}({fields})"
+    fields = ", ".join(f"{k}={v}" for k, v in action.goal.items())
+    return f"{action.behavior}({fields})"
 
 
 def print_domain(reply: api.DomainReply, *, running: bool) -> None:
     print(f"domain {reply.name} ({shown(reply.path)})")
     section("types")
-    table(["type", "parent"], [[t["name"], t["parent"]] for t in reply.types])
+    table(["type", "parent"], [[t.name, t.parent] for t in reply.types])
     for title, signatures in (("predicates", reply.predicates), ("functions", reply.functions)):
         if signatures:
             section(title)
             table(
                 [title[:-1], "parameters"],
-                [[s["name"], " ".join(s["parameters"])] for s in signatures],
+                [[s.name, " ".join(s.parameters)] for s in signatures],
             )
     if reply.constants:
         section("constants")
         table(["constant", "type"], sorted(reply.constants.items()))
     section("actions")
     headers = ["action", "parameters", "duration", "task (behavior and goal)"]
-    rows = [
-        [a["name"], parameters(a["parameters"]), a["duration"] or "-", _task(a)]
-        for a in reply.actions
-    ]
+    rows = [[a.name, parameters(a.parameters), a.duration or "-", _task(a)] for a in reply.actions]
     if running:
         headers.append("can run")
         for row, action in zip(rows, reply.actions, strict=True):
-            row.append("yes" if action["blocked"] is None else f"no: {action['blocked']}")
+            row.append("yes" if action.blocked is None else f"no: {action.blocked}")
     table(headers, rows)
 
 

@@ -12,6 +12,8 @@ from typing import TYPE_CHECKING, Any
 from executive.bus.api import planning as api
 from executive.bus.event_text import line
 from executive.bus.keys import EVENTS
+from executive.bus.payloads import read_event
+from executive.bus.schema import plain
 from executive.bus.session import Bus, Message
 from executive.cli import exits_at_once
 from executive.cli.arguments import count, event_kind
@@ -20,6 +22,8 @@ from executive.cli.output import add_json_flag, print_json
 
 if TYPE_CHECKING:
     import queue
+
+    from knowledge.records import Event
 
 PAGE = 1000  # events read at a time when catching up
 
@@ -58,21 +62,21 @@ def run_events(args: argparse.Namespace) -> int:
         return _events_from_file(args)
     import queue  # only to follow: not for 'dura status'
 
-    arrived: queue.Queue[dict[str, Any]] = queue.Queue()
-    newest: list[dict[str, Any]] = []
+    arrived: queue.Queue[Event] = queue.Queue()
+    newest: list[Event] = []
     with connect(args) as bus:
         if args.follow:  # before the history, so that nothing falls between the two: the
             # stream has every event logged after the newest one read here
-            bus.subscribe(EVENTS, lambda m: arrived.put(m.payload) if _is_event(m) else None)
+            bus.subscribe(EVENTS, lambda m: _arrived(m, arrived))
             newest = api.EVENTS.call(bus, api.EventQuery(limit=1)).events
         past = api.EVENTS.call(bus, api.EventQuery(limit=args.lines, kind=args.kind)).events
         if args.json and not args.follow:
-            print_json({"events": past})
+            print_json({"events": plain(past)})
             return 0
         for event in past:
             _show(event, args.json)
         if args.follow:
-            _follow(bus, arrived, max((int(e["id"]) for e in newest + past), default=0), args)
+            _follow(bus, arrived, max((e.id for e in newest + past), default=0), args)
     return 0
 
 
@@ -83,29 +87,26 @@ def _events_from_file(args: argparse.Namespace) -> int:
     """``dura events --db FILE``: the log as the knowledge base file holds it; with
     ``--follow``, read it again every ``POLL`` seconds (readers never block a writer)."""
     from knowledge.knowledge_base import KnowledgeBase
-    from knowledge.records import to_plain
 
     with KnowledgeBase(args.db, readonly=True) as kb:
-        past = to_plain(kb.events(limit=args.lines, kind=args.kind))
+        past = kb.events(limit=args.lines, kind=args.kind)
         if args.json and not args.follow:
-            print_json({"events": past})
+            print_json({"events": plain(past)})
             return 0
         for event in past:
             _show(event, args.json)
         if not args.follow:
             return 0
         newest = kb.events(limit=1)
-        last = max([int(e["id"]) for e in past] + [e.id for e in newest], default=0)
+        last = max([e.id for e in past] + [e.id for e in newest], default=0)
         while True:
             time.sleep(POLL)
-            for event in to_plain(kb.events(after=last, limit=PAGE, oldest=True)):
-                last = int(event["id"])
+            for event in kb.events(after=last, limit=PAGE, oldest=True):
+                last = event.id
                 _print_followed(event, args)
 
 
-def _follow(
-    bus: Bus, arrived: queue.Queue[dict[str, Any]], last: int, args: argparse.Namespace
-) -> None:
+def _follow(bus: Bus, arrived: queue.Queue[Event], last: int, args: argparse.Namespace) -> None:
     """Print events as they come, in order and without a gap: an event that arrives
     after a gap (the bus dropped some, or they came before the subscription) is
     preceded by the missing ones, read from the knowledge base by sequence number."""
@@ -116,29 +117,31 @@ def _follow(
             event = arrived.get(timeout=0.5)
         except queue.Empty:
             continue
-        number = int(event["id"])
+        number = event.id
         if number <= last:
             continue
         while last < number - 1:
             page = api.EVENTS.call(bus, api.EventQuery(after=last, limit=PAGE, oldest=True))
-            missing = [e for e in page.events if int(e["id"]) < number]
+            missing = [e for e in page.events if e.id < number]
             if not missing:
                 break  # not stored yet: the stream's own copies come later
             for old in missing:
                 _print_followed(old, args)
-            last = int(missing[-1]["id"])
+            last = missing[-1].id
         _print_followed(event, args)
         last = number
 
 
-def _print_followed(event: dict[str, Any], args: argparse.Namespace) -> None:
-    if not args.kind or event.get("kind") == args.kind:
+def _print_followed(event: Event, args: argparse.Namespace) -> None:
+    if not args.kind or event.kind == args.kind:
         _show(event, args.json)
 
 
-def _is_event(message: Message) -> bool:
-    return isinstance(message.payload.get("id"), int)
+def _arrived(message: Message, arrived: queue.Queue[Event]) -> None:
+    event = read_event(message.payload)
+    if event is not None:
+        arrived.put(event)
 
 
-def _show(event: dict[str, Any], as_json: bool) -> None:
-    print(json.dumps(event, sort_keys=True) if as_json else line(event), flush=True)
+def _show(event: Event, as_json: bool) -> None:
+    print(json.dumps(plain(event), sort_keys=True) if as_json else line(event), flush=True)

@@ -11,12 +11,14 @@ from typing import Any, TextIO
 
 from executive.bus.api import planning as api
 from executive.bus.keys import EVENTS
+from executive.bus.schema import plain
 from executive.bus.session import Bus, Message
 from executive.cli import exits_at_once
 from executive.cli.arguments import identifier, priority, seconds
 from executive.cli.client import add_client_options, ask, connect
 from executive.cli.output import add_json_flag, print_json, table
 from knowledge.errors import DuraError
+from knowledge.records import Goal
 from knowledge.transitions import GoalState
 
 REFRESH = 0.2  # seconds at least between two looks at the goal while following it
@@ -108,24 +110,24 @@ def clock(stamp: float) -> str:
     return time.strftime("%H:%M:%S", time.localtime(stamp)) if stamp else "-"
 
 
-def state_of(goal: dict[str, Any]) -> str:
+def state_of(goal: Goal) -> str:
     """A goal's state as shown: a maintenance goal that is achieved is watched."""
-    if goal.get("keep") and goal["state"] == GoalState.ACHIEVED.value:
+    if goal.keep and goal.state is GoalState.ACHIEVED:
         return "achieved, watched"
-    return str(goal["state"])
+    return goal.state.value
 
 
-def goal_rows(goals: list[dict[str, Any]]) -> list[list[Any]]:
+def goal_rows(goals: list[Goal]) -> list[list[Any]]:
     return [
         [
-            g["id"],
+            g.id,
             state_of(g),
-            "keep" if g.get("keep") else "once",
-            g["priority"],
-            "-" if g["deadline"] is None else f"{g['deadline']:g} s",
-            g["source"],
-            g["expression"],
-            g["reason"],
+            "keep" if g.keep else "once",
+            g.priority,
+            "-" if g.deadline is None else f"{g.deadline:g} s",
+            g.source,
+            g.expression,
+            g.reason,
         ]
         for g in goals
     ]
@@ -148,16 +150,16 @@ def run_add(args: argparse.Namespace) -> int:
     if not args.wait:
         goal = ask(args, api.GOAL_ADD, request).goal
         if args.json:
-            print_json(goal)
+            print_json(plain(goal))
         else:
-            kept = ", kept" if goal.get("keep") else ""
-            print(f"goal {goal['id']}: {goal['expression']} ({goal['state']}{kept})")
+            kept = ", kept" if goal.keep else ""
+            print(f"goal {goal.id}: {goal.expression} ({goal.state.value}{kept})")
         return 0
     with connect(args) as bus:
         follower = GoalFollower(bus)  # before the goal exists: no change is missed
         goal = api.GOAL_ADD.call(bus, request).goal
         if not args.json:
-            print(f"goal {goal['id']}: {goal['expression']} ({goal['state']})", flush=True)
+            print(f"goal {goal.id}: {goal.expression} ({goal.state.value})", flush=True)
         return _outcome(follower.follow(goal, _view(args), args.timeout), args)
 
 
@@ -176,18 +178,18 @@ def _view(args: argparse.Namespace) -> GoalView:
 def _outcome(followed: Followed, args: argparse.Namespace) -> int:
     goal = followed.goal
     if args.json:
-        print_json(goal)
-        return 0 if goal["state"] == GoalState.ACHIEVED.value else 1
-    text = f"goal {goal['id']} {goal['expression']}"
+        print_json(plain(goal))
+        return 0 if goal.state is GoalState.ACHIEVED else 1
+    text = f"goal {goal.id} {goal.expression}"
     if followed.timed_out:
         raise DuraError(
-            f"{text}: still {goal['state']} after {args.timeout:g} s (it goes on; "
-            f"'dura goal watch {goal['id']}' follows it again)"
+            f"{text}: still {goal.state.value} after {args.timeout:g} s (it goes on; "
+            f"'dura goal watch {goal.id}' follows it again)"
         )
-    if goal["state"] != GoalState.ACHIEVED.value:
-        reason = f": {goal['reason']}" if goal["reason"] else ""
-        raise DuraError(f"{text}: {goal['state']}{reason}")
-    print(f"{text}: achieved in {_seconds(goal['updated'] - goal['created'])}")
+    if goal.state is not GoalState.ACHIEVED:
+        reason = f": {goal.reason}" if goal.reason else ""
+        raise DuraError(f"{text}: {goal.state.value}{reason}")
+    print(f"{text}: achieved in {_seconds(goal.updated - goal.created)}")
     return 0
 
 
@@ -198,7 +200,7 @@ def _seconds(value: float) -> str:
 class Followed:
     """How following a goal ended: the goal as last seen, and whether time ran out."""
 
-    def __init__(self, goal: dict[str, Any], timed_out: bool) -> None:
+    def __init__(self, goal: Goal, timed_out: bool) -> None:
         self.goal = goal
         self.timed_out = timed_out
 
@@ -211,21 +213,21 @@ class GoalView:
         self.out = out
         self.live = live
         self.changes = changes
-        self._state: str | None = None
+        self._state: GoalState | None = None
         self._drawn = False
 
-    def show(self, goal: dict[str, Any], plan: api.PlanReply | None, now: float) -> None:
+    def show(self, goal: Goal, plan: api.PlanReply | None, now: float) -> None:
         if self.live:
             line = progress(goal, plan, now)
             self.out.write("\r" + line[: _width() - 1] + "\x1b[K")
             self.out.flush()
             self._drawn = True
-        elif self.changes and goal["state"] != self._state:
+        elif self.changes and goal.state is not self._state:
             stamp = time.strftime("%H:%M:%S", time.localtime(now))
-            reason = f": {goal['reason']}" if goal["reason"] else ""
-            self.out.write(f"{stamp}  goal {goal['id']} {goal['state']}{reason}\n")
+            reason = f": {goal.reason}" if goal.reason else ""
+            self.out.write(f"{stamp}  goal {goal.id} {goal.state.value}{reason}\n")
             self.out.flush()
-        self._state = goal["state"]
+        self._state = goal.state
 
     def close(self) -> None:
         """Take the live line away (the outcome is printed in its place)."""
@@ -241,20 +243,20 @@ def _width() -> int:
     return shutil.get_terminal_size().columns
 
 
-def progress(goal: dict[str, Any], plan: api.PlanReply | None, now: float) -> str:
+def progress(goal: Goal, plan: api.PlanReply | None, now: float) -> str:
     """One line on how a goal stands: its state, for how long, and the progress of the
     plan that pursues it (steps ended of all, those under way)."""
-    line = f"goal {goal['id']} {goal['expression']}: {goal['state']}"
-    line += f" {_seconds(now - goal['created'])}"
+    line = f"goal {goal.id} {goal.expression}: {goal.state.value}"
+    line += f" {_seconds(now - goal.created)}"
     stored = plan.plan if plan is not None else None
-    if plan is None or stored is None or goal["id"] not in stored.get("goal_ids", []):
+    if plan is None or stored is None or goal.id not in stored.goal_ids:
         return line
-    if plan.execution.get("plan") != stored["id"]:
-        return line + f"; plan {stored['id']} waits"
-    steps = plan.execution.get("steps", [])
-    ended = sum(1 for s in steps if s.get("state") == "ended")
-    line += f"; plan {stored['id']}: {ended} of {len(stored['steps'])} steps ended"
-    under_way = [f"{s['step']} {s['state']}" for s in steps if s.get("state") in ACTIVE_STEPS]
+    if plan.execution.plan != stored.id:
+        return line + f"; plan {stored.id} waits"
+    steps = plan.execution.steps
+    ended = sum(1 for s in steps if s.state == "ended")
+    line += f"; plan {stored.id}: {ended} of {len(stored.steps)} steps ended"
+    under_way = [f"{s.step} {s.state}" for s in steps if s.state in ACTIVE_STEPS]
     if under_way:
         line += ", " + ", ".join(under_way)
     return line
@@ -276,9 +278,7 @@ class GoalFollower:
     def _on_event(self, message: Message) -> None:
         self._woken.set()
 
-    def follow(
-        self, goal: dict[str, Any], view: GoalView, timeout: float | None = None
-    ) -> Followed:
+    def follow(self, goal: Goal, view: GoalView, timeout: float | None = None) -> Followed:
         """Show the goal as it goes, until it ends or ``timeout`` passes."""
         deadline = None if timeout is None else time.monotonic() + timeout
         try:
@@ -287,7 +287,7 @@ class GoalFollower:
                 goal = self._look(goal)
                 plan = api.PLAN_SHOW.call(self.bus) if view.live else None
                 view.show(goal, plan, time.time())
-                if not GoalState(goal["state"]).is_open:
+                if not goal.state.is_open:
                     return Followed(goal, timed_out=False)
                 left = None if deadline is None else deadline - time.monotonic()
                 if left is not None and left <= 0:
@@ -298,20 +298,20 @@ class GoalFollower:
         finally:
             view.close()
 
-    def _look(self, goal: dict[str, Any]) -> dict[str, Any]:
+    def _look(self, goal: Goal) -> Goal:
         """The goal now: among the open goals, or (once it ended) as shown."""
         open_states = [s for s in GoalState if s.is_open]
         for found in api.GOAL_LIST.call(self.bus, api.GoalQuery(open_states)).goals:
-            if found["id"] == goal["id"]:
+            if found.id == goal.id:
                 return found
-        return api.GOAL_SHOW.call(self.bus, api.GoalId(goal["id"])).goal
+        return api.GOAL_SHOW.call(self.bus, api.GoalId(goal.id)).goal
 
 
 def run_list(args: argparse.Namespace) -> int:
     states = [s for s in GoalState if s.is_open] if args.open else None
     goals = ask(args, api.GOAL_LIST, api.GoalQuery(states)).goals
     if args.json:
-        print_json({"goals": goals})
+        print_json({"goals": plain(goals)})
     else:
         table(GOAL_HEADERS, goal_rows(goals))
     return 0
@@ -325,20 +325,20 @@ def run_show(args: argparse.Namespace) -> int:
         print_json(reply.to_payload())
         return 0
     g = reply.goal
-    kind = "maintenance goal" if g.get("keep") else "goal"
-    print(f"{kind} {g['id']}: {g['expression']}")
+    kind = "maintenance goal" if g.keep else "goal"
+    print(f"{kind} {g.id}: {g.expression}")
     state = state_of(g)
-    print(f"  state {state}{': ' + g['reason'] if g['reason'] else ''}")
+    print(f"  state {state}{': ' + g.reason if g.reason else ''}")
     if state in MEANING:
-        print(f"  ({MEANING[state].format(updated=clock(g['updated']))})")
-    deadline = "none" if g["deadline"] is None else f"{g['deadline']:g} s after submission"
-    print(f"  priority {g['priority']}, deadline {deadline}, from {g['source']}")
-    print(f"  submitted {clock(g['created'])}, last change {clock(g['updated'])}")
+        print(f"  ({MEANING[state].format(updated=clock(g.updated))})")
+    deadline = "none" if g.deadline is None else f"{g.deadline:g} s after submission"
+    print(f"  priority {g.priority}, deadline {deadline}, from {g.source}")
+    print(f"  submitted {clock(g.created)}, last change {clock(g.updated)}")
     if reply.events:
         print()
         table(
             ["time", "event", "details"],
-            [[clock(e["stamp"]), e["kind"], describe(e)] for e in reply.events],
+            [[clock(e.stamp), e.kind, describe(e)] for e in reply.events],
         )
     return 0
 
@@ -346,7 +346,7 @@ def run_show(args: argparse.Namespace) -> int:
 def run_cancel(args: argparse.Namespace) -> int:
     goal = ask(args, api.GOAL_CANCEL, api.GoalId(args.id)).goal
     if args.json:
-        print_json(goal)
+        print_json(plain(goal))
     else:
-        print(f"goal {goal['id']}: {goal['state']}")
+        print(f"goal {goal.id}: {goal.state.value}")
     return 0

@@ -46,7 +46,7 @@ def live_state(args: argparse.Namespace) -> LiveState:
     robot = load_robot(args.robot)
     state = LiveState(robot)
     status = ask(args, planning.STATUS)
-    state.set_diagnosis(status.diagnoses)
+    state.set_diagnosis(status.diagnosis)
     if isinstance(status.components, list):
         state.set_components(status.components)
     if isinstance(status.tasks, list):

@@ -7,6 +7,7 @@ import argparse
 import sys
 import time
 from collections import Counter
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +18,7 @@ from executive.cli.output import add_json_flag, print_json, section, shown, tabl
 from knowledge.errors import DuraError
 from knowledge.health import check, repair
 from knowledge.knowledge_base import KnowledgeBase
+from knowledge.records import PlanStep
 from knowledge.robot import read_robot
 
 
@@ -75,61 +77,47 @@ def _clock(stamp: float) -> str:
 
 def run_show(args: argparse.Namespace) -> int:
     with KnowledgeBase(database_path(args), readonly=True) as kb:
-        data = kb.snapshot(events=args.events)
-    if args.json:
-        print_json(data)
-        return 0
-    print(f"knowledge base {shown(data['path'])} (schema {data['schema_version']})")
-    section("goals")
-    table(
-        ["id", "state", "priority", "deadline", "source", "expression", "reason"],
-        [
+        if args.json:
+            print_json(kb.snapshot(events=args.events))
+            return 0
+        print(f"knowledge base {shown(str(kb.path))} (schema {kb.schema_version})")
+        section("goals")
+        table(
+            ["id", "state", "priority", "deadline", "source", "expression", "reason"],
             [
-                g["id"],
-                g["state"],
-                g["priority"],
-                None if g["deadline"] is None else seconds(g["deadline"]),
-                g["source"],
-                g["expression"],
-                g["reason"],
-            ]
-            for g in data["goals"]
-        ],
-    )
-    section("plans")
-    table(
-        ["id", "state", "engine", "goals", "steps"],
-        [
-            [p["id"], p["state"], p["engine"], p["goal_ids"], _steps(p["steps"])]
-            for p in data["plans"]
-        ],
-    )
-    section("tasks")
-    table(
-        ["id", "state", "action", "behavior", "args", "reason"],
-        [
-            [t["id"], t["state"], t["action"], t["behavior"], t["args"], t["reason"]]
-            for t in data["tasks"]
-        ],
-    )
-    section("objects")
-    table(["name", "type"], sorted(data["objects"].items()))
-    section("facts")
-    for fact in data["facts"]:
-        print(f"  {fact}")
-    section("components")
-    table(
-        ["name", "rating", "faults", "permanent", "reason"],
-        [
-            [c["name"], c["rating"], c["fault_count"], c["permanent_fault"], c["reason"]]
-            for c in data["components"]
-        ],
-    )
-    section(f"last {plural(args.events, 'event')}")
-    table(
-        ["id", "time", "kind", "event"],
-        [[e["id"], _clock(e["stamp"]), e["kind"], describe(e)] for e in data["events"]],
-    )
+                [g.id, g.state.value, g.priority, None if g.deadline is None else seconds(g.deadline),
+                 g.source, g.expression, g.reason]
+                for g in kb.goals()
+            ],
+        )  # fmt: skip
+        section("plans")
+        table(
+            ["id", "state", "engine", "goals", "steps"],
+            [[p.id, p.state.value, p.engine, p.goal_ids, _steps(p.steps)] for p in kb.plans()],
+        )
+        section("tasks")
+        table(
+            ["id", "state", "action", "behavior", "args", "reason"],
+            [[t.id, t.state.value, t.action, t.behavior, t.args, t.reason] for t in kb.tasks()],
+        )
+        section("objects")
+        table(["name", "type"], sorted(kb.objects().items()))
+        section("facts")
+        for fact in kb.facts():
+            print(f"  {fact.text}")
+        section("components")
+        table(
+            ["name", "rating", "faults", "permanent", "reason"],
+            [
+                [c.name, c.rating, c.fault_count, c.permanent_fault, c.reason]
+                for c in kb.components()
+            ],
+        )
+        section(f"last {plural(args.events, 'event')}")
+        table(
+            ["id", "time", "kind", "event"],
+            [[e.id, _clock(e.stamp), e.kind, describe(e)] for e in kb.events(limit=args.events)],
+        )
     return 0
 
 
@@ -169,9 +157,9 @@ def run_repair(args: argparse.Namespace) -> int:
     return 0
 
 
-def _steps(steps: list[dict[str, Any]]) -> str:
+def _steps(steps: Sequence[PlanStep]) -> str:
     """``3: 1 ended, 1 cancelled, 1 pending``: how many steps, and what happened to them."""
-    counts = Counter(s.get("state", "pending") for s in steps)
+    counts = Counter(s.state for s in steps)
     return (
         f"{len(steps)}: " + ", ".join(f"{n} {state}" for state, n in counts.items())
         if steps

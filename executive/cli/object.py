@@ -51,7 +51,7 @@ def run_object_remove(args: argparse.Namespace) -> int:
         print_json(removed.to_payload())
         return 0
     ((name, type_name),) = removed.objects.items()
-    facts = [f["text"] for f in removed.facts]
+    facts = [f.text for f in removed.facts]
     also = f", and {plural(len(facts), 'fact')}: {', '.join(facts)}" if facts else ""
     print(f"object {name} - {type_name} removed{also}")
     return 0

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from executive.bus.api import monitoring as api
+from executive.bus.schema import plain
 from executive.bus.verb import Verb
 from executive.cli import exits_at_once
 from executive.cli.client import add_client_options, ask, connect
@@ -90,13 +91,13 @@ def register(sub: Any) -> None:
 def run_list(args: argparse.Namespace) -> int:
     observers = ask(args, api.OBSERVER_LIST).observers
     if args.json:
-        print_json({"observers": observers})
+        print_json({"observers": plain(observers)})
         return 0
     table(
         ["id", "type", "component", "activated", "observing", "rate", "start-up"],
         [
-            [o["id"], o["type"], o["component"], o["enabled"], o["active"],
-             f"{o['main_loop_rate']:g} Hz", f"{o['start_up_time']:g} s"]
+            [o.id, o.type, o.component, o.enabled, o.active, f"{o.main_loop_rate:g} Hz",
+             f"{o.start_up_time:g} s"]
             for o in observers
         ],
     )  # fmt: skip

@@ -12,6 +12,7 @@ from typing import Any
 
 from executive.bus.api import planning as api
 from executive.bus.api import tasks
+from executive.bus.schema import plain
 from executive.bus.wording import plural
 from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
@@ -19,6 +20,7 @@ from executive.cli.output import add_json_flag, bar, print_json, shown, table
 from executive.cli.progress import LiveLine
 from executive.dashboard import gantt
 from executive.fast_start import use_reader_environment
+from executive.planning.dry_run import planned_steps
 from executive.planning.expression import TRUE
 from executive.planning.goals import GoalSpec
 from executive.planning.partial_order import PartialOrderPlan, Step
@@ -146,15 +148,14 @@ def run_show(args: argparse.Namespace) -> int:
     if plan is None:
         print("no plan yet")
         return 0
-    states = step_states(plan, reply.execution)
-    steps = plan["steps"]
-    span = max((s["start"] + (s["duration"] or 0.0) for s in steps), default=0.0)
-    goals = ", ".join(str(g) for g in plan["goal_ids"]) or "-"
-    print(f"plan {plan['id']}: {plan['state']}, by {plan['engine']}, for goals {goals}")
+    states = reply.execution.states_of(plan)
+    steps = plan.steps
+    span = max((s.start + (s.duration or 0.0) for s in steps), default=0.0)
+    goals = ", ".join(str(g) for g in plan.goal_ids) or "-"
+    print(f"plan {plan.id}: {plan.state.value}, by {plan.engine}, for goals {goals}")
     rows = [
-        [s["index"], f"{s['start']:.3f}", _duration(s["duration"]),
-         f"{s['action']}({', '.join(s['args'])})", states.get(s["index"], "-"),
-         bar(s["start"], s["duration"], span)]
+        [s.index, f"{s.start:.3f}", _duration(s.duration), f"{s.action}({', '.join(s.args)})",
+         states.get(s.index, "-"), bar(s.start, s.duration, span)]
         for s in steps
     ]  # fmt: skip
     table(["#", "start", "duration", "step", "state", "timeline"], rows)
@@ -192,22 +193,13 @@ def run_dry_run(args: argparse.Namespace) -> int:
     )
     span = reply.makespan or 0.0
     rows = [
-        [s["index"], f"{s['start']:.3f}", _duration(s["duration"]),
-         f"{s['action']}({', '.join(s['args'])})",
-         " ".join(f"{p['step']}{'' if p['at'] == 'end' else '(start)'}" for p in s["after"]) or "-",
-         bar(s["start"], s["duration"], span)]
+        [s.index, f"{s.start:.3f}", _duration(s.duration), f"{s.action}({', '.join(s.args)})",
+         " ".join(f"{p.step}{'' if p.at == 'end' else '(start)'}" for p in s.after) or "-",
+         bar(s.start, s.duration, span)]
         for s in reply.steps
     ]  # fmt: skip
     table(["#", "start", "duration", "step", "after", "timeline"], rows)
     return 0
-
-
-def step_states(plan: dict[str, Any], execution: dict[str, Any]) -> dict[int, str]:
-    """Each step's state: live while the plan executes (``paused`` too), else as stored."""
-    states = {s["index"]: s.get("state", "-") for s in plan["steps"]}
-    if execution.get("plan") == plan["id"]:
-        states.update({s["index"]: s["state"] for s in execution.get("steps", [])})
-    return states
 
 
 def write_svg(target: str, picture: str) -> bool:
@@ -250,16 +242,6 @@ def as_json(result: PlanResult) -> dict[str, Any]:
         "validator": result.validator,
         "reason": result.reason,
         "makespan": plan.makespan if plan is not None else None,
-        "steps": [
-            {
-                "index": s.index,
-                "action": s.action,
-                "args": list(s.args),
-                "start": s.start,
-                "duration": s.duration,
-                "after": [{"step": p.step, "at": p.at.value} for p in s.after],
-            }
-            for s in (plan.steps if plan is not None else ())
-        ],
+        "steps": plain(planned_steps(plan)),
         "log": list(result.log),
     }

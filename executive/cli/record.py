@@ -14,9 +14,8 @@ from executive.bags.recording import (
     MB,
     BusRecording,
     Recorder,
-    state_payloads,
 )
-from executive.bus.api.components import COMPONENT_LIST
+from executive.bus.api.components import COMPONENT_LIST, lifecycle
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.wording import plural
 from executive.cli.arguments import count, megabytes
@@ -67,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
                 stop.set()  # the executive stopped: so does its recording
 
         bus.watch_alive(EXECUTIVE_ALIVE, on_executive)
-        states = state_payloads(COMPONENT_LIST.call(bus).components)
+        states = [lifecycle(c).to_payload() for c in COMPONENT_LIST.call(bus).components]
         recorder = Recorder(args.out, bus.robot, max_size=args.max_size, keep=args.keep)
         recording = BusRecording(bus, recorder, on_failure=lambda _: stop.set())
         recording.start(states)

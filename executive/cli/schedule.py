@@ -27,14 +27,13 @@ def run_schedule(args: argparse.Namespace) -> int:
         print_json(schedule.to_payload())
         return 0
     tasks = schedule.tasks
-    span = max((t["end"] for t in tasks), default=0.0)
-    first = min((t["start"] for t in tasks), default=0.0)
+    span = max((t.end for t in tasks), default=0.0)
+    first = min((t.start for t in tasks), default=0.0)
     table(
         ["id", "task", "state", "start", "end", "uses", "timeline"],
         [
-            [t["id"], t["name"], t["state"], f"{t['start']:+.1f}", f"{t['end']:+.1f}",
-             ", ".join(t["functionalities"]) or "-",
-             bar(t["start"] - first, t["end"] - t["start"], span - first)]
+            [t.id, t.name, t.state, f"{t.start:+.1f}", f"{t.end:+.1f}",
+             ", ".join(t.functionalities) or "-", bar(t.start - first, t.end - t.start, span - first)]
             for t in tasks
         ],
     )  # fmt: skip

@@ -7,9 +7,11 @@ import argparse
 from typing import Any
 
 from executive.bus.api import planning as api
+from executive.bus.schema import plain
 from executive.cli import exits_at_once
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
+from knowledge.records import Fact
 
 
 def register(sub: Any) -> None:
@@ -41,9 +43,8 @@ def register(sub: Any) -> None:
         add_json_flag(cmd)
 
 
-def _value(fact: dict[str, Any]) -> str:
-    value = fact["value"]
-    return "true" if value is True else f"{value:g}"
+def _value(fact: Fact) -> str:
+    return "true" if fact.value is True else f"{fact.value:g}"
 
 
 def run_get(args: argparse.Namespace) -> int:
@@ -53,7 +54,7 @@ def run_get(args: argparse.Namespace) -> int:
         return 0
     table(
         ["fact", "value"],
-        [[f"({' '.join([f['name'], *f['args']])})", _value(f)] for f in reply.facts],
+        [[f"({' '.join([f.name, *f.args])})", _value(f)] for f in reply.facts],
     )
     return 0
 
@@ -62,7 +63,7 @@ def run_change(args: argparse.Namespace) -> int:
     verb = api.STATE_UNSET if args.verb == "unset" else api.STATE_SET
     fact = ask(args, verb, api.FactChange(args.fact)).fact
     if args.json:
-        print_json(fact)
+        print_json(plain(fact))
     else:
-        print(f"{fact['text']} {'unset' if args.verb == 'unset' else 'set'}")
+        print(f"{fact.text} {'unset' if args.verb == 'unset' else 'set'}")
     return 0

@@ -28,64 +28,56 @@ def register(sub: Any) -> None:
 
 
 def run_status(args: argparse.Namespace) -> int:
-    status = ask(args, api.STATUS).to_payload()
+    status = ask(args, api.STATUS)
     if args.json:
-        print_json(status)
+        print_json(status.to_payload())
         return 0
     print_status(status)
     return 0
 
 
-def print_status(status: dict[str, Any], out: Any = None) -> None:
+def print_status(status: api.StatusReply, out: Any = None) -> None:
     out = out or sys.stdout
-    section(f"robot {status['robot']}: goals", out, first=True)
-    table(GOAL_HEADERS, goal_rows(status["goals"]), out)
-    plan, execution = status.get("plan"), status.get("execution") or {}
+    section(f"robot {status.robot}: goals", out, first=True)
+    table(GOAL_HEADERS, goal_rows(status.goals), out)
+    plan = status.plan
     if plan is not None:
-        section(f"plan {plan['id']} ({plan['state']}, by {plan['engine']})", out)
-        states = {s["index"]: s.get("state", "-") for s in plan["steps"]}
-        if execution.get("plan") == plan["id"]:  # live, paused steps too
-            states.update({s["index"]: s["state"] for s in execution.get("steps", [])})
+        section(f"plan {plan.id} ({plan.state.value}, by {plan.engine})", out)
+        states = status.execution.states_of(plan)
         table(
             ["#", "start", "duration", "step", "state"],
             [
                 [
-                    s["index"],
-                    f"{s['start']:.3f}",
-                    "-" if s["duration"] is None else f"{s['duration']:g}",
-                    f"{s['action']}({', '.join(s['args'])})",
-                    states.get(s["index"], "-"),
+                    s.index,
+                    f"{s.start:.3f}",
+                    "-" if s.duration is None else f"{s.duration:g}",
+                    f"{s.action}({', '.join(s.args)})",
+                    states.get(s.index, "-"),
                 ]
-                for s in plan["steps"]
+                for s in plan.steps
             ],
             out,
         )
-    if isinstance(status.get("tasks"), list):
+    if isinstance(status.tasks, list):
         section("tasks", out)
         table(
             ["id", "task", "state", "uses"],
-            [
-                [t.get("id"), t.get("name", t.get("behavior")), t.get("state"),
-                 ", ".join(sorted(t.get("functionalities", [])))]
-                for t in status["tasks"]
-            ],
+            [[t.id, t.name, t.state, ", ".join(sorted(t.functionalities))] for t in status.tasks],
             out,
-        )  # fmt: skip
-    if isinstance(status.get("components"), list):
+        )
+    if isinstance(status.components, list):
         section("components", out)
         table(
             ["name", "kind", "state", "pid"],
-            [[c["component"], c["kind"], c["state"], c["pid"]] for c in status["components"]],
+            [[c.component, c.kind, c.state.value, c.pid] for c in status.components],
             out,
         )
-    faults = status.get("faults") or []
-    if faults:
+    if status.faults:
         section("faults", out)
         table(
             ["component", "faults", "permanent", "reason"],
-            [[f["name"], f["fault_count"], f["permanent_fault"], f["reason"]] for f in faults],
+            [[f.name, f.fault_count, f.permanent_fault, f.reason] for f in status.faults],
             out,
         )
-    diagnoses = status.get("diagnoses") or {}
-    if diagnoses:
-        section(f"diagnosis: {diagnosis(diagnoses)}", out)
+    if status.diagnosis is not None:
+        section(f"diagnosis: {diagnosis(status.diagnosis)}", out)

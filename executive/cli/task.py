@@ -7,6 +7,8 @@ import argparse
 from typing import Any
 
 from executive.bus.api import tasks as api
+from executive.bus.reports import ExecutorTask
+from executive.bus.schema import plain
 from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
@@ -88,17 +90,14 @@ def run_start(args: argparse.Namespace) -> int:
     return 0
 
 
-def _rows(tasks: list[dict[str, Any]]) -> list[list[Any]]:
-    return [
-        [t["id"], t["name"], t["state"], ", ".join(t["functionalities"]) or "-", t["reason"]]
-        for t in tasks
-    ]
+def _rows(tasks: list[ExecutorTask]) -> list[list[Any]]:
+    return [[t.id, t.name, t.state, ", ".join(t.functionalities) or "-", t.reason] for t in tasks]
 
 
 def run_list(args: argparse.Namespace) -> int:
     tasks = ask(args, api.TASK_LIST).tasks
     if args.json:
-        print_json({"tasks": tasks})
+        print_json({"tasks": plain(tasks)})
     else:
         table(["id", "task", "state", "uses", "reason"], _rows(tasks))
     return 0
@@ -108,7 +107,7 @@ def run_verb(args: argparse.Namespace) -> int:
     verb = {"stop": api.TASK_STOP, "pause": api.TASK_PAUSE, "resume": api.TASK_RESUME}[args.verb]
     task = ask(args, verb, api.TaskId(args.id)).task
     if args.json:
-        print_json(task)
+        print_json(plain(task))
     else:
-        print(f"task {task['id']}: {task['state']}")
+        print(f"task {task.id}: {task.state}")
     return 0

@@ -33,11 +33,13 @@ from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from executive.bus.api import planning
+from executive.bus.schema import plain
 from executive.dashboard import gantt, graph
 from executive.dashboard.access import COOKIE, Access
 from executive.dashboard.feed import Feed
 from executive.dashboard.live import GOALS, PLAN
 from knowledge.errors import DuraError
+from knowledge.records import Goal
 
 STATIC = Path(__file__).resolve().parent / "static"
 MAX_BODY = 16 * 1024  # bytes of a request body: a goal is a line of text
@@ -158,13 +160,13 @@ def create_app(feed: Feed, access: Access) -> ASGIApp:
             return JSONResponse({"error": f"not a goal id: {e}"}, status_code=400)
         return await _call(lambda: planning.GOAL_CANCEL.call(feed.bus, goal_id).goal)
 
-    async def _call(ask: Callable[[], dict[str, Any]]) -> Response:
+    async def _call(ask: Callable[[], Goal]) -> Response:
         try:
             goal = await asyncio.to_thread(ask)
         except DuraError as e:
             return JSONResponse({"error": str(e)}, status_code=400)
         feed.ask(GOALS, PLAN)
-        return JSONResponse({"goal": goal})
+        return JSONResponse({"goal": plain(goal)})
 
     @contextlib.asynccontextmanager
     async def lifespan(app: Starlette) -> AsyncIterator[None]:

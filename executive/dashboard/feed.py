@@ -22,9 +22,21 @@ from typing import Any
 
 from executive.bus.api import components, monitoring, planning, tasks
 from executive.bus.keys import DIAGNOSES, EVENTS, EXECUTIVE_ALIVE, OBSERVATIONS, component
+from executive.bus.payloads import ComponentState, DiagnosisInfo, read_event
 from executive.bus.session import Bus, Message
-from executive.dashboard.live import FAULTS, GOALS, PLAN, TASKS, VIEWS, LiveState, stale
+from executive.dashboard.live import (
+    FAULTS,
+    GOALS,
+    PLAN,
+    TASKS,
+    VIEWS,
+    LiveState,
+    event_item,
+    stale,
+)
 from knowledge.errors import DuraError
+from knowledge.records import Event
+from knowledge.transitions import PlanState
 
 log = logging.getLogger("dura.dashboard")
 
@@ -63,7 +75,7 @@ class Feed:
         self._stale: set[str] = set()
         self._wake = asyncio.Event()
         self._dirty: set[str] = set()
-        self._new_events: list[dict[str, Any]] = []
+        self._new_events: list[Event] = []
         self._new_observations: dict[str, dict[str, Any]] = {}
         self._tasks: list[asyncio.Task[None]] = []
         self._subscriptions: list[Any] = []
@@ -170,11 +182,12 @@ class Feed:
         if alive:
             self.ask(*EVERYTHING)
 
-    def _on_event(self, event: dict[str, Any]) -> None:
-        if not self.state.add_event(event):
+    def _on_event(self, payload: dict[str, Any]) -> None:
+        event = read_event(payload)
+        if event is None or not self.state.add_event(event):
             return
         self._new_events.append(event)
-        kind = str(event.get("kind", ""))
+        kind = event.kind
         queries = stale(kind)
         if queries:
             self.ask(*queries)
@@ -184,9 +197,17 @@ class Feed:
             self.changed("plan")
 
     def _on_diagnosis(self, payload: dict[str, Any]) -> None:
+        try:
+            diagnosis = DiagnosisInfo.from_payload(payload)
+        except (KeyError, TypeError, ValueError):
+            log.warning("the dashboard ignored a malformed diagnosis")
+            return
+        self._set_diagnosis(diagnosis)
+
+    def _set_diagnosis(self, diagnosis: DiagnosisInfo) -> None:
         before = self.state.diagnosis
-        self.state.set_diagnosis(payload)
-        if _verdict(before) != _verdict(payload):
+        self.state.set_diagnosis(diagnosis)
+        if _verdict(before) != _verdict(diagnosis):
             self.changed("components")
 
     def _on_observation(self, payload: dict[str, Any]) -> None:
@@ -194,7 +215,12 @@ class Feed:
         self._new_observations[track.key] = {**track.item(), "point": list(track.history[-1])}
 
     def _on_lifecycle(self, payload: dict[str, Any]) -> None:
-        self.state.set_lifecycle(payload)
+        try:
+            state = ComponentState.from_payload(payload)
+        except (KeyError, TypeError, ValueError):
+            log.warning("the dashboard ignored a malformed component state")
+            return
+        self.state.set_lifecycle(state)
         self.changed("components")
 
     # --- asking the executive ----------------------------------------------------------
@@ -237,7 +263,7 @@ class Feed:
         if query == EVENTS_NOW:
             return planning.EVENTS.call(bus, planning.EventQuery(limit=HISTORY)).events
         if query == DIAGNOSIS:
-            return planning.STATUS.call(bus).diagnoses
+            return planning.STATUS.call(bus).diagnosis
         raise ValueError(query)
 
     def _apply(self, query: str, answer: Any) -> None:
@@ -265,8 +291,8 @@ class Feed:
         elif query == EVENTS_NOW:
             state.set_events(answer)
             self.changed("events", "plan")
-        elif query == DIAGNOSIS and not state.diagnosis:  # a live one is newer
-            self._on_diagnosis(answer)
+        elif query == DIAGNOSIS and state.diagnosis is None and answer is not None:
+            self._set_diagnosis(answer)  # a live one is newer
 
     # --- pushing to pages ---------------------------------------------------------------
 
@@ -276,7 +302,7 @@ class Feed:
             await asyncio.sleep(FLUSH)
             now = time.time()
             plan = self.state.plan
-            if plan is not None and plan.get("state") == "executing" and now - last_clock > CLOCK:
+            if plan is not None and plan.state is PlanState.EXECUTING and now - last_clock > CLOCK:
                 self._dirty.add("plan")
                 last_clock = now
             messages = []
@@ -287,7 +313,8 @@ class Feed:
                     log.exception("the dashboard could not draw its '%s' view", name)
             self._dirty.clear()
             if self._new_events:
-                messages.append(sse("event", {"events": self._new_events}))
+                items = [event_item(e) for e in self._new_events]
+                messages.append(sse("event", {"events": items}))
                 self._new_events = []
             if self._new_observations:
                 items = list(self._new_observations.values())
@@ -306,8 +333,8 @@ class Feed:
                 queue.put_nowait(text)
 
 
-def _verdict(diagnosis: dict[str, Any]) -> tuple[str, str]:
+def _verdict(diagnosis: DiagnosisInfo | None) -> tuple[str, str]:
     """What the picture shows of a diagnosis (a repeated one changes nothing)."""
-    return str(diagnosis.get("status")), json.dumps(
-        [diagnosis.get("diagnoses"), diagnosis.get("failed")], sort_keys=True
-    )
+    if diagnosis is None:
+        return "None", "[null, null]"
+    return diagnosis.status, json.dumps([diagnosis.diagnoses, diagnosis.failed], sort_keys=True)

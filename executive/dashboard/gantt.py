@@ -11,14 +11,16 @@ current plan's start). :func:`render` draws either.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from executive.dashboard import svg
 
 if TYPE_CHECKING:
+    from executive.bus.reports import ExecutionStatus, ExecutorTask
     from executive.planning.partial_order import PartialOrderPlan
+    from knowledge.records import Event, Plan
 
 HISTORY = 60.0  # seconds before the current plan's start whose plans and replans are marked
 STATES = ("pending", "dispatched", "running", "paused", "done", "failed", "cancelled")
@@ -81,80 +83,76 @@ def offline_gantt(plan: PartialOrderPlan, title: str) -> Gantt:
 
 
 def live_gantt(
-    plan: Mapping[str, Any],
-    execution: Mapping[str, Any],
-    events: Sequence[Mapping[str, Any]],
-    tasks: Sequence[Mapping[str, Any]],
+    plan: Plan,
+    execution: ExecutionStatus,
+    events: Sequence[Event],
+    tasks: Sequence[ExecutorTask],
     now: float,
 ) -> Gantt:
     """The chart of the running robot's plan (a ``plan/show`` reply's ``plan`` and
     ``execution``), its events (``events``, oldest first) and tasks (``task/list``)."""
-    plan_id = plan["id"]
-    origin = float(plan.get("created") or now)
+    plan_id = plan.id
+    origin = plan.created or now
     for event in events:
-        if event.get("kind") == "PLAN_START" and event.get("subject") == f"plan {plan_id}":
-            origin = float(event["stamp"])
-    executing = execution.get("plan") == plan_id
-    states = {s["index"]: s["state"] for s in execution.get("steps", [])} if executing else {}
+        if event.kind == "PLAN_START" and event.subject == f"plan {plan_id}":
+            origin = event.stamp
+    executing = execution.plan == plan_id
+    states = {s.index: s.state for s in execution.steps} if executing else {}
     ran: dict[int, tuple[float, float | None]] = {}
     unended: dict[str, float] = {}  # a step a new plan adopts ran since an older plan's dispatch
     for event in events:
-        data = event.get("data") or {}
-        kind, at = event.get("kind"), float(event.get("stamp", 0.0)) - origin
+        kind, at, step = event.kind, event.stamp - origin, event.data.get("step")
         if kind == "DISPATCH":
-            unended[str(event.get("subject"))] = at
+            unended[event.subject] = at
         elif kind in _ENDS:
-            unended.pop(str(event.get("subject")), None)
-        if data.get("plan") != plan_id or not isinstance(data.get("step"), int):
+            unended.pop(event.subject, None)
+        if event.data.get("plan") != plan_id or not isinstance(step, int):
             continue
         if kind == "DISPATCH":
-            ran[data["step"]] = (at, None)
-        elif kind in _ENDS and data["step"] in ran:
-            ran[data["step"]] = (ran[data["step"]][0], at)
+            ran[step] = (at, None)
+        elif kind in _ENDS and step in ran:
+            ran[step] = (ran[step][0], at)
     # the newest task of a step (a restarted step has several)
-    by_name = {str(t.get("name")): t for t in sorted(tasks, key=lambda t: _number(t.get("id")))}
+    by_name = {t.name: t for t in sorted(tasks, key=lambda t: _number(t.id))}
     steps = []
-    for step in plan.get("steps", []):
-        label = f"{step['action']}({', '.join(step['args'])})"
-        state = _state(states.get(step["index"]), plan.get("state", ""))
-        span = ran.get(step["index"])
+    for planned in plan.steps:
+        label = f"{planned.action}({', '.join(planned.args)})"
+        state = _state(states.get(planned.index), plan.state.value)
+        span = ran.get(planned.index)
         if span is None and state in ("dispatched", "running", "paused") and label in unended:
             span = (unended[label], None)
-        details = [label, f"state {state}", _planned(step["start"], step["duration"])]
+        details = [label, f"state {state}", _planned(planned.start, planned.duration)]
         task = by_name.get(label)
         if task is not None and span is not None:
-            details.append(f"task {task['id']}: {task.get('behavior', '')} {task.get('state', '')}")
-            providers = task.get("providers") or {}
-            if providers:
-                uses = ", ".join(f"{c} → {p}" for c, p in sorted(providers.items()))
+            details.append(f"task {task.id}: {task.behavior} {task.state}")
+            if task.providers:
+                uses = ", ".join(f"{c} → {p}" for c, p in sorted(task.providers.items()))
                 details.append(f"configuration: {uses}")
-            if task.get("reason"):
-                details.append(f"reason: {task['reason']}")
+            if task.reason:
+                details.append(f"reason: {task.reason}")
         steps.append(
-            GanttStep(step["index"], label, float(step["start"]), step["duration"], state,
-                      span, tuple(details))
+            GanttStep(planned.index, label, planned.start, planned.duration, state, span,
+                      tuple(details))
         )  # fmt: skip
     marks = []
     for event in events:
-        kind, at = event.get("kind"), float(event.get("stamp", 0.0)) - origin
+        kind, at = event.kind, event.stamp - origin
         if at < -HISTORY or kind not in ("PLAN_START", "REPLAN"):
             continue
         if kind == "PLAN_START":
-            marks.append(Mark(at, "plan", str(event.get("subject", "plan"))))
+            marks.append(Mark(at, "plan", event.subject or "plan"))
         else:
-            reason = (event.get("data") or {}).get("reason", "")
+            reason = event.data.get("reason", "")
             marks.append(Mark(at, "replan", f"replan: {reason}" if reason else "replan"))
-    goals = ", ".join(str(g) for g in plan.get("goal_ids", [])) or "-"
-    title = (
-        f"plan {plan_id}: {plan.get('state', '')}, by {plan.get('engine', '')}, for goals {goals}"
-    )
+    goals = ", ".join(str(g) for g in plan.goal_ids) or "-"
+    title = f"plan {plan_id}: {plan.state.value}, by {plan.engine}, for goals {goals}"
     return Gantt(title, tuple(steps), tuple(marks), now - origin)
 
 
-def _number(value: Any) -> float:
+def _number(value: str) -> float:
     try:
         return float(value)
-    except (TypeError, ValueError):
+    except ValueError:
         return math.inf
 
 

@@ -1,9 +1,9 @@
 """What the dashboard knows of a running robot, and the views the page shows of it.
 
-:class:`LiveState` is plain data with no bus in it: the feed hands it replies of the
-executive's verbs and the messages of its bus subscriptions, and asks it for views
-(JSON objects the page renders, the pictures among them as SVG). One owner changes it:
-the dashboard's event loop (see :mod:`executive.dashboard.feed`).
+:class:`LiveState` is plain data with no bus in it: the feed hands it the records of the
+executive's replies and of its bus subscriptions, and asks it for views (JSON objects
+the page renders, the pictures among them as SVG). One owner changes it: the
+dashboard's event loop (see :mod:`executive.dashboard.feed`).
 """
 
 from __future__ import annotations
@@ -14,11 +14,15 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from executive.bus.api.components import lifecycle
 from executive.bus.event_text import describe
-from executive.bus.payloads import DiagnosisInfo
+from executive.bus.payloads import ComponentState, DiagnosisInfo
+from executive.bus.reports import ComponentEntry, ExecutionStatus, ExecutorTask
+from executive.bus.schema import plain
 from executive.bus.states import Lifecycle
 from executive.dashboard import gantt, graph, svg
 from knowledge.description import FunctionalitySpec, RobotDescription
+from knowledge.records import ComponentRecord, Event, Goal, Plan
 
 OBSERVATION_HISTORY = 300.0  # seconds of measured values kept per observation (sparklines)
 EVENTS_KEPT = 1000  # events the page can filter
@@ -48,7 +52,7 @@ def stale(kind: str) -> set[str]:
     return found
 
 
-def component_state(lifecycle: Mapping[str, Any] | None, *, permanent: bool, faulty: bool) -> str:
+def component_state(lifecycle: ComponentState | None, *, permanent: bool, faulty: bool) -> str:
     """How a component is drawn: running, starting, paused, stopping, stopped, faulty
     (diagnosed, being repaired after a fault, or crashed) or permanently faulty."""
     if permanent:
@@ -57,12 +61,9 @@ def component_state(lifecycle: Mapping[str, Any] | None, *, permanent: bool, fau
         return "faulty"
     if lifecycle is None:
         return "stopped"
-    try:
-        phase = Lifecycle(lifecycle.get("state"))
-    except ValueError:
-        return "stopped"
+    phase = lifecycle.state
     if phase is Lifecycle.FAILED or (
-        phase is Lifecycle.EXITED and (lifecycle.get("exit_code") or lifecycle.get("signal"))
+        phase is Lifecycle.EXITED and (lifecycle.exit_code or lifecycle.signal)
     ):
         return "faulty"
     return {
@@ -102,9 +103,9 @@ class Track:
         }
 
 
-def _number(event: Mapping[str, Any]) -> int:
-    number = event.get("id")
-    return number if isinstance(number, int) else 0
+def event_item(event: Event) -> dict[str, Any]:
+    """An event as the page shows it: its JSON form with its readable line (``text``)."""
+    return {**plain(event), "text": describe(event)}
 
 
 def _numbers(values: Any) -> dict[str, float]:
@@ -123,70 +124,65 @@ class LiveState:
     def __init__(self, robot: RobotDescription) -> None:
         self.robot = robot
         self.layout = graph.layout(robot)
-        self.goals: list[dict[str, Any]] = []
-        self.plan: dict[str, Any] | None = None
-        self.execution: dict[str, Any] = {}
-        self.tasks: list[dict[str, Any]] = []
-        self.lifecycles: dict[str, dict[str, Any]] = {}
-        self.faults: dict[str, dict[str, Any]] = {}
+        self.goals: list[Goal] = []
+        self.plan: Plan | None = None
+        self.execution = ExecutionStatus()
+        self.tasks: list[ExecutorTask] = []
+        self.lifecycles: dict[str, ComponentState] = {}
+        self.faults: dict[str, ComponentRecord] = {}
         self.unusable: set[str] = set()
-        self.diagnosis: dict[str, Any] = {}
+        self.diagnosis: DiagnosisInfo | None = None
         self.repairing: set[str] = set()
         self.tracks: dict[str, Track] = {}
-        self.events: collections.deque[dict[str, Any]] = collections.deque(maxlen=EVENTS_KEPT)
-        self.plan_events: collections.deque[dict[str, Any]] = collections.deque(
-            maxlen=PLAN_EVENTS_KEPT
-        )
+        self.events: collections.deque[Event] = collections.deque(maxlen=EVENTS_KEPT)
+        self.plan_events: collections.deque[Event] = collections.deque(maxlen=PLAN_EVENTS_KEPT)
         self._seen: set[int] = set()
         self.alive = False
         self.problem = ""
 
     # --- what the executive answered ---------------------------------------------------
 
-    def set_goals(self, goals: list[dict[str, Any]]) -> None:
+    def set_goals(self, goals: list[Goal]) -> None:
         self.goals = goals
 
-    def set_plan(self, plan: dict[str, Any] | None, execution: dict[str, Any]) -> None:
+    def set_plan(self, plan: Plan | None, execution: ExecutionStatus) -> None:
         self.plan, self.execution = plan, execution
 
-    def set_tasks(self, tasks: list[dict[str, Any]]) -> None:
+    def set_tasks(self, tasks: list[ExecutorTask]) -> None:
         self.tasks = tasks
 
-    def set_components(self, components: Iterable[Mapping[str, Any]]) -> None:
+    def set_components(self, components: Iterable[ComponentEntry]) -> None:
         for c in components:
-            self.lifecycles[str(c.get("component"))] = dict(c)
+            self.lifecycles[c.component] = lifecycle(c)
 
-    def set_faults(self, faults: Iterable[Mapping[str, Any]], unusable: Iterable[str]) -> None:
-        self.faults = {str(f["name"]): dict(f) for f in faults}
+    def set_faults(self, faults: Iterable[ComponentRecord], unusable: Iterable[str]) -> None:
+        self.faults = {f.name: f for f in faults}
         self.unusable = set(unusable)
 
-    def set_events(self, events: Iterable[dict[str, Any]]) -> None:
+    def set_events(self, events: Iterable[Event]) -> None:
         """The event log's newest events, read when the feed starts (live ones may have
         come first: both are kept in the log's order)."""
         for event in events:
             self.add_event(event)
         for kept in (self.events, self.plan_events):
-            ordered = sorted(kept, key=_number)
+            ordered = sorted(kept, key=lambda e: e.id)
             kept.clear()
             kept.extend(ordered)
 
     # --- what the bus brought ----------------------------------------------------------
 
-    def add_event(self, event: dict[str, Any]) -> bool:
-        """Keep a logged event with its readable line (``text``, for the page); returns
-        whether it is new (the log and the live subscription may both bring it)."""
-        number = event.get("id")
-        if isinstance(number, int):
-            if number in self._seen:
-                return False
-            self._seen.add(number)
-            if len(self._seen) > 4 * PLAN_EVENTS_KEPT:
-                oldest = sorted(self._seen)[: 2 * PLAN_EVENTS_KEPT]
-                self._seen.difference_update(oldest)
-        event.setdefault("text", describe(event))
+    def add_event(self, event: Event) -> bool:
+        """Keep a logged event; returns whether it is new (the log and the live
+        subscription may both bring it)."""
+        number = event.id
+        if number in self._seen:
+            return False
+        self._seen.add(number)
+        if len(self._seen) > 4 * PLAN_EVENTS_KEPT:
+            oldest = sorted(self._seen)[: 2 * PLAN_EVENTS_KEPT]
+            self._seen.difference_update(oldest)
         self.events.append(event)
-        kind = str(event.get("kind", ""))
-        subject = str(event.get("subject", ""))
+        kind, subject = event.kind, event.subject
         if kind in _PLAN_KINDS:
             self.plan_events.append(event)
         if kind == "FAULT" and subject in self.robot.components:
@@ -195,14 +191,13 @@ class LiveState:
             self.repairing.discard(subject)
         return True
 
-    def set_lifecycle(self, payload: Mapping[str, Any]) -> None:
-        name = str(payload.get("component", ""))
-        self.lifecycles[name] = dict(payload)
-        if payload.get("state") == Lifecycle.READY.value:
-            self.repairing.discard(name)
+    def set_lifecycle(self, state: ComponentState) -> None:
+        self.lifecycles[state.component] = state
+        if state.state is Lifecycle.READY:
+            self.repairing.discard(state.component)
 
-    def set_diagnosis(self, payload: dict[str, Any]) -> None:
-        self.diagnosis = payload
+    def set_diagnosis(self, diagnosis: DiagnosisInfo | None) -> None:
+        self.diagnosis = diagnosis
 
     def add_observation(self, payload: Mapping[str, Any], now: float | None = None) -> Track:
         resource = payload.get("resource") or []
@@ -228,44 +223,40 @@ class LiveState:
 
     @property
     def diagnosed(self) -> frozenset[str]:
-        if not self.diagnosis or self.diagnosis.get("status") == "OK":
+        if self.diagnosis is None or self.diagnosis.status == "OK":
             return frozenset()
-        try:
-            return DiagnosisInfo.from_payload(self.diagnosis).possibly_faulty
-        except (KeyError, TypeError, ValueError):
-            return frozenset()
+        return self.diagnosis.possibly_faulty
 
-    def active_tasks(self) -> list[dict[str, Any]]:
-        return [t for t in self.tasks if t.get("state") in ("starting", "running", "paused")]
+    def active_tasks(self) -> list[ExecutorTask]:
+        return [t for t in self.tasks if t.state in ("starting", "running", "paused")]
 
     def graph_state(self) -> graph.GraphState:
         diagnosed = self.diagnosed
         states = {}
         faults = {}
         for name, spec in self.robot.components.items():
-            record = self.faults.get(name, {})
-            permanent = bool(record.get("permanent_fault")) or name in self.unusable
+            record = self.faults.get(name)
+            permanent = (record is not None and record.permanent_fault) or name in self.unusable
             states[name] = component_state(
                 self.lifecycles.get(name),
                 permanent=permanent,
                 faulty=name in diagnosed or name in self.repairing,
             )
             limit = spec.max_faults if isinstance(spec, FunctionalitySpec) else 0
-            if record.get("fault_count"):
-                faults[name] = (int(record["fault_count"]), limit)
+            if record is not None and record.fault_count:
+                faults[name] = (record.fault_count, limit)
         serves: dict[str, list[str]] = {}
-        used = set()
+        used: set[tuple[str, str]] = set()
         for task in self.active_tasks():
-            label = f"task {task['id']} {task.get('name', '')}"
-            for capability, provider in (task.get("providers") or {}).items():
-                used.add((str(capability), str(provider)))
-            for name in [*task.get("functionalities", []), task.get("behavior")]:
+            label = f"task {task.id} {task.name}"
+            used.update(task.providers.items())
+            for name in [*task.functionalities, task.behavior]:
                 if name:
-                    serves.setdefault(str(name), []).append(label)
+                    serves.setdefault(name, []).append(label)
         topics = set(self.robot.topics)
         failed = {
             str(r)
-            for observer in self.diagnosis.get("failed", []) if self.diagnosed
+            for observer in (self.diagnosis.failed if self.diagnosis and diagnosed else ())
             for r in observer.get("resource", []) if str(r) in topics
         }  # fmt: skip
         return graph.GraphState(
@@ -283,7 +274,7 @@ class LiveState:
         if name == "status":
             return {"robot": self.robot.name, "alive": self.alive, "problem": self.problem}
         if name == "goals":
-            return {"goals": self.goals}
+            return {"goals": plain(self.goals)}
         if name == "plan":
             return self.plan_view(now)
         if name == "components":
@@ -291,7 +282,7 @@ class LiveState:
         if name == "observations":
             return {"observations": [t.view() for t in self.tracks.values()], "now": now}
         if name == "events":
-            return {"events": list(self.events)}
+            return {"events": [event_item(e) for e in self.events]}
         raise KeyError(name)
 
     def plan_view(self, now: float) -> dict[str, Any]:
@@ -299,8 +290,8 @@ class LiveState:
             return {"plan": None, "title": "no plan yet", "svg": "", "steps": []}
         chart = gantt.live_gantt(self.plan, self.execution, self.plan_events, self.tasks, now)
         return {
-            "plan": self.plan["id"],
-            "state": self.plan.get("state"),
+            "plan": self.plan.id,
+            "state": self.plan.state.value,
             "title": chart.title,
             "svg": svg.inline(gantt.render(chart)),
             "steps": [
@@ -313,17 +304,18 @@ class LiveState:
         state = self.graph_state()
         components = []
         for name, spec in self.robot.components.items():
-            lifecycle = self.lifecycles.get(name, {})
-            record = self.faults.get(name, {})
+            lifecycle = self.lifecycles.get(name)
+            record = self.faults.get(name)
             components.append(
                 {
                     "name": name,
                     "kind": spec.kind.value,
                     "state": state.states.get(name, "stopped"),
-                    "lifecycle": lifecycle.get("state", "stopped"),
-                    "pid": lifecycle.get("pid"),
-                    "reason": lifecycle.get("reason", "") or record.get("reason", ""),
-                    "faults": int(record.get("fault_count", 0) or 0),
+                    "lifecycle": lifecycle.state.value if lifecycle else "stopped",
+                    "pid": lifecycle.pid if lifecycle else None,
+                    "reason": (lifecycle.reason if lifecycle else "")
+                    or (record.reason if record else ""),
+                    "faults": record.fault_count if record else 0,
                     "max_faults": spec.max_faults if isinstance(spec, FunctionalitySpec) else None,
                     "permanent": state.states.get(name) == "permanently faulty",
                     "diagnosed": name in state.diagnosed,
@@ -331,18 +323,13 @@ class LiveState:
                 }
             )
         configurations = [
-            {
-                "id": t.get("id"),
-                "name": t.get("name"),
-                "behavior": t.get("behavior"),
-                "state": t.get("state"),
-                "providers": t.get("providers") or {},
-            }
+            {"id": t.id, "name": t.name, "behavior": t.behavior, "state": t.state,
+             "providers": dict(t.providers)}
             for t in self.active_tasks()
-        ]
+        ]  # fmt: skip
         return {
             "svg": svg.inline(graph.render(self.layout, state)),
             "components": components,
             "configurations": configurations,
-            "diagnosis": self.diagnosis,
+            "diagnosis": plain(self.diagnosis) if self.diagnosis is not None else {},
         }

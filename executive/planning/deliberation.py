@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from executive.bus.clock import Clock
+from executive.bus.reports import PlannerStatus
 from executive.bus.service import Context
 from executive.planning.blocked_tasks import BlockedTasks, blocked_now
 from executive.planning.goal_planner import GoalPlanner
@@ -101,7 +102,7 @@ class Deliberation:
     def diagnosed(self, payload: Mapping[str, Any]) -> None:
         self.integrity_loop.diagnosed(payload)
 
-    def status(self) -> dict[str, Any]:
+    def status(self) -> PlannerStatus:
         """What the goal planner does now (never waits for it)."""
         return self.goals.status()
 

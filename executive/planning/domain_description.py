@@ -8,7 +8,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from executive.bus.api.planning import DomainReply
+from executive.bus.api.planning import DomainAction, DomainReply, DomainSignature, DomainType
 from knowledge.description import GoalArg, RobotDescription
 from knowledge.domain import DomainInfo
 
@@ -25,9 +25,9 @@ def describe(
     return DomainReply(
         name=domain.name,
         path=str(domain.path),
-        types=[{"name": t, "parent": domain.supertypes.get(t) or "object"} for t in domain.types],
-        predicates=[{"name": n, "parameters": list(p)} for n, p in domain.predicates.items()],
-        functions=[{"name": n, "parameters": list(p)} for n, p in domain.functions.items()],
+        types=[DomainType(t, domain.supertypes.get(t) or "object") for t in domain.types],
+        predicates=[DomainSignature(n, tuple(p)) for n, p in domain.predicates.items()],
+        functions=[DomainSignature(n, tuple(p)) for n, p in domain.functions.items()],
         actions=[_action(a.name, domain, robot, blocked) for a in domain.actions.values()],
         constants=dict(domain.constants),
     )
@@ -35,19 +35,19 @@ def describe(
 
 def _action(
     name: str, domain: DomainInfo, robot: RobotDescription, blocked: Mapping[str, str] | None
-) -> dict[str, Any]:
+) -> DomainAction:
     action = domain.actions[name]
     task = robot.tasks.get(name)
-    return {
-        "name": name,
-        "parameters": [[f"?{p}", t] for p, t in action.parameters],
-        "durative": action.durative,
-        "duration": action.duration,
-        "task": None if task is None else name,
-        "behavior": None if task is None else task.behavior,
-        "goal": {} if task is None else {k: _goal_arg(v) for k, v in task.goal.items()},
-        "blocked": None if blocked is None else blocked.get(name),
-    }
+    return DomainAction(
+        name=name,
+        parameters=tuple((f"?{p}", t) for p, t in action.parameters),
+        durative=action.durative,
+        duration=action.duration,
+        task=None if task is None else name,
+        behavior=None if task is None else task.behavior,
+        goal={} if task is None else {k: _goal_arg(v) for k, v in task.goal.items()},
+        blocked=None if blocked is None else blocked.get(name),
+    )
 
 
 def _goal_arg(arg: GoalArg) -> Any:

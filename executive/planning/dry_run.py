@@ -11,9 +11,8 @@ waits for the goal planner's (one engine, one worker).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
 
-from executive.bus.api.planning import DryRunReply
+from executive.bus.api.planning import DryRunReply, PlannedStep, StepAfter
 from executive.bus.clock import Clock
 from executive.planning.expression import Signature, WorldState, parse
 from executive.planning.goals import normalized, specs
@@ -77,22 +76,22 @@ def dry_run(
         planned=list(outcome.planned) if outcome.ok else [],
         achieved=achieved,
         unreachable=unreachable,
-        steps=steps_json(plan),
+        steps=planned_steps(plan),
         makespan=plan.makespan if plan is not None else None,
         asked=asked,
     )
 
 
-def steps_json(plan: PartialOrderPlan | None) -> list[dict[str, Any]]:
-    """Return a plan's steps as plain data, as ``dura plan --offline --json`` prints them."""
+def planned_steps(plan: PartialOrderPlan | None) -> list[PlannedStep]:
+    """A plan's steps, as ``dura plan --offline --json`` prints them."""
     return [
-        {
-            "index": s.index,
-            "action": s.action,
-            "args": list(s.args),
-            "start": s.start,
-            "duration": s.duration,
-            "after": [{"step": p.step, "at": p.at.value} for p in s.after],
-        }
+        PlannedStep(
+            s.index,
+            s.action,
+            tuple(s.args),
+            s.start,
+            s.duration,
+            tuple(StepAfter(p.step, p.at.value) for p in s.after),
+        )
         for s in (plan.steps if plan is not None else ())
     ]

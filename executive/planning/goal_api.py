@@ -14,17 +14,16 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from executive.bus.api import planning as api
+from executive.bus.reports import DiagnosisInfo, ExecutionStatus, PlannerStatus
 from executive.bus.service import Context
 from executive.bus.verb import Empty
 from executive.planning.blocked_tasks import blocked_now
 from executive.planning.deliberation import Deliberation
 from executive.planning.domain_description import describe
 from executive.planning.dry_run import dry_run
-from executive.planning.goal_planner import PlannerStatus
 from executive.planning.goals import submit
-from executive.planning.plan_executor import ExecutionStatus
 from knowledge.errors import DuraError
-from knowledge.records import Event, to_plain
+from knowledge.records import Event
 
 SECTIONS = ("tasks", "components")  # what other services add to ``status``
 MAX_EVENTS = 10_000  # the most events one request returns
@@ -88,27 +87,27 @@ class GoalApi:
             keep=request.keep,
         )
         planning.goals.wake(f"goal {goal.id} added")
-        return api.GoalReply(to_plain(goal))
+        return api.GoalReply(goal)
 
     def _goal_list(self, request: api.GoalQuery) -> api.GoalsReply:
-        return api.GoalsReply(to_plain(self.context.kb.goals(request.states)))
+        return api.GoalsReply(self.context.kb.goals(request.states))
 
     def _goal_show(self, request: api.GoalId) -> api.GoalHistory:
         kb = self.context.kb
         goal = kb.goal(request.id)
         subject = f"goal {goal.id}"
         events = [e for e in kb.events() if e.subject == subject or _names_goal(e, goal.id)]
-        return api.GoalHistory(to_plain(goal), to_plain(events))
+        return api.GoalHistory(goal, events)
 
     def _goal_cancel(self, request: api.GoalId) -> api.GoalReply:
         """Cancelled by the goal planner's thread, which owns goal states; the reply is
         the goal as it left that thread (or the reason it could not be cancelled)."""
         planning = self.planning()
-        return api.GoalReply(to_plain(planning.goals.cancel(request.id)))
+        return api.GoalReply(planning.goals.cancel(request.id))
 
     def _plan_show(self, request: Empty) -> api.PlanReply:
         plan = self.context.kb.latest_plan()
-        return api.PlanReply(None if plan is None else to_plain(plan), self._execution())
+        return api.PlanReply(plan, self._execution())
 
     def _plan_dry_run(self, request: api.DryRun) -> api.DryRunReply:
         """Plan for the open goals and those asked about on the live state; nothing
@@ -137,29 +136,28 @@ class GoalApi:
             limit=min(request.limit, MAX_EVENTS),
             oldest=request.oldest,
         )
-        return api.EventsReply(to_plain(events))
+        return api.EventsReply(events)
 
     def _status(self, request: Empty) -> api.StatusReply:
         kb = self.context.kb
         plan = kb.latest_plan()
         current = self.current()
+        diagnoses = self.diagnoses()
         return api.StatusReply(
             robot=self.context.robot.name,
-            goals=to_plain(kb.goals()),
-            plan=None if plan is None else to_plain(plan),
+            goals=kb.goals(),
+            plan=plan,
             execution=self._execution(),
-            diagnoses=self.diagnoses(),
-            faults=to_plain([c for c in kb.components() if c.fault_count or c.permanent_fault]),
+            diagnoses=DiagnosisInfo.from_payload(diagnoses) if diagnoses else api.NoDiagnosis(),
+            faults=[c for c in kb.components() if c.fault_count or c.permanent_fault],
             tasks=self._section("tasks"),
             components=self._section("components"),
             planning=current.status() if current is not None else _STARTING,
         )
 
-    def _execution(self) -> dict[str, Any]:
+    def _execution(self) -> ExecutionStatus:
         current = self.current()
-        return (
-            current.executor.status() if current is not None else dict(to_plain(ExecutionStatus()))
-        )
+        return current.executor.status() if current is not None else ExecutionStatus()
 
     def _section(self, name: str) -> Any:
         """A section another service adds to ``status``; its error if it did not answer."""
@@ -169,10 +167,10 @@ class GoalApi:
         try:
             return section()
         except DuraError as e:
-            return {"error": str(e)}
+            return api.Unanswered(str(e))
 
 
-_STARTING = to_plain(PlannerStatus(starting=True))  # the planner is warming up
+_STARTING = PlannerStatus(starting=True)  # the planner is warming up
 
 
 def _names_goal(event: Event, goal_id: int) -> bool:

@@ -30,15 +30,14 @@ steps under way with it (critical ones too: nobody wants what they do any more).
 
 from __future__ import annotations
 
-import enum
 import logging
 import threading
 import time
 from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
 
+from executive.bus.reports import PlannerStatus, RoundPhase
 from executive.bus.worker import Worker
 from executive.planning.expression import Signature, WorldState
 from executive.planning.goal_keeper import GoalKeeper, KeeperLinks
@@ -51,32 +50,14 @@ from executive.planning.state_change import Change, apply_change
 from knowledge.domain import DomainInfo
 from knowledge.errors import DuraError, KnowledgeError
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.records import Fact, Goal, GoalState, PlanState, to_plain
+from knowledge.records import Fact, Goal, GoalState, PlanState
+
+__all__ = ["GoalPlanner", "PlannerStatus", "RoundPhase"]  # the status records live in the bus API
 
 log = logging.getLogger("dura.goal_planner")
 
 CANCEL_WAIT = 10.0  # seconds a cancel waits for the goal planner's thread to take it up
 PAUSE_SLICE = 0.5  # seconds between looks at a stop while critical tasks finish
-
-
-class RoundPhase(enum.Enum):
-    """Where a planning round is."""
-
-    PAUSING = "pausing"  # the executor pauses; critical tasks finish first
-    SEARCHING = "searching"  # the planner searches for a plan
-
-
-@dataclass(frozen=True)
-class PlannerStatus:
-    """What the goal planner is doing, as of its last job (for ``dura status``)."""
-
-    planning: bool = False  # a round is under way
-    phase: RoundPhase | None = None
-    reason: str = ""  # why it began
-    goals: tuple[int, ...] = ()  # the goals open when it began
-    since: float | None = None  # when it began (seconds since the epoch)
-    planned: tuple[int, ...] = ()  # the goals of the plan handed to the executor
-    starting: bool = False  # the planner is still loading the domain (at the start)
 
 
 @dataclass
@@ -158,9 +139,9 @@ class GoalPlanner:
             self._search.stop()
             self._worker.stop()
 
-    def status(self) -> dict[str, Any]:
+    def status(self) -> PlannerStatus:
         """What the goal planner is doing; never waits for its thread."""
-        return dict(to_plain(self._snapshot))
+        return self._snapshot
 
     def _after_each(self) -> None:
         r = self._round

@@ -45,6 +45,7 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from executive.bus.clock import Clock, system_clock
+from executive.bus.reports import ExecutionStatus, GoalProgress, StepStatus
 from executive.bus.worker import Worker
 from executive.planning.expression import WorldState, atoms
 from executive.planning.goals import GoalSpec
@@ -63,7 +64,7 @@ from executive.planning.step_run import (
 )
 from executive.planning.task_runner import Progress, StepReport, StepTask, TaskRunner
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.records import Fact, GoalState, PlanState, to_plain
+from knowledge.records import Fact, GoalState, PlanState
 
 # the runner port and crash recovery moved to modules of their own; callers keep
 # importing them from here
@@ -79,30 +80,6 @@ __all__ = [
 ]
 
 T = TypeVar("T")
-
-
-@dataclass(frozen=True)
-class StepStatus:
-    index: int
-    step: str  # its label, ``move_to(dock, lab)``
-    state: str
-
-
-@dataclass(frozen=True)
-class GoalProgress:
-    id: int
-    achieved: bool
-
-
-@dataclass(frozen=True)
-class ExecutionStatus:
-    """How the execution stands, as of the executor's last job (for ``dura status``)."""
-
-    plan: int | None = None
-    paused: bool = False
-    failed: bool = False
-    steps: tuple[StepStatus, ...] = ()
-    goals: tuple[GoalProgress, ...] = ()
 
 
 @dataclass
@@ -268,10 +245,10 @@ class PlanExecutor:
         planner plans from (a new plan either adopts such a step or it is undone)."""
         return self._call(self._planning_facts)
 
-    def status(self) -> dict[str, Any]:
+    def status(self) -> ExecutionStatus:
         """The current plan and the state of each step (for ``dura status``), as of the
         last job: it never waits for the executor's thread."""
-        return dict(to_plain(self._snapshot))
+        return self._snapshot
 
     # --- work on the executor's thread --------------------------------------------------
 

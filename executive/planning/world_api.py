@@ -27,7 +27,6 @@ from executive.planning.expression import (
 from executive.planning.integrity import Trigger
 from executive.planning.warm_up import WarmUp
 from knowledge.errors import DuraError, KnowledgeError
-from knowledge.records import Fact
 from knowledge.transitions import PlanState
 from knowledge.yamlsource import did_you_mean
 
@@ -70,7 +69,7 @@ class WorldApi:
         if warm is not None:
             pattern.check(Signature.of(warm.domain, kb.objects()))
         facts = [f for f in kb.facts() if pattern.matches(f)]
-        return api.StateReply([_fact(f) for f in facts], kb.objects())
+        return api.StateReply(facts, kb.objects())
 
     def _state_change(self, request: api.FactChange, *, unset: bool) -> api.FactReply:
         planning = self.planning()
@@ -86,7 +85,7 @@ class WorldApi:
         planning.executor.facts_changed([(fact.name, fact.args)])
         by = "the user" if request.source == "user" else request.source
         planning.goals.wake(f"{fact} {'unset' if unset else 'set'} by {by}")
-        return api.FactReply(_fact(fact))
+        return api.FactReply(fact)
 
     def _object_add(self, request: api.ObjectAdd) -> api.ObjectAdd:
         domain = self.planning().domain
@@ -128,7 +127,7 @@ class WorldApi:
             )
         planning.executor.facts_changed()
         planning.goals.wake(f"object {name} removed by the user")
-        return api.StateReply([_fact(f) for f in facts], {name: objects[name]})
+        return api.StateReply(facts, {name: objects[name]})
 
     def _naming(self, name: str, planning: Deliberation) -> list[str]:
         """Who names an object: open goals, the current plan's steps, integrity rules."""
@@ -148,7 +147,3 @@ class WorldApi:
             if name in named_objects(rule.goal) | named_objects(condition):
                 users.append(f"integrity rule '{rule.name}' ({rule.where})")
         return users
-
-
-def _fact(fact: Fact) -> dict[str, Any]:
-    return {"name": fact.name, "args": list(fact.args), "value": fact.value, "text": str(fact)}

@@ -23,6 +23,7 @@ import threading
 from typing import Any
 
 from executive.bus.api.planning import GOAL_ADD, GoalAdd
+from executive.bus.schema import plain
 from executive.bus.service import Context, Service
 from executive.ros2.cdr import CdrError
 from executive.ros2.link import Ros2Link
@@ -136,8 +137,8 @@ class Ros2Goals(Service):
         except DuraError as e:
             log.info("goal from ROS 2 refused: %s", e)
             return {"expression": request.expression, "accepted": False, "reason": str(e)}
-        log.info("goal %s from ROS 2: %s", goal.get("id"), request.expression)
-        return {"expression": request.expression, "accepted": True, "goal": goal}
+        log.info("goal %s from ROS 2: %s", goal.id, request.expression)
+        return {"expression": request.expression, "accepted": True, "goal": plain(goal)}
 
     def _reply(self, reply: dict[str, Any]) -> None:
         if self._writer is None:

@@ -11,6 +11,7 @@ components (the task executor, in the executive), else straight to the launcher.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import socket
 from typing import Any, Protocol
 
@@ -27,6 +28,7 @@ from executive.bus.api.components import (
     LogReply,
 )
 from executive.bus.payloads import ComponentState
+from executive.bus.reports import ComponentEntry
 from executive.bus.service import Context, Service
 from executive.bus.verb import Empty
 from executive.runtime.launcher import Launcher
@@ -89,7 +91,7 @@ class ComponentApi(Service):
         launcher = self.launcher
         return ComponentsReply(
             [
-                {**listed(launcher, state), "log": launcher.log_path(state.component)}
+                dataclasses.replace(listed(launcher, state), log=launcher.log_path(state.component))
                 for state in launcher.states()
             ]
         )
@@ -111,19 +113,22 @@ class ComponentApi(Service):
         return LogReply(name, self.launcher.log_path(name), self.launcher.logs(name, request.lines))
 
 
-def listed(launcher: Launcher, state: ComponentState) -> dict[str, Any]:
+def listed(launcher: Launcher, state: ComponentState) -> ComponentEntry:
     """A component as lists show it: its kind, host and state, and a pid only while it
     runs (a stopped component's last pid may belong to another process by now). The
     host is its agent's name, or the executive's computer's (``hostname``)."""
     host = launcher.host(state.component)
-    payload = {
-        "kind": launcher.kind(state.component).value,
-        "host": host if host is not None else _hostname(),
-        **state.to_payload(),
-    }
-    if not state.state.is_alive:
-        payload["pid"] = None
-    return payload
+    return ComponentEntry(
+        kind=launcher.kind(state.component).value,
+        host=host if host is not None else _hostname(),
+        component=state.component,
+        state=state.state,
+        pid=state.pid if state.state.is_alive else None,
+        exit_code=state.exit_code,
+        signal=state.signal,
+        reason=state.reason,
+        stamp=state.stamp,
+    )
 
 
 def _hostname() -> str:

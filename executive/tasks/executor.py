@@ -57,6 +57,7 @@ from executive.bus.api.tasks import (
 )
 from executive.bus.clock import Clock
 from executive.bus.payloads import ComponentState
+from executive.bus.reports import ExecutorTask
 from executive.bus.service import Context, Service
 from executive.bus.worker import Worker
 from executive.runtime.launcher import Launcher
@@ -296,14 +297,14 @@ class TaskExecutor(Service):
         enactor = self._running
         return self._call(lambda: enactor.parameters.set(name, key, value), timeout=HAND_TIMEOUT)
 
-    def tasks(self) -> list[dict[str, Any]]:
+    def tasks(self) -> list[ExecutorTask]:
         """Every task with its phase and configuration (newest last), from the snapshot."""
         return self._snapshot.task_list()
 
-    def schedule(self) -> dict[str, Any]:
+    def schedule(self) -> ScheduleReply:
         """The running and waiting tasks in time, and the functionalities each uses, from
         the snapshot."""
-        return self._snapshot.schedule(time.time()).to_payload()
+        return self._snapshot.schedule(time.time())
 
     # --- the worker ----------------------------------------------------------------------
 
@@ -347,7 +348,7 @@ class TaskExecutor(Service):
             TASK_STOP.serve(bus, lambda r: self._on_task(r, stop)),
             TASK_PAUSE.serve(bus, lambda r: self._on_task(r, enactor.supervisor.pause)),
             TASK_RESUME.serve(bus, lambda r: self._on_task(r, enactor.supervisor.resume)),
-            SCHEDULE_SHOW.serve(bus, lambda _: self._schedule_reply()),
+            SCHEDULE_SHOW.serve(bus, lambda _: self.schedule()),
             COMPONENT_RESTART.serve(bus, self._restart_request),
             COMPONENT_FAULT.serve(bus, self._fault_request),
             COMPONENT_RESET.serve(bus, self._reset_request),
@@ -392,15 +393,12 @@ class TaskExecutor(Service):
         """Act on a task on the worker; the task as it is afterwards."""
         ledger = self._running.ledger
 
-        def run() -> dict[str, Any]:
+        def run() -> ExecutorTask:
             task = ledger.get(request.id)
             act(task)
-            return task.view().to_payload()
+            return task.view().status()
 
         return TaskReply(self._call(run))
-
-    def _schedule_reply(self) -> ScheduleReply:
-        return self._snapshot.schedule(time.time())
 
     def _restart_request(self, request: ComponentFault) -> FaultReply:
         return self.fault(request.name, request.reason or "restarted by request")

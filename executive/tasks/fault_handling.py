@@ -151,7 +151,7 @@ class FaultHandler:
         """The component's state with its fault count."""
         record = self.kb.component(name)
         return FaultReply(
-            state=self.launcher.state(name).to_payload(),
+            state=self.launcher.state(name),
             faults=record.fault_count,
             permanent=record.permanent_fault,
         )

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Any
 
 from executive.bus.api.tasks import ScheduleReply
+from executive.bus.reports import ExecutorTask, ScheduledTask
 from executive.tasks.task import TaskView
 
 
@@ -29,9 +29,9 @@ class Snapshot:
         """This snapshot with a newly asked-for task."""
         return dataclasses.replace(self, tasks=(*self.tasks, task))
 
-    def task_list(self) -> list[dict[str, Any]]:
+    def task_list(self) -> list[ExecutorTask]:
         """Every task with its phase and configuration (newest last)."""
-        return [t.to_payload() for t in self.tasks]
+        return [t.status() for t in self.tasks]
 
     def schedule(self, now: float) -> ScheduleReply:
         """The running and waiting tasks in time (seconds from ``now``), the running
@@ -47,6 +47,6 @@ class Snapshot:
             if not t.phase.holds and at is None and t.behind:
                 start = max([0.0, *(ends[b] for b in t.behind if b in ends)])
             ends[t.id] = start + t.duration
-            rows.append({**t.to_payload(), "start": round(start, 3),
-                         "end": round(start + t.duration, 3)})  # fmt: skip
+            rows.append(ScheduledTask(**vars(t.status()), start=round(start, 3),
+                                      end=round(start + t.duration, 3)))  # fmt: skip
         return ScheduleReply(rows, sorted(self.running), sorted(self.faulty))

@@ -14,6 +14,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+from executive.bus.reports import ExecutorTask
 from executive.runtime.launcher import GoalHandle
 from executive.tasks.faults import TaskAction, TaskUsage
 from knowledge.records import TaskState
@@ -113,21 +114,21 @@ class TaskView:
     end: TaskEnd | None = None
     result: Mapping[str, Any] | None = None
 
-    def to_payload(self) -> dict[str, Any]:
+    def status(self) -> ExecutorTask:
         """The task as ``task/list`` shows it."""
-        return {
-            "id": self.id,
-            "name": self.name or self.behavior,
-            "behavior": self.behavior,
-            "goal": dict(self.goal),
-            "state": self.phase.value,
-            "providers": dict(self.providers),
-            "functionalities": sorted(set(self.providers.values())),
-            "duration": self.duration,
-            "reason": self.reason,
-            "ended_by": None if self.end is None else self.end.value,
-            "result": None if self.result is None else dict(self.result),
-        }
+        return ExecutorTask(
+            id=self.id,
+            name=self.name or self.behavior,
+            behavior=self.behavior,
+            goal=dict(self.goal),
+            state=self.phase.value,
+            providers=dict(self.providers),
+            functionalities=tuple(sorted(set(self.providers.values()))),
+            duration=self.duration,
+            reason=self.reason,
+            ended_by=None if self.end is None else self.end.value,
+            result=None if self.result is None else dict(self.result),
+        )
 
 
 Listener = Callable[["TaskHandle"], None]

@@ -3,13 +3,14 @@
 
 The ``dura_robot`` fixture starts the executive of a robot description in a temporary
 folder and returns an :class:`executive.testing.harness.RobotProcess`: submit goals, wait for
-them, inject faults, read events and facts. Every robot it started is stopped at the
-end of the test, with all its components::
+them, inject faults, read events and facts (:class:`executive.testing.client.RobotClient`:
+the goals, events, components and status come as typed records). Every robot it started
+is stopped at the end of the test, with all its components::
 
     def test_pictures(dura_robot):
         robot = dura_robot("robot.yaml")
         goal = robot.submit_goal("(picture_taken lab)")
-        robot.wait_for(goal, "achieved", timeout=60)
+        assert robot.wait_for(goal, "achieved", timeout=60).state.value == "achieved"
         assert "(picture_taken lab)" in robot.facts("picture_taken")
 
 Its sibling ``dura_replay`` puts monitoring in the loop: it replays a recording (a ROS 2
@@ -24,6 +25,8 @@ repair rules, with the recording's time as the clock, and returns the timeline
 - :mod:`.harness` — a robot run by a real ``dura run`` process, driven over the bus
   (:class:`~.harness.RobotProcess`, and :class:`~.harness.ServiceGroupProcess` for a
   service group in a process of its own);
+- :mod:`.client` — what a test asks a running robot over the bus, answered with records
+  (:class:`~.client.RobotClient`, the base of :class:`~.harness.RobotProcess`);
 - :mod:`.replay` — a recording replayed through a robot's monitoring;
 - :mod:`.hosts` — host agents as child processes, and network namespaces to put them
   in.
@@ -40,19 +43,15 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from executive.testing.harness import (
-    GoalEnded,
-    RobotProcess,
-    ServiceGroupProcess,
-    WaitTimedOut,
-    robot_variant,
-)
+from executive.testing.client import GoalEnded, RobotClient, WaitTimedOut
+from executive.testing.harness import RobotProcess, ServiceGroupProcess, robot_variant
 
 if TYPE_CHECKING:
     from monitoring.timeline import Timeline
 
 __all__ = [
     "GoalEnded",
+    "RobotClient",
     "RobotProcess",
     "ServiceGroupProcess",
     "WaitTimedOut",

@@ -1,10 +1,12 @@
 """A robot run by a real ``dura run`` process, driven over the bus: for tests and the demo.
 
 :class:`RobotProcess` starts the executive of a robot description in a folder of its
-own (knowledge base, logs, free loopback endpoint), waits until it answers, and offers
-what a test of a domain needs: submit goals, wait for their outcome, inject faults into
-components, read the event log and the facts. It can also kill the executive (SIGKILL)
-and start it again on the same knowledge base, to test recovery.
+own (knowledge base, logs, free loopback endpoint) and waits until it answers; what a
+test of a domain then asks of it (submit goals, wait for their outcome, inject faults
+into components, read the event log and the facts) is its
+:class:`~executive.testing.client.RobotClient` side. It can also kill the executive
+(SIGKILL) and start it again on the same knowledge base, to test recovery.
+:class:`ServiceGroupProcess` runs a group of services in a process of its own beside it.
 
 The pytest plugin :mod:`executive.testing` hands it to tests as the ``dura_robot``
 fixture.
@@ -28,19 +30,27 @@ from typing import Any
 import yaml
 
 from executive.bus import security
-from executive.bus.api import planning
-from executive.bus.api.components import COMPONENT_INJECT, COMPONENT_LIST, Injection
 from executive.bus.clock import SCALE_VARIABLE, Clock
-from executive.bus.keys import EXECUTIVE_ALIVE, api, service_alive
+from executive.bus.keys import EXECUTIVE_ALIVE, service_alive
 from executive.bus.security import Login
 from executive.bus.session import Bus
-from executive.bus.states import Lifecycle
+from executive.testing.client import INJECT_TIMEOUT, GoalEnded, RobotClient, WaitTimedOut
 from knowledge.errors import BusError, DuraError
-from knowledge.records import GoalState
 from knowledge.robot import load_robot
 
+__all__ = [  # GoalEnded, WaitTimedOut and INJECT_TIMEOUT live in the client; named here too
+    "INJECT_TIMEOUT",
+    "START_TIMEOUT",
+    "GoalEnded",
+    "RobotProcess",
+    "ServiceGroupProcess",
+    "WaitTimedOut",
+    "free_endpoint",
+    "robot_variant",
+    "terminate",
+]
+
 START_TIMEOUT = 60.0  # seconds for the executive to answer after it was started
-INJECT_TIMEOUT = 30.0  # seconds a fault injection waits for its component to run
 
 
 def free_endpoint() -> str:
@@ -83,14 +93,6 @@ def _merge(into: dict[str, Any], changes: Mapping[str, Any]) -> None:
             into[key] = value
 
 
-class GoalEnded(AssertionError):
-    """A goal ended other than expected, or did not end in time (a test failure)."""
-
-
-class WaitTimedOut(AssertionError):
-    """What a test waited for did not happen in time (a test failure)."""
-
-
 def terminate(process: subprocess.Popen[Any], timeout: float) -> None:
     """End a process as Ctrl-C does (SIGTERM), SIGKILL it if it is still there after
     ``timeout`` seconds, and wait for it."""
@@ -103,8 +105,9 @@ def terminate(process: subprocess.Popen[Any], timeout: float) -> None:
             process.wait()
 
 
-class RobotProcess:
-    """The executive of one robot, as a child process (see the module docstring).
+class RobotProcess(RobotClient):
+    """The executive of one robot, as a child process (see the module docstring); the
+    helpers a test calls on it are :class:`~executive.testing.client.RobotClient`'s.
 
     Args:
         description: the robot description (YAML).
@@ -263,176 +266,13 @@ class RobotProcess:
             return "\n".join(self.output.read_text(errors="replace").splitlines()[-lines:])
         return ""
 
-    # --- the bus API ---------------------------------------------------------------------
+    # --- the bus -------------------------------------------------------------------------
 
     @property
     def bus(self) -> Bus:
         if self._bus is None:
             raise DuraError(f"the executive of '{self.robot.name}' does not run")
         return self._bus
-
-    def request(
-        self, verb: str, payload: Mapping[str, Any] | None = None, timeout: float = 30.0
-    ) -> dict[str, Any]:
-        """Ask the executive (``executive/api/<verb>``); raises BusError on an error reply."""
-        return self.bus.request(api(verb), dict(payload or {}), timeout=timeout)
-
-    def submit_goal(
-        self,
-        expression: str,
-        *,
-        priority: int = 0,
-        deadline: float | None = None,
-        keep: bool = False,
-    ) -> int:
-        """Submit a goal (``keep``: a maintenance goal); returns its id. Raises BusError if
-        the executive refuses it."""
-        request = planning.GoalAdd(expression, priority, deadline, keep=keep)
-        return int(planning.GOAL_ADD.call(self.bus, request).goal["id"])
-
-    def goal(self, goal_id: int) -> dict[str, Any]:
-        return planning.GOAL_SHOW.call(self.bus, planning.GoalId(goal_id)).goal
-
-    def goals(self) -> list[dict[str, Any]]:
-        return planning.GOAL_LIST.call(self.bus).goals
-
-    def wait_for(
-        self, goal_id: int, state: str | GoalState = GoalState.ACHIEVED, timeout: float = 60.0
-    ) -> dict[str, Any]:
-        """Wait until a goal is in ``state``; returns the goal.
-
-        Raises:
-            GoalEnded: the goal ended in another state, or ``timeout`` passed (the
-                message has the goal's state and reason and the latest events).
-        """
-        wanted = GoalState(state)
-        deadline = time.monotonic() + timeout
-        while True:
-            goal = self.goal(goal_id)
-            now = GoalState(goal["state"])
-            if now is wanted:
-                return goal
-            ended = not now.is_open and now is not GoalState.UNREACHABLE
-            if ended or time.monotonic() > deadline:
-                why = f": {goal['reason']}" if goal["reason"] else ""
-                raise GoalEnded(
-                    f"goal {goal_id} {goal['expression']} is {now.value}{why}, not "
-                    f"{wanted.value}; the latest events:\n{self._recent()}"
-                )
-            time.sleep(0.05)
-
-    def wait_for_component(
-        self, name: str, state: str = "ready", timeout: float = 60.0
-    ) -> dict[str, Any]:
-        """Wait until the launcher reports a component in ``state`` (``ready``: started
-        and configured, so it takes faults and goals); returns its state payload.
-
-        Raises:
-            WaitTimedOut: not within ``timeout`` seconds (with its last state and the
-                latest events).
-            DuraError: the robot has no such component.
-        """
-        if name not in self.robot.components:
-            raise DuraError(f"robot '{self.robot.name}' has no component '{name}'")
-        deadline = time.monotonic() + timeout
-        while True:
-            found = next((c for c in self.components() if c.get("component") == name), {})
-            if found.get("state") == state:
-                return found
-            if time.monotonic() > deadline:
-                raise WaitTimedOut(
-                    f"component {name} is {found.get('state', 'unknown')}, not {state}, "
-                    f"after {timeout:g} s; the latest events:\n{self._recent()}"
-                )
-            time.sleep(0.05)
-
-    def wait_for_event(
-        self, kind: str, subject: str = "", *, after: int = 0, timeout: float = 60.0
-    ) -> dict[str, Any]:
-        """Wait for the first event of ``kind`` whose subject contains ``subject``,
-        logged after the event numbered ``after``; returns it.
-
-        Raises:
-            WaitTimedOut: none within ``timeout`` seconds (with the latest events).
-        """
-        deadline = time.monotonic() + timeout
-        while True:
-            query = planning.EventQuery(after=after, limit=10_000, kind=kind, oldest=True)
-            for event in planning.EVENTS.call(self.bus, query).events:
-                if subject in event["subject"]:
-                    return event
-            if time.monotonic() > deadline:
-                raise WaitTimedOut(
-                    f"no {kind} event{f' about {subject}' if subject else ''} within "
-                    f"{timeout:g} s; the latest events:\n{self._recent()}"
-                )
-            time.sleep(0.05)
-
-    def _recent(self, count: int = 15) -> str:
-        return "\n".join(
-            f"  {e['kind']} {e['subject']} {e['data']}" for e in self.events()[-count:]
-        )
-
-    def components(self) -> list[dict[str, Any]]:
-        """Every component's state payload (``component``, ``state``, ``pid``, ...)."""
-        return COMPONENT_LIST.call(self.bus).components
-
-    def cancel_goal(self, goal_id: int) -> None:
-        planning.GOAL_CANCEL.call(self.bus, planning.GoalId(goal_id))
-
-    def inject_fault(
-        self, name: str, mode: str, *, timeout: float = INJECT_TIMEOUT, **options: Any
-    ) -> None:
-        """Make a component misbehave (see :mod:`executive.sdk.fault_injection`) as soon
-        as it runs: waits at most ``timeout`` seconds for it to be ready.
-
-        Raises:
-            DuraError: it did not run in time, or the executive refused the fault (an
-                unknown mode or option: the reason).
-        """
-        deadline = time.monotonic() + timeout
-        while (state := self.component_state(name)) != Lifecycle.READY.value:
-            if time.monotonic() > deadline:
-                raise DuraError(
-                    f"cannot inject {mode!r} into '{name}': it is {state}, not running "
-                    f"(waited {timeout:g} s)"
-                )
-            time.sleep(0.05)
-        try:
-            COMPONENT_INJECT.call(self.bus, Injection(name, mode, dict(options)))
-        except BusError as e:
-            raise DuraError(f"cannot inject {mode!r} into '{name}': {e}") from None
-
-    def component_state(self, name: str) -> str:
-        """A component's state (``ready``, ``stopped``, ...).
-
-        Raises:
-            DuraError: the robot has no such component.
-        """
-        for listed in self.components():
-            if listed["component"] == name:
-                return str(listed["state"])
-        raise DuraError(f"robot '{self.robot.name}' has no component '{name}'")
-
-    def events(self, kind: str | None = None, limit: int = 10_000) -> list[dict[str, Any]]:
-        """The event log, oldest first (only events of ``kind`` if given)."""
-        return planning.EVENTS.call(self.bus, planning.EventQuery(limit=limit, kind=kind)).events
-
-    def facts(self, pattern: str = "") -> list[str]:
-        """The true facts and values as text, e.g. ``(robot_at dock)``."""
-        reply = planning.STATE_GET.call(self.bus, planning.StateQuery(pattern))
-        return [f["text"] for f in reply.facts]
-
-    def set_fact(self, fact: str) -> None:
-        """Make a fact true (or set a value: ``(= (battery) 80)``), as ``dura state set``."""
-        planning.STATE_SET.call(self.bus, planning.FactChange(fact))
-
-    def unset_fact(self, fact: str) -> None:
-        """Make a fact false, as ``dura state unset``."""
-        planning.STATE_UNSET.call(self.bus, planning.FactChange(fact))
-
-    def status(self) -> dict[str, Any]:
-        return planning.STATUS.call(self.bus).to_payload()
 
 
 class ServiceGroupProcess:

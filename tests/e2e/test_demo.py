@@ -13,7 +13,6 @@ import pytest
 from executive.bus.event_text import describe
 from executive.cli.demo_timeline import replans
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.records import to_plain
 from tests.conftest import run_dura
 
 pytestmark = pytest.mark.slow
@@ -40,10 +39,10 @@ def test_the_demo_ends_with_every_goal_achieved_after_the_switch_to_the_camera(
     )
     # every plan it executed, with its steps, as the knowledge base logged it
     with KnowledgeBase(tmp_path / "run" / "usecase.db", readonly=True) as kb:
-        logged = to_plain(kb.events())
-    started = [e for e in logged if e["kind"] == "PLAN_START"]
-    assert [p["id"] for p in report["plans"]] == [int(e["subject"][5:]) for e in started]
-    assert [len(p["steps"]) for p in report["plans"]] == [e["data"]["steps"] for e in started]
+        logged = kb.events()
+    started = [e for e in logged if e.kind == "PLAN_START"]
+    assert [p["id"] for p in report["plans"]] == [int(e.subject[5:]) for e in started]
+    assert [len(p["steps"]) for p in report["plans"]] == [e.data["steps"] for e in started]
     assert report["replans"] == len(replans(logged)) >= 1  # lidar's fault posts a goal
     for plan in report["plans"][1:]:
         assert plan["replaces"] or plan["why"], plan

@@ -25,7 +25,7 @@ FAST = 10.0  # robot time ten times faster than the wall clock
 
 
 def kinds(robot: RobotProcess, subject: str = "") -> list[str]:
-    return [e["kind"] for e in robot.events() if subject in e["subject"]]
+    return [e.kind for e in robot.events() if subject in e.subject]
 
 
 def gone(pid: int) -> bool:
@@ -38,7 +38,7 @@ def gone(pid: int) -> bool:
 
 def first(events: list[dict[str, Any]], kind: str, subject: str = "") -> int:
     """The index of the first event of ``kind`` whose subject contains ``subject``."""
-    return next(i for i, e in enumerate(events) if e["kind"] == kind and subject in e["subject"])
+    return next(i for i, e in enumerate(events) if e.kind == kind and subject in e.subject)
 
 
 def test_goals_are_planned_executed_and_achieved(dura_robot: Start) -> None:
@@ -48,7 +48,7 @@ def test_goals_are_planned_executed_and_achieved(dura_robot: Start) -> None:
     robot.wait_for(pictures, "achieved", timeout=90)
     robot.wait_for(home, "achieved", timeout=90)
     assert set(robot.facts("picture_taken")) == {"(picture_taken lab)", "(picture_taken office)"}
-    dispatched = [e["subject"] for e in robot.events("DISPATCH")]
+    dispatched = [e.subject for e in robot.events("DISPATCH")]
     assert "take_picture(lab)" in dispatched and "take_picture(office)" in dispatched
 
 
@@ -75,7 +75,7 @@ def test_an_unreachable_goal_is_reported_while_the_others_are_achieved(
     unreachable = robot.submit_goal("(picture_taken dock)", priority=5)
     robot.wait_for(reachable, "achieved", timeout=90)
     goal = robot.wait_for(unreachable, "unreachable", timeout=10)
-    assert goal["reason"]
+    assert goal.reason
     assert "(picture_taken dock)" not in robot.facts("picture_taken")
 
 
@@ -93,9 +93,9 @@ def test_a_critical_task_is_not_interrupted_by_replanning(dura_robot: Start) -> 
     ended = first(events, "END", "take_picture(lab)")
     added = first(events, "GOAL_ADDED", "goal 2")
     assert started < added < ended
-    between = [e["kind"] for e in events[added:ended] if "take_picture(lab)" in e["subject"]]
+    between = [e.kind for e in events[added:ended] if "take_picture(lab)" in e.subject]
     assert "CANCEL" not in between and "FAIL" not in between
-    replanned = [i for i, e in enumerate(events) if e["kind"] == "PLAN_START" and i > added]
+    replanned = [i for i, e in enumerate(events) if e.kind == "PLAN_START" and i > added]
     assert replanned and replanned[0] > ended  # the planner waited for the critical task
 
 
@@ -119,9 +119,9 @@ def test_functionalities_needed_by_later_steps_keep_running_between_the_steps(
     robot = dura_robot(USECASE, time_scale=FAST)
     goal = robot.submit_goal("(and (picture_taken lab) (picture_taken office) (robot_at dock))")
     robot.wait_for(goal, "achieved", timeout=120)
-    moves = [e for e in robot.events("DISPATCH") if e["subject"].startswith("move_to")]
+    moves = [e for e in robot.events("DISPATCH") if e.subject.startswith("move_to")]
     assert len(moves) >= 2, moves  # move_to, take_picture, move_to, ...: lidar in between
-    starts = [e["subject"] for e in robot.events("COMPONENT_STARTING")]
+    starts = [e.subject for e in robot.events("COMPONENT_STARTING")]
     for name in ("lidar", "lidar_filter", "robot_base", "cam"):
         assert starts.count(name) == 1, (name, starts)
     assert wait_for(
@@ -143,4 +143,4 @@ def test_the_readme_example_waits_for_lidar_before_crashing_it(dura_robot: Start
     robot.wait_for(goal, "achieved", timeout=90)  # else: the reason and the latest events
     assert robot.facts("robot_at") == ["(robot_at office)"]
     restarted = robot.wait_for_event("REPAIR", "lidar", timeout=30)
-    assert restarted["data"]["restart"] is True
+    assert restarted.data["restart"] is True

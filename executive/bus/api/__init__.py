@@ -13,10 +13,13 @@
 - :mod:`.parameters` — component parameters at run time (the task executor);
 - :mod:`.monitoring` — observers at run time and the diagnosis model;
 - :mod:`.steps` — plan steps run on the task executor for a high level in another
-  process (the task executor's side serves them).
+  process (the task executor's side serves them);
+- :mod:`.free_form` — the few values left free-form (what a component's author
+  decides: parameters, a behavior's goal and result; an observer entry as written).
 
 A declaration is a :class:`~executive.bus.verb.Verb`: its key, its request and reply
 types (:class:`~executive.bus.schema.Payload` dataclasses) and how long a caller waits.
+Replies carry typed records (:mod:`knowledge.records`, :mod:`executive.bus.reports`).
 The services serve them, and the CLI, the test harness, the dashboard, the rule engine
 and the component SDK call them, through these constants.
 """

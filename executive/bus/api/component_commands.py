@@ -7,6 +7,7 @@ from collections.abc import Mapping
 from dataclasses import field
 from typing import Any, ClassVar
 
+from executive.bus.api.free_form import GoalFields, Params, Value
 from executive.bus.schema import Payload, PayloadError, Text, payload
 from executive.bus.states import Command, ComponentPhase
 
@@ -43,8 +44,8 @@ class Configure(ComponentCommand):
     """Parameters, and the achievements kept for a warm start."""
 
     verb = Command.CONFIGURE
-    params: dict[str, Any] = field(default_factory=dict)
-    achievements: dict[str, Any] = field(default_factory=dict)
+    params: Params = field(default_factory=dict)
+    achievements: Params = field(default_factory=dict)
 
 
 @payload
@@ -73,7 +74,7 @@ class Reconfigure(ComponentCommand):
     """Changed parameters only."""
 
     verb = Command.RECONFIGURE
-    params: dict[str, Any] = field(default_factory=dict)
+    params: Params = field(default_factory=dict)
 
 
 @payload
@@ -90,7 +91,7 @@ class TakeGoal(ComponentCommand):
 
     verb = Command.GOAL
     goal_id: Text
-    goal: dict[str, Any] = field(default_factory=dict)
+    goal: GoalFields = field(default_factory=dict)
 
 
 @payload
@@ -106,7 +107,7 @@ class InjectFault(ComponentCommand):
     """``"crash"`` or ``{"mode": "crash", ...}`` (see :mod:`executive.sdk.fault_injection`)."""
 
     verb = Command.INJECT_FAULT
-    fault: Any
+    fault: str | dict[str, Value]
 
 
 COMMANDS: tuple[type[ComponentCommand], ...] = (

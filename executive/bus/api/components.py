@@ -5,10 +5,12 @@ injection). The lifecycle commands every component process serves are in
 from __future__ import annotations
 
 from dataclasses import field
-from typing import Annotated, Any
+from typing import Annotated
 
+from executive.bus.api.free_form import Value
 from executive.bus.keys import api
 from executive.bus.payloads import ComponentState
+from executive.bus.reports import ComponentEntry
 from executive.bus.schema import Between, Payload, Text, payload
 from executive.bus.verb import Empty, Verb
 
@@ -24,9 +26,9 @@ class ComponentName(Payload):
 
 @payload
 class ComponentsReply(Payload):
-    """Each component's state payload with its ``kind`` and ``log`` path."""
+    """Each component as lists show it."""
 
-    components: list[dict[str, Any]]
+    components: list[ComponentEntry]
 
 
 @payload
@@ -52,7 +54,7 @@ class Achievement(Payload):
 
     component: Text
     key: Text
-    value: Any = None
+    value: Value = None
 
 
 @payload
@@ -62,7 +64,15 @@ class Injection(Payload):
 
     name: Text
     mode: Text
-    options: dict[str, Any] = field(default_factory=dict)
+    options: dict[str, Value] = field(default_factory=dict)
+
+
+def lifecycle(entry: ComponentEntry) -> ComponentState:
+    """A listed component's state as ``component/<name>/state`` reports it."""
+    return ComponentState(
+        entry.component, entry.state, entry.pid, entry.exit_code, entry.signal, entry.reason,
+        entry.stamp,
+    )  # fmt: skip
 
 
 COMPONENT_LIST = Verb(api("component/list"), Empty, ComponentsReply, threaded=False)

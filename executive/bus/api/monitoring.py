@@ -6,17 +6,32 @@ from __future__ import annotations
 from dataclasses import field
 from typing import Any
 
+from executive.bus.api.free_form import ObserverConfig
 from executive.bus.keys import DIAGNOSIS_EXONERATION, DIAGNOSIS_MODEL, observers_api
 from executive.bus.schema import Payload, Text, payload
 from executive.bus.verb import Empty, Verb
 
 
 @payload
-class ObserversReply(Payload):
-    """Each observer: ``{id, type, component, enabled, active, main_loop_rate,
-    start_up_time}``."""
+class ObserverStatus:
+    """What the observer manager says about one observer: its id, type and component
+    (``None``: an observer of its own), whether it is enabled and observes now
+    (``active``: enabled, and its component READY), and its rates."""
 
-    observers: list[dict[str, Any]]
+    id: str
+    type: str
+    component: str | None
+    enabled: bool
+    active: bool
+    main_loop_rate: float
+    start_up_time: float
+
+
+@payload
+class ObserversReply(Payload):
+    """Each observer."""
+
+    observers: list[ObserverStatus]
 
 
 @payload
@@ -24,7 +39,7 @@ class ObserverAdd(Payload):
     """An observer entry (the thesis/tug schema), of a component or of its own, with an
     optional name (its id)."""
 
-    config: Any
+    config: ObserverConfig
     component: str | None = None
     name: str | None = None
 
@@ -34,7 +49,7 @@ class ObserverChange(Payload):
     """A new configuration for an observer (it keeps its id)."""
 
     id: Text
-    config: Any
+    config: ObserverConfig
 
 
 @payload

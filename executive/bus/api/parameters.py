@@ -7,8 +7,7 @@ description's ``params``) and reaches a running component at once: through its
 
 from __future__ import annotations
 
-from typing import Any
-
+from executive.bus.api.free_form import Params, Value
 from executive.bus.keys import api
 from executive.bus.schema import Payload, Text, payload
 from executive.bus.verb import Verb
@@ -21,7 +20,7 @@ class ParameterChange(Payload):
 
     component: Text
     key: Text
-    value: Any = None
+    value: Value = None
 
 
 @payload
@@ -48,7 +47,7 @@ class ParameterReply(Payload):
 
     component: str
     key: str
-    value: Any
+    value: Value
     source: str
     applied: str = ""
     reason: str = ""
@@ -59,7 +58,7 @@ class ParametersReply(Payload):
     """Every parameter of a component with its value and source."""
 
     component: str
-    parameters: dict[str, Any]
+    parameters: Params
     sources: dict[str, str]
 
 

@@ -1,18 +1,96 @@
 """The high level's API: goals, plans, the world's facts and objects, the domain, events,
-status."""
+status.
+
+The replies carry typed records: the knowledge base's (:class:`~knowledge.records.Goal`,
+:class:`~knowledge.records.Plan`, :class:`~knowledge.records.Event`,
+:class:`~knowledge.records.Fact`, :class:`~knowledge.records.ComponentRecord`), what the
+services report (:mod:`executive.bus.reports`: the execution, the goal planner, tasks,
+components) and those declared here: a planned step (:class:`PlannedStep`) and the
+domain (:class:`DomainType`, :class:`DomainSignature`, :class:`DomainAction`).
+"""
 
 from __future__ import annotations
 
 from dataclasses import field
-from typing import Annotated, Any
+from typing import Annotated
 
+from executive.bus.api.free_form import GoalFields
 from executive.bus.keys import api
+from executive.bus.reports import (
+    ComponentEntry,
+    DiagnosisInfo,
+    ExecutionStatus,
+    ExecutorTask,
+    PlannerStatus,
+)
 from executive.bus.schema import Between, Payload, Text, payload
 from executive.bus.verb import Empty, Verb
+from knowledge.records import ComponentRecord, Event, Fact, Goal, KeyAccess, Plan
 from knowledge.transitions import GoalState
 
 Count = Annotated[int, Between(0, 2**63 - 1)]
 Priority = Annotated[int, Between(-(10**9), 10**9)]  # what the CLI accepts too
+
+
+@payload
+class StepAfter:
+    """What a planned step waits for: the start or the end (``at``) of another step."""
+
+    step: int
+    at: str
+
+
+@payload
+class PlannedStep:
+    """A step of a plan just found, as ``dura plan --offline --json`` prints it: when it
+    starts (seconds from the plan's start), for how long, and the steps it comes after."""
+
+    index: int
+    action: str
+    args: tuple[str, ...]
+    start: float
+    duration: float | None
+    after: tuple[StepAfter, ...] = ()
+
+
+@payload
+class DomainType:
+    """A type of the domain and its parent (``object`` at the top)."""
+
+    name: str
+    parent: str
+
+
+@payload
+class DomainSignature:
+    """A predicate or function of the domain and the types of its parameters."""
+
+    name: str
+    parameters: tuple[str, ...]
+
+
+@payload
+class DomainAction:
+    """An action of the domain: its parameters (``?name``, type), whether it is durative,
+    its duration as written, and the task that carries it out (its behavior and the
+    behavior's goal fields: ``?parameter`` or a constant); ``blocked``: why it cannot run
+    now (permanently faulty components), or ``None`` (offline: not known)."""
+
+    name: str
+    parameters: tuple[tuple[str, str], ...]
+    durative: bool
+    duration: str | None
+    task: str | None
+    behavior: str | None
+    goal: GoalFields
+    blocked: str | None
+
+
+@payload
+class Unanswered:
+    """A section of ``status`` that another service adds, when it did not answer: why."""
+
+    error: str
 
 
 @payload
@@ -45,30 +123,30 @@ class GoalQuery(Payload):
 class GoalReply(Payload):
     """A goal as stored."""
 
-    goal: dict[str, Any]
+    goal: Goal
 
 
 @payload
 class GoalsReply(Payload):
     """Goals as stored, by id."""
 
-    goals: list[dict[str, Any]]
+    goals: list[Goal]
 
 
 @payload
 class GoalHistory(Payload):
     """A goal and the events that name it."""
 
-    goal: dict[str, Any]
-    events: list[dict[str, Any]]
+    goal: Goal
+    events: list[Event]
 
 
 @payload
 class PlanReply(Payload):
     """The newest plan (stored) and how its execution stands."""
 
-    plan: dict[str, Any] | None
-    execution: dict[str, Any]
+    plan: Plan | None
+    execution: ExecutionStatus
 
 
 @payload
@@ -96,7 +174,7 @@ class DryRunReply(Payload):
     planned: list[int]
     achieved: list[int]
     unreachable: dict[str, str]
-    steps: list[dict[str, Any]]
+    steps: list[PlannedStep]
     makespan: float | None = None
     asked: list[str] = field(default_factory=list)
 
@@ -110,9 +188,9 @@ class StateQuery(Payload):
 
 @payload
 class StateReply(Payload):
-    """Facts (name, args, value, text) and objects (name -> type)."""
+    """Facts and objects (name -> type)."""
 
-    facts: list[dict[str, Any]]
+    facts: list[Fact]
     objects: dict[str, str]
 
 
@@ -129,7 +207,7 @@ class FactChange(Payload):
 class FactReply(Payload):
     """The fact as it was set or unset."""
 
-    fact: dict[str, Any]
+    fact: Fact
 
 
 @payload
@@ -149,17 +227,15 @@ class ObjectName(Payload):
 
 @payload
 class DomainReply(Payload):
-    """The robot's domain: ``types`` ``{name, parent}``; ``predicates`` and ``functions``
-    ``{name, parameters}`` (their types); ``actions`` ``{name, parameters [[?name, type]],
-    durative, duration (as written), task, behavior, goal (the behavior's goal fields),
-    blocked (why it cannot run now, or null)}``; ``constants`` by name, their types."""
+    """The robot's domain: its types, predicates, functions and actions, and its
+    constants by name, with their types."""
 
     name: str
     path: str
-    types: list[dict[str, Any]]
-    predicates: list[dict[str, Any]]
-    functions: list[dict[str, Any]]
-    actions: list[dict[str, Any]]
+    types: list[DomainType]
+    predicates: list[DomainSignature]
+    functions: list[DomainSignature]
+    actions: list[DomainAction]
     constants: dict[str, str]
 
 
@@ -179,24 +255,35 @@ class EventQuery(Payload):
 class EventsReply(Payload):
     """Events of the log, oldest first."""
 
-    events: list[dict[str, Any]]
+    events: list[Event]
 
 
 @payload
-class StatusReply(Payload):
-    """Everything at a glance. ``tasks`` and ``components`` come from the task executor
-    and the launcher: a list, or ``{"error": reason}`` when that service did not answer.
-    ``planning`` says whether the goal planner is computing a plan, since when and why."""
+class NoDiagnosis:
+    """No diagnosis result yet: ``{}`` where ``status`` has one."""
+
+
+@payload
+class StatusReply(KeyAccess, Payload):
+    """Everything at a glance. ``diagnoses`` is the newest diagnosis result, if any.
+    ``tasks`` and ``components`` come from the task executor and the launcher, or say
+    why that service did not answer. ``planning`` says whether the goal planner is
+    computing a plan, since when and why."""
 
     robot: str
-    goals: list[dict[str, Any]]
-    plan: dict[str, Any] | None
-    execution: dict[str, Any]
-    diagnoses: dict[str, Any]
-    faults: list[dict[str, Any]]
-    tasks: Any = None
-    components: Any = None
-    planning: dict[str, Any] | None = None
+    goals: list[Goal]
+    plan: Plan | None
+    execution: ExecutionStatus
+    diagnoses: DiagnosisInfo | NoDiagnosis
+    faults: list[ComponentRecord]
+    tasks: list[ExecutorTask] | Unanswered | None = None
+    components: list[ComponentEntry] | Unanswered | None = None
+    planning: PlannerStatus | None = None
+
+    @property
+    def diagnosis(self) -> DiagnosisInfo | None:
+        """The newest diagnosis result, or ``None`` before the first."""
+        return self.diagnoses if isinstance(self.diagnoses, DiagnosisInfo) else None
 
 
 GOAL_ADD = Verb(api("goal/add"), GoalAdd, GoalReply)

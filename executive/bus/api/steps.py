@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import enum
 from dataclasses import field
-from typing import Any
 
+from executive.bus.api.free_form import Result
 from executive.bus.schema import Payload, Text, payload
 from executive.bus.verb import Empty, Verb
 
@@ -71,7 +71,7 @@ class StepProgress(Payload):
 
     run: Text
     progress: Text
-    value: Any = None
+    value: Result = None
 
 
 STEP_RUN = Verb("executive/steps/run", StepRun, Empty, timeout=10.0)

@@ -1,11 +1,19 @@
-"""The task executor's API: tasks by hand, the schedule, faults and resets of components."""
+"""The task executor's API: tasks by hand, the schedule, faults and resets of components.
+
+A task travels as an :class:`~executive.bus.reports.ExecutorTask` (the executor's view
+of it; the knowledge base's row is :class:`knowledge.records.Task`), placed in time as a
+:class:`~executive.bus.reports.ScheduledTask`.
+"""
 
 from __future__ import annotations
 
 from dataclasses import field
-from typing import Annotated, Any
+from typing import Annotated
 
+from executive.bus.api.free_form import GoalFields
 from executive.bus.keys import api
+from executive.bus.payloads import ComponentState
+from executive.bus.reports import ExecutorTask, ScheduledTask
 from executive.bus.schema import Between, Payload, Text, payload
 from executive.bus.verb import Empty, Verb
 
@@ -18,7 +26,7 @@ class TaskStart(Payload):
     are seconds from now, ``together`` lists waiting tasks to start with."""
 
     task: Text
-    goal: dict[str, Any] = field(default_factory=dict)
+    goal: GoalFields = field(default_factory=dict)
     duration: Seconds | None = None
     earliest: Seconds | None = None
     deadline: Seconds | None = None
@@ -51,14 +59,14 @@ class TaskId(Payload):
 class TaskReply(Payload):
     """A task as the executor holds it."""
 
-    task: dict[str, Any]
+    task: ExecutorTask
 
 
 @payload
 class TasksReply(Payload):
     """Every task as the executor holds it."""
 
-    tasks: list[dict[str, Any]]
+    tasks: list[ExecutorTask]
 
 
 @payload
@@ -66,7 +74,7 @@ class ScheduleReply(Payload):
     """Waiting and running tasks in time, the running and the permanently faulty
     functionalities."""
 
-    tasks: list[dict[str, Any]]
+    tasks: list[ScheduledTask]
     running: list[str]
     faulty: list[str]
 
@@ -81,9 +89,9 @@ class ComponentFault(Payload):
 
 @payload
 class FaultReply(Payload):
-    """The component's state (a ``component/<name>/state`` payload) and its faults."""
+    """The component's state and its faults."""
 
-    state: dict[str, Any]
+    state: ComponentState
     faults: int
     permanent: bool
 

@@ -8,8 +8,10 @@ import io
 import json
 from typing import Any
 
+from executive.bus.schema import plain
 from executive.bus.session import Message
 from executive.cli.demo_timeline import Timeline, replans
+from knowledge.records import Event
 
 T0 = 1_700_000_000.0
 
@@ -22,11 +24,10 @@ class Log:
     """Events with ids and stamps in the log's order."""
 
     def __init__(self) -> None:
-        self.events: list[dict[str, Any]] = []
+        self.events: list[Event] = []
 
-    def __call__(self, at: float, kind: str, subject: str, **data: Any) -> dict[str, Any]:
-        event = {"id": len(self.events) + 1, "stamp": T0 + at, "kind": kind,
-                 "subject": subject, "data": data}  # fmt: skip
+    def __call__(self, at: float, kind: str, subject: str, **data: Any) -> Event:
+        event = Event(len(self.events) + 1, T0 + at, kind, subject, data)
         self.events.append(event)
         return event
 
@@ -62,13 +63,13 @@ def test_the_timeline_shows_each_plan_as_it_starts_and_keeps_causes_before_effec
     timeline.start = T0
     log = scenario()
     for event in log.events:
-        if event["kind"] == "RULE_FIRED":  # the rule's event comes before the diagnosis
-            timeline.on_event(message(event))
+        if event.kind == "RULE_FIRED":  # the rule's event comes before the diagnosis
+            timeline.on_event(message(plain(event)))
             diagnosis = {"status": "DIAGNOSED", "diagnoses": [["lidar"]],
                          "failed": [{"type": "timeout", "resource": ["scan"]}], "stamp": T0 + 1.1}  # fmt: skip
             timeline.on_diagnoses(message(diagnosis))
         else:
-            timeline.on_event(message(event))
+            timeline.on_event(message(plain(event)))
     timeline.close()
     lines = out.getvalue().splitlines()
     heads = [line.split("PLAN", 1)[1].strip() for line in lines if "  PLAN  " in line]

@@ -40,7 +40,7 @@ def test_following_events_misses_none_under_load(tmp_path: Path) -> None:
             for writer in writers:
                 writer.join()
             stored = robot.events()
-            newest = stored[-1]["id"]
+            newest = stored[-1].id
             assert wait_for(lambda: bool(printed) and printed[-1] >= newest, timeout=30)
         finally:
             follower.send_signal(signal.SIGINT)
@@ -48,9 +48,9 @@ def test_following_events_misses_none_under_load(tmp_path: Path) -> None:
             reader.join(timeout=5)
         assert "Traceback" not in err
         first = printed[0]
-        assert printed == [e["id"] for e in stored if first <= e["id"] <= printed[-1]]
+        assert printed == [e.id for e in stored if first <= e.id <= printed[-1]]
         seen = set(printed)
-        assert sum(1 for e in stored if e["id"] in seen and e["kind"] == "STATE_SET") == EVENTS
+        assert sum(1 for e in stored if e.id in seen and e.kind == "STATE_SET") == EVENTS
 
 
 def _read(follower: subprocess.Popen[str], printed: list[int]) -> None:

@@ -6,6 +6,7 @@ other on it, so each test leaves the robot idle.
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import re
@@ -15,23 +16,19 @@ from collections.abc import Iterator
 import pytest
 
 from executive.bus.api.planning import PlanReply
+from executive.bus.reports import ExecutionStatus, StepStatus
 from executive.cli.goal import GoalView, progress
 from executive.testing.harness import RobotProcess
+from knowledge.records import Goal, GoalState, Plan, PlanState, PlanStep
 from tests.conftest import ROOT, USECASE, run_dura
 
-GOAL = {
-    "id": 3,
-    "expression": "(picture_taken lab)",
-    "state": "executing",
-    "reason": "",
-    "created": 100.0,
-    "updated": 101.0,
-}
-PLAN = {
-    "id": 2,
-    "goal_ids": [3],
-    "steps": [{"index": 0}, {"index": 1}, {"index": 2}],
-}
+GOAL = Goal(3, "(picture_taken lab)", GoalState.EXECUTING, created=100.0, updated=101.0)
+PLAN = Plan(
+    2,
+    PlanState.EXECUTING,
+    tuple(PlanStep(i, "move_to", (), 0.0) for i in range(3)),
+    goal_ids=(3,),
+)
 
 
 @pytest.fixture(scope="module")
@@ -51,13 +48,13 @@ def dura(robot: RobotProcess, *args: str) -> subprocess.CompletedProcess[str]:
 
 
 def test_the_progress_line_says_the_state_the_time_and_the_steps_under_way() -> None:
-    execution = {
-        "plan": 2,
-        "steps": [
-            {"index": 0, "step": "move_to(dock, lab)", "state": "ended"},
-            {"index": 1, "step": "take_picture(lab)", "state": "running"},
-        ],
-    }
+    execution = ExecutionStatus(
+        plan=2,
+        steps=(
+            StepStatus(0, "move_to(dock, lab)", "ended"),
+            StepStatus(1, "take_picture(lab)", "running"),
+        ),
+    )
     line = progress(GOAL, PlanReply(PLAN, execution), now=104.5)
     assert line == (
         "goal 3 (picture_taken lab): executing 4.5 s; plan 2: 1 of 3 steps ended, "
@@ -66,11 +63,12 @@ def test_the_progress_line_says_the_state_the_time_and_the_steps_under_way() -> 
 
 
 def test_the_progress_line_leaves_out_a_plan_that_does_not_pursue_the_goal() -> None:
-    other = {**PLAN, "goal_ids": [7]}
-    assert progress(GOAL, PlanReply(other, {"plan": 2}), now=101.0) == (
+    other = dataclasses.replace(PLAN, goal_ids=(7,))
+    assert progress(GOAL, PlanReply(other, ExecutionStatus(plan=2)), now=101.0) == (
         "goal 3 (picture_taken lab): executing 1.0 s"
     )
-    assert progress(GOAL, PlanReply(PLAN, {"plan": 1}), now=101.0).endswith("; plan 2 waits")
+    waits = progress(GOAL, PlanReply(PLAN, ExecutionStatus(plan=1)), now=101.0)
+    assert waits.endswith("; plan 2 waits")
     assert progress(GOAL, None, now=99.0) == "goal 3 (picture_taken lab): executing 0.0 s"
 
 
@@ -78,7 +76,7 @@ def test_on_a_terminal_one_line_is_redrawn_and_taken_away_at_the_end() -> None:
     out = io.StringIO()
     view = GoalView(out, live=True, changes=False)
     view.show(GOAL, None, now=101.0)
-    view.show({**GOAL, "state": "achieved"}, None, now=102.0)
+    view.show(dataclasses.replace(GOAL, state=GoalState.ACHIEVED), None, now=102.0)
     view.close()
     text = out.getvalue()
     assert text.count("\r") == 3 and "\n" not in text
@@ -89,8 +87,8 @@ def test_elsewhere_each_change_of_state_is_a_line_of_its_own() -> None:
     out = io.StringIO()
     view = GoalView(out, live=False, changes=True)
     for state in ("pending", "pending", "executing", "failed"):
-        view.show({**GOAL, "state": state, "reason": "no plan" if state == "failed" else ""},
-                  None, now=101.0)  # fmt: skip
+        reason = "no plan" if state == "failed" else ""
+        view.show(dataclasses.replace(GOAL, state=GoalState(state), reason=reason), None, now=101.0)
     view.close()
     lines = out.getvalue().splitlines()
     assert [line.split("  ", 1)[1] for line in lines] == [
@@ -112,7 +110,7 @@ def test_a_goal_added_with_wait_exits_0_once_achieved(robot: RobotProcess) -> No
     goal_id = int(added.group(1))
     assert re.fullmatch(rf"goal {goal_id} \(picture_taken lab\): achieved in \d+\.\d s", lines[-1])
     assert "\r" not in done.stdout  # not a terminal: no live line
-    assert robot.goal(goal_id)["state"] == "achieved"
+    assert robot.goal(goal_id).state is GoalState.ACHIEVED
 
 
 def test_with_json_only_the_ended_goal_is_printed(robot: RobotProcess) -> None:
@@ -147,7 +145,7 @@ def test_waiting_gives_up_after_the_timeout_and_leaves_the_goal_alone(
         waited = dura(robot, "goal", "watch", str(goal_id), "--timeout", "0.5")
         assert waited.returncode == 1
         assert f"goal {goal_id} (robot_at dock): still " in waited.stderr
-        assert robot.goal(goal_id)["state"] in ("pending", "planned", "executing")
+        assert robot.goal(goal_id).state.is_open
     finally:
         robot.wait_for(goal_id)
 

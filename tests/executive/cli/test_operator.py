@@ -179,7 +179,7 @@ def test_exoneration_is_switched_on_and_off_at_run_time(robot: RobotProcess) -> 
     assert dura(robot, "observer", "exonerate").stdout.startswith("exoneration on: ")
     off = dura(robot, "observer", "exonerate", "off")
     assert off.stdout.startswith("exoneration off: ")
-    assert [e["data"]["on"] for e in robot.events("EXONERATION")] == [True, False]
+    assert [e.data["on"] for e in robot.events("EXONERATION")] == [True, False]
     wrong = dura(robot, "observer", "exonerate", "maybe")
     assert wrong.returncode == 2
 
@@ -199,7 +199,7 @@ def test_an_object_is_removed_with_every_fact_that_names_it(robot: RobotProcess)
     )
     assert "garage" not in " ".join(robot.facts())
     event = robot.events("OBJECT_REMOVED")[-1]
-    assert (event["subject"], event["data"]["type"]) == ("garage", "place")
+    assert (event.subject, event.data["type"]) == ("garage", "place")
 
 
 def test_an_object_an_open_goal_or_an_integrity_rule_names_is_kept_with_the_reason(
@@ -315,10 +315,10 @@ def test_a_quick_command_imports_no_solver_planner_or_graph_library(
 ) -> None:
     modules = imported(robot.folder, *command)
     assert sorted(m for m in modules if m.split(".")[0] in HEAVY) == []
-    # nor what it does not need: the robot description, the records, logging, and
-    # inspect with its parsers, copy (dataclasses names them: executive.fast_start
-    # defers them)
-    unneeded = {"knowledge.description", "knowledge.records", "logging", "yaml", "inspect"}
+    # nor what it does not need: the robot description, logging, and inspect with its
+    # parsers, copy (dataclasses names them: executive.fast_start defers them); the
+    # replies it reads are records (knowledge.records, executive.bus.reports)
+    unneeded = {"knowledge.description", "logging", "yaml", "inspect"}
     assert not modules & (unneeded | {"ast", "dis", "tokenize", "copy"})
     assert not modules & UNNEEDED[command]
     # nor anything of the standard library or elsewhere it did not need before

@@ -8,8 +8,10 @@ import io
 import re
 from pathlib import Path
 
+from executive.bus.api.planning import StatusReply
 from executive.bus.api.tasks import TaskStart
 from executive.bus.event_kinds import KINDS
+from executive.bus.reports import DiagnosisInfo, ExecutionStatus
 from executive.cli.observe import _measured
 from executive.cli.status import print_status
 from knowledge.knowledge_base import KnowledgeBase
@@ -37,12 +39,10 @@ def test_a_kind_may_be_written_in_lower_case(tmp_path: Path) -> None:
 
 def test_status_starts_with_its_first_title_and_reads_its_diagnosis() -> None:
     out = io.StringIO()
-    print_status(
-        {"robot": "usecase", "goals": [], "faults": [],
-         "diagnoses": {"status": "DIAGNOSED", "diagnoses": [["lidar"]],
-                       "failed": [{"type": "timeout", "resource": ["scan"]}]}},
-        out,
-    )  # fmt: skip
+    diagnosis = DiagnosisInfo(
+        "DIAGNOSED", (("lidar",),), failed=({"type": "timeout", "resource": ["scan"]},)
+    )
+    print_status(StatusReply("usecase", [], None, ExecutionStatus(), diagnosis, []), out)
     lines = out.getvalue().splitlines()
     assert lines[0] == "robot usecase: goals"
     assert lines[-1] == "diagnosis: DIAGNOSED: lidar (failed: timeout[scan])"

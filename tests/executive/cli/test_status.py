@@ -40,4 +40,4 @@ def test_status_answers_while_a_component_start_is_in_progress(tmp_path: Path) -
 
 def _state(robot: RobotProcess, name: str) -> str:
     listed = COMPONENT_LIST.call(robot.bus).components
-    return str(next(c["state"] for c in listed if c["component"] == name))
+    return next(c.state.value for c in listed if c.component == name)

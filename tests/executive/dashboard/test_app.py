@@ -3,6 +3,7 @@ answered by a test on a real bus, so every answer is known in advance."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import threading
 import urllib.error
@@ -15,32 +16,35 @@ import pytest
 
 from executive.bus.api import components, monitoring, planning, tasks
 from executive.bus.keys import EVENTS
+from executive.bus.payloads import DiagnosisInfo
+from executive.bus.reports import ExecutionStatus, StepStatus
+from executive.bus.schema import read
 from executive.bus.session import Bus
 from executive.dashboard.server import Dashboard, DashboardError
 from knowledge.errors import DomainError
+from knowledge.records import ComponentRecord, Goal, GoalState, Plan
 from knowledge.robot import load_robot
 from tests.conftest import USECASE, free_endpoint
 
-PLAN = {
+PLAN: Plan = read(Plan, {
     "id": 1, "state": "executing", "engine": "kairos", "goal_ids": [1], "reason": "",
     "created": 100.0, "updated": 100.0,
     "steps": [
         {"index": 0, "action": "move_to", "args": ["dock", "lab"], "start": 0.0, "duration": 5.0},
         {"index": 1, "action": "take_picture", "args": ["lab"], "start": 5.0, "duration": 2.0},
     ],
-}  # fmt: skip
-EXECUTION = {
-    "plan": 1,
-    "steps": [
-        {"index": 0, "step": "move_to(dock, lab)", "state": "running"},
-        {"index": 1, "step": "take_picture(lab)", "state": "pending"},
-    ],
-}
+}, "plan")  # fmt: skip
+EXECUTION = ExecutionStatus(
+    plan=1,
+    steps=(
+        StepStatus(0, "move_to(dock, lab)", "running"),
+        StepStatus(1, "take_picture(lab)", "pending"),
+    ),
+)
 
 
-def goal(number: int, expression: str, state: str = "pending") -> dict[str, Any]:
-    return {"id": number, "expression": expression, "state": state, "priority": 0,
-            "deadline": None, "source": "user", "reason": "", "created": 1.0, "updated": 1.0}  # fmt: skip
+def goal(number: int, expression: str, state: str = "pending") -> Goal:
+    return Goal(number, expression, GoalState(state), created=1.0, updated=1.0)
 
 
 @dataclass
@@ -48,7 +52,7 @@ class ScriptedExecutive:
     """The executive's verbs, answered from these fields; what it was asked is kept."""
 
     bus: Bus
-    goals: list[dict[str, Any]] = field(default_factory=list)
+    goals: list[Goal] = field(default_factory=list)
     added: list[planning.GoalAdd] = field(default_factory=list)
     cancelled: list[int] = field(default_factory=list)
 
@@ -62,9 +66,8 @@ class ScriptedExecutive:
         planning.STATUS.serve(
             bus,
             lambda _: planning.StatusReply(
-                "usecase", self.goals, PLAN, EXECUTION, {"status": "OK", "diagnoses": []},
-                [{"name": "lidar", "fault_count": 1, "permanent_fault": False, "reason": "x",
-                  "rating": 10.0, "updated": 1.0}],
+                "usecase", self.goals, PLAN, EXECUTION, DiagnosisInfo("OK"),
+                [ComponentRecord("lidar", 10.0, fault_count=1, reason="x", updated=1.0)],
             ),
         )  # fmt: skip
         tasks.TASK_LIST.serve(bus, lambda _: tasks.TasksReply([]))
@@ -81,7 +84,8 @@ class ScriptedExecutive:
 
     def cancel(self, request: planning.GoalId) -> planning.GoalReply:
         self.cancelled.append(request.id)
-        return planning.GoalReply({**self.goals[request.id - 1], "state": "cancelled"})
+        cancelled = dataclasses.replace(self.goals[request.id - 1], state=GoalState.CANCELLED)
+        return planning.GoalReply(cancelled)
 
 
 @pytest.fixture(scope="module")

@@ -71,7 +71,7 @@ def test_the_page_shows_the_goals_the_plan_and_the_component_graph(
         "(() => { const s = [...document.querySelectorAll('#plan-chart g.step')]"
         ".map(g => g.dataset.label); return s.length ? s : null; })()"
     )
-    assert drawn == [f"{s['action']}({', '.join(s['args'])})" for s in plan["steps"]]
+    assert drawn == [f"{s.action}({', '.join(s.args)})" for s in plan.steps]
     nodes = browser.evaluate(
         "[...document.querySelectorAll('#graph g.node')].map(g => g.dataset.node)"
     )
@@ -97,8 +97,8 @@ def test_a_goal_added_on_the_page_reaches_the_executive(
     )
     assert "added: (robot_at lab)" in said
     goals = planning.GOAL_LIST.call(robot.bus).goals
-    added = [g for g in goals if g["expression"] == "(robot_at lab)"]
-    assert len(added) == 1 and added[0]["priority"] == 2 and added[0]["source"] == "user"
+    added = [g for g in goals if g.expression == "(robot_at lab)"]
+    assert len(added) == 1 and added[0].priority == 2 and added[0].source == "user"
     browser.evaluate(submit.format(expression=js("(picture_taken lob)")))
     refused = browser.wait_for(
         "(() => { const m = document.getElementById('goal-message');"
@@ -114,7 +114,7 @@ def test_a_goal_added_on_the_page_reaches_the_executive(
 
 def driving_on_lidar(robot: RobotProcess) -> bool:
     return any(
-        t["behavior"] == "move_to" and t["state"] == "running" and "lidar" in t["functionalities"]
+        t.behavior == "move_to" and t.state == "running" and "lidar" in t.functionalities
         for t in tasks.TASK_LIST.call(robot.bus).tasks
     )
 
@@ -126,7 +126,7 @@ def drive(robot: RobotProcess, timeout: float = 90.0) -> None:
     while not driving_on_lidar(robot):
         assert time.monotonic() < deadline, "move_to never drove on lidar"
         goals = planning.GOAL_LIST.call(robot.bus).goals
-        if all(g["state"] not in ("pending", "planned", "executing") for g in goals):
+        if not any(g.state.is_open for g in goals):
             here = robot.facts("robot_at")
             there = next(p for p in places if f"(robot_at {p})" not in here)
             robot.submit_goal(f"(robot_at {there})")
@@ -175,7 +175,7 @@ def test_plan_show_draws_the_running_robots_plan(
     assert plan is not None
     rows = groups(parse(picture.read_text()), "step")
     assert [r.get("data-label") for r in rows] == [
-        f"{s['action']}({', '.join(s['args'])})" for s in plan["steps"]
+        f"{s.action}({', '.join(s.args)})" for s in plan.steps
     ]
     assert {r.get("data-state") for r in rows} <= {"pending", "dispatched", "running", "paused",
                                                    "done", "failed", "cancelled"}  # fmt: skip

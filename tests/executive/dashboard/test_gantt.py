@@ -2,25 +2,31 @@
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import pytest
 
+from executive.bus.reports import ExecutionStatus, ExecutorTask
+from executive.bus.schema import read
 from executive.dashboard import gantt
 from executive.planning.partial_order import PartialOrderPlan, Precedence, Step, Timepoint
+from knowledge.records import Event, Plan
 from tests.executive.dashboard.pictures import groups, parse, texts, tooltip
 
-PLAN: dict[str, Any] = {
+PLAN: Plan = read(Plan, {
     "id": 2, "state": "executing", "engine": "kairos", "goal_ids": [1, 3], "created": 1000.0,
     "steps": [
         {"index": 0, "action": "move_to", "args": ["dock", "lab"], "start": 0.0, "duration": 5.0},
         {"index": 1, "action": "take_picture", "args": ["lab"], "start": 5.0, "duration": 2.0},
         {"index": 2, "action": "move_to", "args": ["lab", "dock"], "start": 7.0, "duration": 5.0},
     ],
-}  # fmt: skip
-EXECUTION = {"plan": 2, "steps": [{"index": 0, "state": "ended"}, {"index": 1, "state": "running"},
-                                  {"index": 2, "state": "pending"}]}  # fmt: skip
-EVENTS = [
+}, "plan")  # fmt: skip
+EXECUTION: ExecutionStatus = read(ExecutionStatus, {"plan": 2, "steps": [
+    {"index": 0, "step": "move_to(dock, lab)", "state": "ended"},
+    {"index": 1, "step": "take_picture(lab)", "state": "running"},
+    {"index": 2, "step": "move_to(lab, dock)", "state": "pending"}]}, "execution")  # fmt: skip
+EVENTS: list[Event] = read(list[Event], [
     {"id": 1, "stamp": 980.0, "kind": "PLAN_START", "subject": "plan 1", "data": {}},
     {"id": 2, "stamp": 990.0, "kind": "REPLAN", "subject": "plan 1",
      "data": {"reason": "move_to(dock, lab) failed"}},
@@ -31,12 +37,12 @@ EVENTS = [
      "data": {"plan": 2, "step": 0}},
     {"id": 6, "stamp": 1007.1, "kind": "DISPATCH", "subject": "take_picture(lab)",
      "data": {"plan": 2, "step": 1}},
-]  # fmt: skip
+], "events")  # fmt: skip
 TASKS = [
-    {"id": "7", "name": "take_picture(lab)", "behavior": "take_picture", "state": "failed",
-     "providers": {"camera": "cam"}},
-    {"id": "9", "name": "take_picture(lab)", "behavior": "take_picture", "state": "running",
-     "providers": {"camera": "cam"}},
+    ExecutorTask("7", "take_picture(lab)", "take_picture", {}, "failed", {"camera": "cam"},
+                 ("cam",), 2.0),
+    ExecutorTask("9", "take_picture(lab)", "take_picture", {}, "running", {"camera": "cam"},
+                 ("cam",), 2.0),
 ]  # fmt: skip
 
 
@@ -103,9 +109,19 @@ def test_an_offline_plan_is_drawn_with_its_precedences_on_hover() -> None:
 
 
 def test_text_from_the_robot_is_escaped_in_the_picture() -> None:
-    plan = {**PLAN, "steps": [{"index": 0, "action": "a<b>&", "args": ['"x"'], "start": 0.0,
-                               "duration": None}]}  # fmt: skip
-    root = parse(gantt.render(gantt.live_gantt(plan, {}, [], [], now=1000.0)))
+    step = read(
+        Plan,
+        {
+            "id": 2,
+            "state": "executing",
+            "steps": [
+                {"index": 0, "action": "a<b>&", "args": ['"x"'], "start": 0.0, "duration": None}
+            ],
+        },
+        "plan",
+    )
+    plan = dataclasses.replace(PLAN, steps=step.steps)  # fmt: skip
+    root = parse(gantt.render(gantt.live_gantt(plan, ExecutionStatus(), [], [], now=1000.0)))
     assert groups(root, "step")[0].get("data-label") == 'a<b>&("x")'
 
 
@@ -115,12 +131,13 @@ def test_ticks_are_round_numbers_across_the_span() -> None:
 
 
 def test_a_step_adopted_from_the_plan_before_ran_since_that_plans_dispatch() -> None:
-    events = [
+    events: list[Any] = read(list[Event], [
         {"id": 1, "stamp": 990.0, "kind": "DISPATCH", "subject": "move_to(dock, lab)",
          "data": {"plan": 1, "step": 0}},
         {"id": 2, "stamp": 1000.0, "kind": "PLAN_START", "subject": "plan 2", "data": {}},
-    ]  # fmt: skip
-    execution = {"plan": 2, "steps": [{"index": 0, "state": "running"}]}
-    plan = {**PLAN, "steps": PLAN["steps"][:1]}
+    ], "events")  # fmt: skip
+    execution = read(ExecutionStatus, {"plan": 2, "steps": [
+        {"index": 0, "step": "move_to(dock, lab)", "state": "running"}]}, "execution")  # fmt: skip
+    plan = dataclasses.replace(PLAN, steps=PLAN.steps[:1])
     (step,) = gantt.live_gantt(plan, execution, events, [], now=1004.0).steps
     assert step.ran == (-10.0, None)

@@ -3,9 +3,16 @@ views the page gets."""
 
 from __future__ import annotations
 
+import dataclasses
+from typing import Any
+
 import pytest
 
+from executive.bus.payloads import ComponentState, DiagnosisInfo
+from executive.bus.reports import ExecutorTask
+from executive.bus.states import Lifecycle
 from executive.dashboard.live import FAULTS, GOALS, PLAN, TASKS, LiveState, component_state, stale
+from knowledge.records import ComponentRecord, Event
 from knowledge.robot import load_robot
 from tests.conftest import USECASE
 
@@ -15,8 +22,12 @@ def state() -> LiveState:
     return LiveState(load_robot(USECASE))
 
 
-def ready(name: str) -> dict[str, object]:
-    return {"component": name, "state": "ready", "pid": 7, "exit_code": None, "signal": None}
+def ready(name: str) -> ComponentState:
+    return ComponentState(name, Lifecycle.READY, pid=7)
+
+
+def event(number: int, kind: str, subject: str, **data: Any) -> Event:
+    return Event(number, 0.0, kind, subject, data)
 
 
 @pytest.mark.parametrize(
@@ -35,9 +46,12 @@ def ready(name: str) -> dict[str, object]:
     ],
 )
 def test_a_component_is_drawn_in_the_state_a_person_cares_about(
-    lifecycle: dict[str, object] | None, permanent: bool, faulty: bool, shown: str
+    lifecycle: dict[str, Any] | None, permanent: bool, faulty: bool, shown: str
 ) -> None:
-    assert component_state(lifecycle, permanent=permanent, faulty=faulty) == shown
+    reported = (
+        None if lifecycle is None else ComponentState.from_payload({"component": "c", **lifecycle})
+    )
+    assert component_state(reported, permanent=permanent, faulty=faulty) == shown
 
 
 def test_each_event_asks_again_only_for_what_it_changed() -> None:
@@ -51,12 +65,12 @@ def test_each_event_asks_again_only_for_what_it_changed() -> None:
 
 def test_a_diagnosed_component_is_faulty_until_the_all_clear(state: LiveState) -> None:
     state.set_lifecycle(ready("lidar"))
-    state.set_diagnosis({"status": "DIAGNOSED", "diagnoses": [["lidar"]],
-                         "failed": [{"type": "timeout", "resource": ["scan"]}]})  # fmt: skip
+    state.set_diagnosis(DiagnosisInfo("DIAGNOSED", (("lidar",),),
+                                      failed=({"type": "timeout", "resource": ["scan"]},)))  # fmt: skip
     drawn = state.graph_state()
     assert drawn.states["lidar"] == "faulty" and drawn.diagnosed == {"lidar"}
     assert drawn.failed_topics == {"scan"}
-    state.set_diagnosis({"status": "OK", "diagnoses": []})
+    state.set_diagnosis(DiagnosisInfo("OK"))
     assert state.graph_state().states["lidar"] == "running"
 
 
@@ -64,9 +78,9 @@ def test_a_component_stays_faulty_from_its_fault_until_it_is_ready_again(
     state: LiveState,
 ) -> None:
     state.set_lifecycle(ready("lidar"))
-    state.add_event({"id": 1, "kind": "FAULT", "subject": "lidar", "data": {"count": 1}})
+    state.add_event(event(1, "FAULT", "lidar", count=1))
     assert state.graph_state().states["lidar"] == "faulty"
-    state.set_lifecycle({**ready("lidar"), "state": "stopped"})
+    state.set_lifecycle(dataclasses.replace(ready("lidar"), state=Lifecycle.STOPPED))
     assert state.graph_state().states["lidar"] == "faulty"
     state.set_lifecycle(ready("lidar"))
     assert state.graph_state().states["lidar"] == "running"
@@ -74,7 +88,7 @@ def test_a_component_stays_faulty_from_its_fault_until_it_is_ready_again(
 
 def test_permanent_faults_and_counters_come_from_the_fault_records(state: LiveState) -> None:
     state.set_faults(
-        [{"name": "lidar", "fault_count": 3, "permanent_fault": True, "reason": "r"}],
+        [ComponentRecord("lidar", 10.0, fault_count=3, permanent_fault=True, reason="r")],
         ["lidar", "lidar_filter"],
     )
     drawn = state.graph_state()
@@ -84,11 +98,11 @@ def test_permanent_faults_and_counters_come_from_the_fault_records(state: LiveSt
 
 def test_active_tasks_give_the_configuration_drawn_over_the_graph(state: LiveState) -> None:
     state.set_tasks([
-        {"id": "1", "name": "move_to(dock, lab)", "behavior": "move_to", "state": "running",
-         "providers": {"laser_scan": "lidar", "obstacle_scan": "lidar_filter", "base": "robot_base"},
-         "functionalities": ["lidar", "lidar_filter", "robot_base"]},
-        {"id": "2", "name": "take_picture(lab)", "behavior": "take_picture", "state": "succeeded",
-         "providers": {"camera": "cam"}, "functionalities": ["cam"]},
+        ExecutorTask("1", "move_to(dock, lab)", "move_to", {}, "running",
+                     {"laser_scan": "lidar", "obstacle_scan": "lidar_filter", "base": "robot_base"},
+                     ("lidar", "lidar_filter", "robot_base"), 4.0),
+        ExecutorTask("2", "take_picture(lab)", "take_picture", {}, "succeeded",
+                     {"camera": "cam"}, ("cam",), 2.0),
     ])  # fmt: skip
     drawn = state.graph_state()
     assert drawn.used == {("laser_scan", "lidar"), ("obstacle_scan", "lidar_filter"),
@@ -100,13 +114,11 @@ def test_active_tasks_give_the_configuration_drawn_over_the_graph(state: LiveSta
 
 
 def test_events_are_kept_once_in_the_logs_order(state: LiveState) -> None:
-    assert state.add_event({"id": 5, "kind": "DISPATCH", "subject": "s", "data": {}})
-    assert not state.add_event({"id": 5, "kind": "DISPATCH", "subject": "s", "data": {}})
-    state.set_events(
-        [{"id": n, "kind": "GOAL_ADDED", "subject": "g", "data": {}} for n in (3, 4, 5)]
-    )
+    assert state.add_event(event(5, "DISPATCH", "s"))
+    assert not state.add_event(event(5, "DISPATCH", "s"))
+    state.set_events([event(n, "GOAL_ADDED", "g") for n in (3, 4, 5)])
     assert [e["id"] for e in state.view("events")["events"]] == [3, 4, 5]
-    assert [e["id"] for e in state.plan_events] == [5]
+    assert [e.id for e in state.plan_events] == [5]
 
 
 def test_observations_keep_the_last_minutes_of_their_values(state: LiveState) -> None:
@@ -126,6 +138,5 @@ def test_without_a_plan_the_plan_view_says_so(state: LiveState) -> None:
 
 
 def test_an_event_reaches_the_page_with_its_readable_line(state: LiveState) -> None:
-    state.add_event({"id": 9, "kind": "FAULT", "subject": "lidar",
-                     "data": {"count": 1, "permanent": False, "reason": "crashed"}})  # fmt: skip
+    state.add_event(event(9, "FAULT", "lidar", count=1, permanent=False, reason="crashed"))
     assert state.view("events")["events"][-1]["text"] == "lidar: fault 1: crashed"

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from executive.bus.reports import RoundPhase
 from executive.planning.goal_planner import GoalPlanner
 from executive.planning.goals import submit
 from executive.planning.partial_order import Step
@@ -250,13 +251,13 @@ def test_a_goal_cancelled_during_the_search_is_cancelled_at_once_and_never_plann
             office = submit(ex.kb, usecase_domain(), "(picture_taken office)", priority=5)
             lab = submit(ex.kb, usecase_domain(), "(robot_at lab)")
         ex.goals.wake("two goals added")
-        eventually(lambda: ex.goals.status()["phase"] == "searching")
+        eventually(lambda: ex.goals.status().phase is RoundPhase.SEARCHING)
 
         cancelled = ex.goals.cancel(office.id)
 
         assert cancelled.state is GoalState.CANCELLED
         # the cancel was applied while the search still ran: the owner did not wait for it
-        assert ex.goals.status()["phase"] == "searching"
+        assert ex.goals.status().phase is RoundPhase.SEARCHING
         eventually(lambda: ex.state(lab) is GoalState.ACHIEVED)
         first, again = ex.kb.events(kind="PLANNING")
         assert first.data["goals"] == [office.id, lab.id]
@@ -272,7 +273,7 @@ def test_a_goal_cancelled_during_the_search_is_cancelled_at_once_and_never_plann
         assert [p.goal_ids for p in ex.kb.plans()] == [(lab.id,)]
         assert ex.runner.labels() == ["move_to(dock, lab)"]
         assert [e.data["goals"] for e in ex.kb.events(kind="PLAN_START")] == [[lab.id]]
-        eventually(lambda: not ex.goals.status()["planning"])
+        eventually(lambda: not ex.goals.status().planning)
         print(f"search with the cancel: {again.stamp - first.stamp:.2f} s")
     finally:
         ex.stop()
@@ -289,7 +290,7 @@ def test_a_cancelled_goal_stays_cancelled_and_a_second_cancel_says_so(
         ex.goals.cancel(goal.id)
     with pytest.raises(KnowledgeError, match=r"^no goal 99$"):
         ex.goals.cancel(99)
-    eventually(lambda: not ex.goals.status()["planning"])
+    eventually(lambda: not ex.goals.status().planning)
     assert ex.state(goal) is GoalState.CANCELLED
     kinds = [e.kind for e in ex.kb.events() if e.subject == f"goal {goal.id}"]
     assert kinds[-1] == "GOAL_CANCELLED" and kinds.count("GOAL_CANCELLED") == 1

@@ -21,6 +21,7 @@ from executive.bus.api.planning import GOAL_LIST, GOAL_SHOW, GoalQuery
 from executive.bus.event_relay import EventRelay
 from executive.bus.keys import EVENTS
 from executive.bus.lifecycle_manager import LifecycleManager
+from executive.bus.reports import RoundPhase
 from executive.bus.service import Context, ServiceState
 from executive.bus.session import Bus
 from executive.planning.goals import submit
@@ -279,7 +280,9 @@ def test_a_goal_cancelled_while_its_plan_is_computed_is_never_planned_or_execute
         office = submit(robot.kb, domain, "(picture_taken office)", priority=5)
         lab = submit(robot.kb, domain, "(robot_at lab)")
     robot.high.deliberation.goals.wake("two goals added")
-    assert wait_for(lambda: robot.high.deliberation.goals.status()["phase"] == "searching", 30)
+    assert wait_for(
+        lambda: robot.high.deliberation.goals.status().phase is RoundPhase.SEARCHING, 30
+    )
     assert robot.kb.events(kind="PLANNING")[0].data["goals"] == [office.id, lab.id]
 
     cancel = robot.dura("goal", "cancel", str(office.id))  # while kairos-slow plans

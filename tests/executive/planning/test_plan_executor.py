@@ -9,6 +9,7 @@ from collections.abc import Callable, Iterator, Sequence
 
 import pytest
 
+from executive.bus.reports import StepStatus
 from executive.planning.expression import Atom, Const
 from executive.planning.goals import GoalSpec, submit
 from executive.planning.partial_order import Effect, PartialOrderPlan, Step
@@ -166,8 +167,8 @@ def test_pausing_pauses_interruptible_tasks_and_waits_for_critical_ones(
     assert r.executor.pause(timeout=10)
     assert move.calls == ["pause"]
     status = r.executor.status()
-    assert (status["plan"], status["paused"]) == (plan_id, True)
-    assert [s["state"] for s in status["steps"]] == ["paused"]
+    assert (status.plan, status.paused) == (plan_id, True)
+    assert [s.state for s in status.steps] == ["paused"]
     # the planner sees the robot where the paused step started
     assert Fact("robot_at", ("dock",)) in r.executor.planning_facts()
     assert Fact("robot_at", ("dock",)) not in r.kb.facts()
@@ -263,19 +264,14 @@ def test_status_answers_from_a_snapshot_while_the_executor_is_busy(
     try:
         assert runner.entered.wait(10)  # the executor's thread waits in the runner
         status = r.executor.status()  # answered while its thread is held in the runner
-        assert status["plan"] is None  # as of the last job: the plan is not handed over yet
+        assert status.plan is None  # as of the last job: the plan is not handed over yet
     finally:
         runner.release.set()
         handing_over.join(10)
-    eventually(lambda: r.executor.status()["plan"] == plan_id)
+    eventually(lambda: r.executor.status().plan == plan_id)
     eventually(lambda: r.kb.plan(plan_id).state is PlanState.SUCCEEDED)
     # the snapshot follows the job that ended the plan (it is taken after each job)
-    eventually(
-        lambda: (
-            r.executor.status()["steps"]
-            == [{"index": 0, "step": "move_to(dock, lab)", "state": "ended"}]
-        )
-    )
+    eventually(lambda: r.executor.status().steps == (StepStatus(0, "move_to(dock, lab)", "ended"),))
 
 
 def test_an_executor_with_an_owner_reports_goal_and_plan_changes_instead_of_writing_them(

@@ -34,16 +34,16 @@ def test_components_are_listed_started_stopped_and_their_logs_read_through_the_v
             started = COMPONENT_START.call(r.bus, ComponentName("lidar"))
             assert started.state is Lifecycle.READY
             (listed,) = COMPONENT_LIST.call(r.bus).components
-            assert (listed["component"], listed["kind"], listed["state"]) == (
+            assert (listed.component, listed.kind, listed.state) == (
                 "lidar",
                 "functionality",
-                "ready",
+                Lifecycle.READY,
             )
-            assert listed["log"] == str(tmp_path / "logs" / "lidar.log")
-            assert listed["pid"] == started.pid
+            assert listed.log == str(tmp_path / "logs" / "lidar.log")
+            assert listed.pid == started.pid
             assert COMPONENT_STOP.call(r.bus, ComponentName("lidar")).state is Lifecycle.STOPPED
             (stopped,) = COMPONENT_LIST.call(r.bus).components
-            assert (stopped["state"], stopped["pid"]) == ("stopped", None)  # no pid shown
+            assert (stopped.state, stopped.pid) == (Lifecycle.STOPPED, None)  # no pid shown
             logs = COMPONENT_LOGS.call(r.bus, LogQuery("lidar", lines=1))
             assert logs.lines[0].startswith("--- dura: stopped: exited with code 0")
         finally:

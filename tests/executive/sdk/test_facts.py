@@ -24,9 +24,9 @@ def test_a_fact_a_component_sets_or_unsets_is_logged_with_the_component_as_its_s
     with RobotProcess(description, tmp_path / "run") as robot:
         assert robot.request("component/start", {"name": "sensor"})["state"] == "ready"
         changes = [
-            (e["kind"], e["subject"], e["data"]["source"])
+            (e.kind, e.subject, e.data["source"])
             for e in robot.events()
-            if e["kind"] in ("STATE_SET", "STATE_UNSET")
+            if e.kind in ("STATE_SET", "STATE_UNSET")
         ]
         assert changes == [
             ("STATE_UNSET", "(photographable lab)", "sensor"),

@@ -43,13 +43,13 @@ def test_status_queries_answer_from_the_snapshot_while_a_component_starts_slowly
             query()
         # every query answered while the camera was still starting: none waited for it
         assert r.launcher.state("slow_cam").state is Lifecycle.STARTING
-        listed = {t["id"]: t["state"] for t in TASK_LIST.call(r.bus).tasks}
+        listed = {t.id: t.state for t in TASK_LIST.call(r.bus).tasks}
         assert listed == {first.id: "starting", second.id: "waiting"}
         assert SCHEDULE_SHOW.call(r.bus).running == ["slow_cam"]
         assert first.wait(30) and first.phase is TaskPhase.SUCCEEDED, first.reason
         assert first.end is TaskEnd.SUCCEEDED
         assert second.wait(30) and second.phase is TaskPhase.SUCCEEDED, second.reason
-        assert wait_for(lambda: [t["state"] for t in tasks.tasks()] == ["succeeded"] * 2)
+        assert wait_for(lambda: [t.state for t in tasks.tasks()] == ["succeeded"] * 2)
 
 
 def test_a_task_ended_by_its_requester_or_by_a_user_says_who_ended_it(
@@ -60,7 +60,7 @@ def test_a_task_ended_by_its_requester_or_by_a_user_says_who_ended_it(
         theirs = tasks.start_task("take_picture", {"place": "office"})  # waits for mine
         mine.cancel("no longer needed")
         stopped = TASK_STOP.call(r.bus, TaskId(theirs.id)).task
-        assert (stopped["state"], stopped["ended_by"]) == ("cancelled", "user")
+        assert (stopped.state, stopped.ended_by) == ("cancelled", "user")
         assert mine.wait(30) and theirs.wait(30)
         assert (mine.phase, mine.end, mine.reason) == (
             TaskPhase.CANCELLED,

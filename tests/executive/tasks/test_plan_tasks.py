@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 
 from executive.bus.api.tasks import TASK_STOP, TaskId
+from executive.bus.reports import ExecutorTask
 from executive.planning.partial_order import Step
 from executive.planning.task_runner import Progress, StepReport
 from executive.tasks.executor import TaskExecutor
@@ -40,8 +41,8 @@ class Reports:
             return list(self._seen.get(step, []))
 
 
-def task_of(tasks: TaskExecutor, name: str) -> dict[str, Any]:
-    return next(t for t in tasks.tasks() if t["name"] == name)
+def task_of(tasks: TaskExecutor, name: str) -> ExecutorTask:
+    return next(t for t in tasks.tasks() if t.name == name)
 
 
 def picture(index: int, place: str) -> Step:
@@ -58,9 +59,9 @@ def test_a_step_its_plan_cancels_reports_nothing_and_one_a_user_stops_fails(
         dropped = runner.run(picture(0, "lab"), plan, reports.report(0))
         runner.run(picture(1, "office"), plan, reports.report(1))  # waits for the first
         dropped.cancel()
-        TASK_STOP.call(r.bus, TaskId(task_of(tasks, "take_picture(office)")["id"]))
+        TASK_STOP.call(r.bus, TaskId(task_of(tasks, "take_picture(office)").id))
         assert wait_for(lambda: reports.of(1) != [], 30)
         assert reports.of(1)[-1] == (Progress.FAILED, "cancelled: stopped by the user")
-        assert wait_for(lambda: task_of(tasks, "take_picture(lab)")["state"] == "cancelled", 30)
-        assert task_of(tasks, "take_picture(lab)")["ended_by"] == TaskEnd.REQUESTER.value
+        assert wait_for(lambda: task_of(tasks, "take_picture(lab)").state == "cancelled", 30)
+        assert task_of(tasks, "take_picture(lab)").ended_by == TaskEnd.REQUESTER.value
         assert all(kind is not Progress.FAILED for kind, _ in reports.of(0)), reports.of(0)

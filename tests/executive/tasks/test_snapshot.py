@@ -21,23 +21,23 @@ def test_the_schedule_shows_open_tasks_in_seconds_from_now_and_leaves_ended_ones
         faulty=frozenset({"lidar"}),
     )  # fmt: skip
     shown = snapshot.schedule(NOW)
-    assert [(r["id"], r["start"], r["end"]) for r in shown.tasks] == [
+    assert [(r.id, r.start, r.end) for r in shown.tasks] == [
         ("1", -3.0, 1.0),
         ("2", 5.0, 7.0),
     ]
     assert (shown.running, shown.faulty) == (["cam"], ["lidar"])
     listed = snapshot.task_list()
-    assert [(t["id"], t["state"], t["ended_by"]) for t in listed] == [
+    assert [(t.id, t.state, t.ended_by) for t in listed] == [
         ("1", "running", None),
         ("2", "waiting", None),
         ("3", "succeeded", "succeeded"),
     ]
-    assert listed[0]["functionalities"] == ["cam"]
+    assert listed[0].functionalities == ("cam",)
 
 
 def test_a_task_asked_for_joins_the_snapshot_as_waiting() -> None:
     snapshot = Snapshot().adding(TaskView("7", "move_to", 5.0, name="move_to(dock, lab)"))
-    assert [(t["id"], t["name"], t["state"]) for t in snapshot.task_list()] == [
+    assert [(t.id, t.name, t.state) for t in snapshot.task_list()] == [
         ("7", "move_to(dock, lab)", "waiting")
     ]
 
@@ -49,9 +49,9 @@ def test_a_task_waiting_behind_a_running_one_is_drawn_after_it_as_the_scheduler_
             TaskView("2", "move_to", 5.0, behind=("1",)),
         )
     )
-    assert [(r["id"], r["start"], r["end"]) for r in snapshot.schedule(NOW).tasks] == [
+    assert [(r.id, r.start, r.end) for r in snapshot.schedule(NOW).tasks] == [
         ("1", -1.0, 4.0),
         ("2", 4.0, 9.0),
     ]
     overran = snapshot.schedule(NOW + 6.0)  # the first runs longer than planned
-    assert [(r["id"], r["start"]) for r in overran.tasks] == [("1", -7.0), ("2", 0.0)]
+    assert [(r.id, r.start) for r in overran.tasks] == [("1", -7.0), ("2", 0.0)]

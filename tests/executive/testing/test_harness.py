@@ -28,7 +28,7 @@ def test_a_fault_injected_before_the_component_runs_strikes_once_it_runs(
     robot.request("component/start", {"name": "lidar"})
     injected.join(30)
     assert not injected.is_alive()
-    assert wait_for(lambda: [e["subject"] for e in robot.events("FAULT")] == ["lidar"], 10)
+    assert wait_for(lambda: [e.subject for e in robot.events("FAULT")] == ["lidar"], 10)
 
 
 def test_a_fault_for_a_component_that_does_not_run_or_a_bad_fault_is_a_clear_error(

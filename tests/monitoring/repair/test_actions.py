@@ -15,8 +15,11 @@ from aiosmtpd.controller import Controller
 
 from executive.bus.api import planning, tasks
 from executive.bus.keys import api
+from executive.bus.payloads import ComponentState
 from executive.bus.session import Bus
+from executive.bus.states import Lifecycle
 from knowledge.errors import BusError, DuraError
+from knowledge.records import Goal, GoalState
 from monitoring.repair.action import ActionContext, Firing
 from monitoring.repair.rule import Rule, read_rules
 
@@ -139,13 +142,13 @@ def executive(endpoint: str) -> Iterator[tuple[Bus, list[tuple[str, dict[str, An
                 requests.append((key.removeprefix("executive/api/"), request.to_payload()))
                 if request.name == "unknown":
                     raise DuraError("no component 'unknown'")
-                return tasks.FaultReply({"component": request.name, "state": "ready"}, 1, False)
+                return tasks.FaultReply(ComponentState(request.name, Lifecycle.READY), 1, False)
 
             verb.serve(server, fault)
 
         def goal(request: planning.GoalAdd) -> planning.GoalReply:
             requests.append(("goal/add", request.to_payload()))
-            return planning.GoalReply({"id": 1, "expression": request.expression})
+            return planning.GoalReply(Goal(1, request.expression, GoalState.PENDING))
 
         planning.GOAL_ADD.serve(server, goal)
         for verb_name in ("parameter/set", "replan"):
