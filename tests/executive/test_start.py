@@ -21,6 +21,7 @@ from executive.bus.api import planning
 from executive.bus.session import Bus
 from executive.testing.harness import free_endpoint, robot_variant
 from knowledge.errors import BusError
+from knowledge.records import GoalState
 from tests.conftest import ROOT, USECASE
 
 pytestmark = pytest.mark.slow
@@ -70,14 +71,16 @@ def test_a_goal_sent_as_soon_as_the_executive_answers_waits_for_the_planner(
                 first = planning.STATUS.call(bus, timeout=1.0)
         assert first.robot == "usecase"
         facts = planning.STATE_GET.call(bus, planning.StateQuery("robot_at")).facts
-        assert [f["text"] for f in facts] == ["(robot_at dock)"]  # a new robot waits for it
+        assert [f.text for f in facts] == ["(robot_at dock)"]  # a new robot waits for it
         goal = planning.GOAL_ADD.call(bus, planning.GoalAdd("(robot_at dock)")).goal
-        assert goal["state"] == "pending"  # accepted: the planner had parsed the domain
+        assert goal.state is GoalState.PENDING  # accepted: the planner had parsed the domain
         deadline = time.monotonic() + 60
-        while planning.GOAL_SHOW.call(bus, planning.GoalId(goal["id"])).goal["state"] != "achieved":
+        shown = planning.GoalId(goal.id)
+        while planning.GOAL_SHOW.call(bus, shown).goal.state is not GoalState.ACHIEVED:
             assert time.monotonic() < deadline, "the goal was not achieved"
             time.sleep(0.05)
-        assert planning.STATUS.call(bus).planning["starting"] is False
+        status = planning.STATUS.call(bus)
+        assert status.planning is not None and status.planning.starting is False
 
 
 def test_the_executive_process_leaves_unified_planning_to_its_planner_worker(
