@@ -62,10 +62,9 @@ from executive.planning.problem import seed
 from executive.planning.recovery import recover
 from executive.planning.sensing import Sensing
 from knowledge.availability import blocked_tasks
-from knowledge.errors import ConfigError, DuraError, KnowledgeError
+from knowledge.errors import ConfigError, DuraError, KnowledgeError, did_you_mean
 from knowledge.records import Event, Fact, to_plain
 from knowledge.transitions import PlanState
-from knowledge.yamlsource import did_you_mean
 
 log = logging.getLogger("dura.high_level")
 FAULT_CHANGES = ("PERMANENT_FAULT", "COMPONENT_RESET")  # events that may block or free tasks
