@@ -127,39 +127,40 @@ def unique_names(rules: tuple[SensingRuleSpec, ...], place: Place) -> tuple[Sens
     return tuple(kept)
 
 
-def _checked(rule: SensingRuleSpec, s: Entry) -> SensingRuleSpec | None:
+def _checked(rule: SensingRuleSpec, entry: Entry) -> SensingRuleSpec | None:
     """The rule with its name, if its parts fit together (the problems reported)."""
-    name = rule.name or rule.fact or rule.value or f"sensing rule at line {s.line}"
-    s.what = f"sensing rule '{name}'"
+    name = rule.name or rule.fact or rule.value or f"sensing rule at line {entry.line}"
+    entry.what = f"sensing rule '{name}'"
     fact, value, path = rule.fact, rule.value, rule.path
     ok = rule.topic is not None and path is not None
     if path is not None and field_problem(path):
-        s.error("field", f"{s.what}: {field_problem(path)}")
+        entry.error("field", f"{entry.what}: {field_problem(path)}")
         ok = False
     if (fact is None) == (value is None):
-        s.error(None, f"{s.what} needs exactly one of 'fact' and 'value'")
+        entry.error(None, f"{entry.what} needs exactly one of 'fact' and 'value'")
         ok = False
-    given = [k for k in CONDITIONS if s.has(k)]
-    if s.has("equals") and rule.equals is None:
+    given = [k for k in CONDITIONS if entry.has(k)]
+    if entry.has("equals") and rule.equals is None:
         ok = False  # reported as it was read
     if fact is not None and len(given) != 1:
-        s.error(None, f"{s.what}: a fact needs exactly one of {', '.join(CONDITIONS)}")
+        entry.error(None, f"{entry.what}: a fact needs exactly one of {', '.join(CONDITIONS)}")
         ok = False
     if value is not None and given:
-        s.error(given[0], f"{s.what}: a value takes no '{given[0]}'")
+        entry.error(given[0], f"{entry.what}: a value takes no '{given[0]}'")
         ok = False
     for clear, level, goes_with, limit in (
         ("clear_above", rule.clear_above, "below", rule.below),
         ("clear_below", rule.clear_below, "above", rule.above),
     ):
-        if level is None or (limit is None and s.has(goes_with)):
+        if level is None or (limit is None and entry.has(goes_with)):
             continue  # not given, or not a number (reported)
         if limit is None:
-            s.error(clear, f"{s.what}: '{clear}' goes with '{goes_with}'")
+            entry.error(clear, f"{entry.what}: '{clear}' goes with '{goes_with}'")
             ok = False
         elif (level < limit) if goes_with == "below" else (level > limit):
-            s.error(
-                clear, f"{s.what}: '{clear}' ({level:g}) must not undo '{goes_with}' ({limit:g})"
+            entry.error(
+                clear,
+                f"{entry.what}: '{clear}' ({level:g}) must not undo '{goes_with}' ({limit:g})",
             )
             ok = False
     if not ok or rule.topic is None:

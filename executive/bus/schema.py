@@ -15,7 +15,7 @@ Payload classes are declared with :func:`payload`: frozen dataclasses (assigning
 raises :class:`dataclasses.FrozenInstanceError`) whose constructor, comparison, hash,
 repr and immutability are shared by every payload class, not generated and compiled
 for each: defining one costs a tenth of what a frozen dataclass costs, and a command
-loads tens of them.
+loads tens of them (see :func:`payload`).
 """
 
 from __future__ import annotations
@@ -173,10 +173,11 @@ def payload(cls: type[T]) -> type[T]:
 
     Its constructor, comparison, hash, repr and its refusal to change a field are shared
     by every payload class, not generated and compiled for each as by
-    ``dataclass(frozen=True)``: a class costs 0.05 ms to create instead of 0.5, and a
-    quick command loads tens of them. A class the shared constructor cannot make
-    (keyword-only, ``InitVar`` or ``init=False`` fields, a ``__post_init__``, dataclass
-    bases) is made by ``dataclass(frozen=True)``."""
+    ``dataclass(frozen=True)``: a class costs about 0.03 ms to create instead of 0.3
+    (0.15 for a dataclass that is not frozen), and a quick command loads tens of them;
+    making an instance costs about 0.9 µs instead of 0.4. A class the shared constructor
+    cannot make (keyword-only, ``InitVar`` or ``init=False`` fields, a ``__post_init__``,
+    dataclass bases) is made by ``dataclass(frozen=True)``."""
     if not _plain(cls):
         made: Any = dataclass(frozen=True, eq=False, repr=False)(cls)
     else:
@@ -192,8 +193,8 @@ def payload(cls: type[T]) -> type[T]:
     return made  # type: ignore[no-any-return]
 
 
-def inspect_annotations(cls: type) -> dict[str, Any]:
-    """A class's own annotations, as written (without importing ``inspect``)."""
+def _own_annotations(cls: type) -> dict[str, Any]:
+    """A class's own annotations, as written (``inspect`` is not imported for them)."""
     found: dict[str, Any] = cls.__dict__.get("__annotations__", {})  # noqa: RUF063
     return found
 
@@ -203,7 +204,7 @@ def _plain(cls: type) -> bool:
     it has no ``__post_init__`` nor dataclass bases."""
     if hasattr(cls, "__post_init__") or any(dataclasses.is_dataclass(b) for b in cls.__mro__[1:]):
         return False
-    for name, annotation in inspect_annotations(cls).items():
+    for name, annotation in _own_annotations(cls).items():
         if any(word in str(annotation) for word in ("KW_ONLY", "InitVar")):
             return False
         value = cls.__dict__.get(name)

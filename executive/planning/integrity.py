@@ -35,7 +35,6 @@ from executive.planning.expression import Expression, Signature, WorldState, par
 from executive.planning.goals import normalized, submit
 from knowledge.conventions import (
     AtLeast,
-    Check,
     Convert,
     Default,
     EntryLine,
@@ -81,11 +80,12 @@ class IntegrityRule:
 
 
 class _Context(NamedTuple):
-    """What the rules of a file are checked against."""
+    """What the rules of a file are checked against, and the names of those read."""
 
     robot: RobotDescription
     signature: Signature
     path: str
+    names: set[str]
 
 
 @dataclass(frozen=True)
@@ -156,6 +156,9 @@ class RuleEntry:
                 trigger = None
         if self.name is None or goal is None or trigger is None or subject is None:
             return None
+        if self.name in context.names:
+            entry.error(None, f"duplicate rule name '{self.name}'")  # kept, as the first
+        context.names.add(self.name)
         return IntegrityRule(
             self.name, trigger, subject, normalized(goal), self.priority, self.deadline,
             self.hold, f"{context.path}:{self.line}", self.keep,
@@ -166,26 +169,12 @@ def _rule(value: Any, place: Place) -> Any:
     return read_value(RuleEntry, value, place)  # an IntegrityRule, by its after_read
 
 
-def _unique(rules: tuple[IntegrityRule, ...], place: Place) -> tuple[IntegrityRule, ...]:
-    """Report a rule whose name an earlier one has (both are kept)."""
-    names: set[str] = set()
-    for rule in rules:
-        if rule.name in names:
-            place.source.error(
-                int(rule.where.rpartition(":")[2]), f"duplicate rule name '{rule.name}'"
-            )
-        names.add(rule.name)
-    return rules
-
-
 @dataclass(frozen=True)
 class IntegrityFile:
     """A file of integrity rules, as written."""
 
     goals: Annotated[
-        tuple[Annotated[IntegrityRule, Convert(_rule)], ...],
-        Label("integrity rule"),
-        Check(_unique),
+        tuple[Annotated[IntegrityRule, Convert(_rule)], ...], Label("integrity rule")
     ] = ()
 
 
@@ -209,7 +198,7 @@ def read_rules(
     rules: list[IntegrityRule] = []
     found = read_file(path, report)
     if found is not None:
-        context = _Context(robot, Signature.of(domain, objects), report.path)
+        context = _Context(robot, Signature.of(domain, objects), report.path, set())
         source = DocumentSource(found, report, context=context)
         written = read(IntegrityFile, found.value, source, "the integrity rules")
         rules = list(written.goals) if written is not None else []
