@@ -4,8 +4,13 @@ The bottom layer: it imports nothing else of dura, and every other package may i
 it.
 
 - :mod:`.description` — the robot description as typed, frozen data;
-- :mod:`.robot` — reading it from YAML (:mod:`.yamlsource`: YAML read against a schema,
-  with the line of every value);
+- :mod:`.typed_reader` — the one reader of typed data: robot descriptions, observer
+  configurations, rules and bus payloads, each declared once as annotated frozen
+  dataclasses (:mod:`.conventions`: the markers of ``Annotated``; :mod:`.field_plan`:
+  how each field is read, worked out once per class; :mod:`.value_source`: where values
+  come from, and how a problem is worded and placed);
+- :mod:`.robot` — reading it from YAML (:mod:`.yamlsource`: YAML documents with the line
+  of every value, bounded in size, depth and aliases);
 - :mod:`.ros2_spec`, :mod:`.ros2_components` — a description's ``ros2:`` section and its
   ROS 2 programs as components; :mod:`.ros2_messages` — ROS 2 message definitions (with
   the services bundled in ``ros2_interfaces/``);

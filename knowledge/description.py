@@ -2,8 +2,9 @@
 
 A robot has functionalities (components that run until stopped and provide
 capabilities), behaviors (components that run a goal to completion) and tasks
-(the mapping of a PDDL action onto a behavior and its goal). See
-``knowledge/robot.py`` for reading and validating it.
+(the mapping of a PDDL action onto a behavior and its goal). The annotations are the
+schema of the YAML (:mod:`knowledge.typed_reader` reads by them); see
+``knowledge/robot.py`` for reading and validating a description.
 """
 
 from __future__ import annotations
@@ -13,14 +14,46 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
+from knowledge.conventions import (
+    AllLines,
+    AtLeast,
+    Check,
+    Convert,
+    EntryLine,
+    FromKey,
+    KeyLines,
+    Label,
+    Named,
+    OneOrMore,
+    Open,
+    OrDefault,
+    Whole,
+)
 from knowledge.errors import ConfigError
 
 if TYPE_CHECKING:  # read only for a ROS 2 robot: the command line stays quick to start
     from knowledge.ros2_components import Ros2ComponentSpec
     from knowledge.ros2_spec import Ros2Spec
     from knowledge.sensing_spec import SensingRuleSpec
+    from knowledge.typed_reader import Entry, Place
+
+
+_LATER = {  # imported when first asked for (a robot without ROS 2 never imports them)
+    "Ros2ComponentSpec": "knowledge.ros2_components",
+    "Ros2Spec": "knowledge.ros2_spec",
+    "SensingRuleSpec": "knowledge.sensing_spec",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """The types of the ROS 2 and sensing parts, for the reader of the annotations."""
+    if name in _LATER:
+        import importlib
+
+        return getattr(importlib.import_module(_LATER[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
@@ -31,6 +64,7 @@ SAFE_NAME_RULE = "must be a letter, then up to 63 letters, digits, '_' or '-'"
 SAFE_TOPIC = re.compile(r"/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*")
 SAFE_TOPIC_RULE = "must be names of letters, digits and '_' joined by '/' (a ROS topic name)"
 DEFAULT_ENGINE = "kairos"
+ENGINES = ("kairos", "aries", "fast-downward", "tamer")
 PYTHONS = ("python", "python3")  # in a command: the executive's own interpreter
 
 
@@ -49,9 +83,11 @@ class ObserverSpec:
     """
 
     type: str
-    config: Mapping[str, Any]
-    line: int = 0
-    lines: Mapping[str, int] = field(default_factory=dict, compare=False, repr=False)
+    config: Annotated[Mapping[str, Any], Whole()]
+    line: Annotated[int, EntryLine()] = 0
+    lines: Annotated[Mapping[str, int], AllLines()] = field(
+        default_factory=dict, compare=False, repr=False
+    )
 
     def line_of(self, path: str) -> int:
         """The line of a dotted path, or of its nearest enclosing entry."""
@@ -62,26 +98,46 @@ class ObserverSpec:
         return self.line
 
 
+def _ros2(value: Any, place: Place) -> Any:
+    from knowledge.ros2_components import read_component_ros2
+
+    return read_component_ros2(value, place)
+
+
+Texts = Annotated[tuple[str, ...], OneOrMore()]  # a single text is a list of one
+
+
 @dataclass(frozen=True)
 class ComponentSpec:
     """What functionalities and behaviors have in common."""
 
-    name: str
-    command: tuple[str, ...]
-    requires: tuple[str, ...] = ()
-    publishes: tuple[str, ...] = ()
-    subscribes: tuple[str, ...] = ()
+    name: Annotated[str, FromKey()]
+    command: Texts = ()  # needed unless dura's own client runs it (a ROS 2 action, service)
+    requires: Texts = ()
+    publishes: Texts = ()
+    subscribes: Texts = ()
     params: Mapping[str, Any] = field(default_factory=dict)
-    observers: tuple[ObserverSpec, ...] = ()
-    startup_timeout: float = 10.0
-    line: int = 0
-    lines: Mapping[str, int] = field(default_factory=dict, compare=False, repr=False)
-    ros2: Ros2ComponentSpec | None = None  # a ROS 2 program, or a ROS 2 action or service
+    observers: Annotated[
+        tuple[Annotated[ObserverSpec, Open()], ...], Label("observer in {what}")
+    ] = ()
+    startup_timeout: Annotated[float, AtLeast(0.0)] = 10.0
+    line: Annotated[int, EntryLine()] = 0
+    lines: Annotated[Mapping[str, int], KeyLines()] = field(
+        default_factory=dict, compare=False, repr=False
+    )
+    # a ROS 2 program, or a ROS 2 action or service
+    ros2: Annotated[Ros2ComponentSpec | None, Convert(_ros2)] = None
     host: str | None = None  # the computer whose host agent runs it (None: the executive's)
 
     @property
     def kind(self) -> Kind:
         raise NotImplementedError
+
+    def after_read(self, entry: Entry) -> ComponentSpec:
+        """Report a missing ``command`` (a ROS 2 action or service needs none)."""
+        if not entry.has("command") and (self.ros2 is None or self.ros2.call is None):
+            entry.error(None, f"{entry.what} has no 'command'")
+        return self
 
     def line_of(self, key: str) -> int:
         """The line of one of this component's keys (its own line if absent)."""
@@ -92,10 +148,10 @@ class ComponentSpec:
 class FunctionalitySpec(ComponentSpec):
     """A continuously running component that provides capabilities."""
 
-    provides: tuple[str, ...] = ()
+    provides: Texts = ()
     shareable: bool = True
-    rating: float = 1.0
-    max_faults: int = 3
+    rating: Annotated[float, AtLeast(0.0)] = 1.0
+    max_faults: Annotated[int, AtLeast(1)] = 3
     standby: bool = False  # kept running, paused, while no task needs it: a warm spare
 
     @property
@@ -109,7 +165,7 @@ class BehaviorSpec(ComponentSpec):
 
     interruptible: bool = True
     reconfigurable: bool = True
-    max_restarts: int = 2
+    max_restarts: Annotated[int, AtLeast(0)] = 2
 
     @property
     def kind(self) -> Kind:
@@ -148,22 +204,50 @@ class GoalArg:
             value = value[part]
         return value
 
+    @staticmethod
+    def written(value: Any, place: Place) -> Any:
+        """A goal field as written: ``?parameter``, ``?parameter.property`` or a constant."""
+        if isinstance(value, str) and value.startswith("?"):
+            parameter, _, prop = value[1:].partition(".")  # ?to.pose: a property of ?to
+            return GoalArg(parameter=parameter, property=prop or None)
+        if isinstance(value, Mapping | list):
+            return place.wrong("a ?parameter or a constant", value)
+        return GoalArg(constant=value)
+
 
 @dataclass(frozen=True)
 class TaskSpec:
     """A PDDL action carried out by a behavior."""
 
-    action: str
+    action: Annotated[str, FromKey()]
     behavior: str
-    goal: Mapping[str, GoalArg] = field(default_factory=dict)
-    line: int = 0
-    lines: Mapping[str, int] = field(default_factory=dict, compare=False, repr=False)
+    goal: Annotated[
+        Mapping[str, Annotated[GoalArg, Convert(GoalArg.written)]],
+        Named("goal field '{name}' of {what}"),
+    ] = field(default_factory=dict)
+    line: Annotated[int, EntryLine()] = 0
+    lines: Annotated[Mapping[str, int], KeyLines("goal")] = field(
+        default_factory=dict, compare=False, repr=False
+    )
+
+
+def _engine(engine: str, place: Place) -> str:
+    """Report an engine that is neither built in nor a plugin (``dura.planners``)."""
+    from importlib.metadata import entry_points
+
+    plugins = sorted(ep.name for ep in entry_points(group="dura.planners"))
+    if engine not in ENGINES and engine not in plugins:
+        place.entry.error(
+            place.key,
+            f"unknown planner engine '{engine}' (choose from {', '.join((*ENGINES, *plugins))})",
+        )
+    return engine
 
 
 @dataclass(frozen=True)
 class PlannerSpec:
-    engine: str = DEFAULT_ENGINE
-    timeout: float = 30.0
+    engine: Annotated[str, OrDefault(), Check(_engine)] = DEFAULT_ENGINE
+    timeout: Annotated[float, AtLeast(0.1)] = 30.0
 
 
 @dataclass(frozen=True)

@@ -56,3 +56,12 @@ class ServiceError(DuraError):
 def located(path: object, line: int | None, message: str) -> str:
     """Format ``file:line: message`` (or ``file: message`` without a line)."""
     return f"{path}:{line}: {message}" if line else f"{path}: {message}"
+
+
+def did_you_mean(word: str, choices: object) -> str:
+    """`` (did you mean 'x'?)`` for the closest choice, or an empty string."""
+    import difflib  # only once a word is wrong: commands stay quick to start
+
+    names = [str(c) for c in choices]  # type: ignore[attr-defined]
+    close = difflib.get_close_matches(word, names, n=1, cutoff=0.6)
+    return f" (did you mean '{close[0]}'?)" if close else ""

@@ -2,185 +2,88 @@
 
 Reading reports every problem it finds (type errors, unknown keys, missing fields)
 as a :class:`Finding` with its line; cross-checks between components, and with the
-PDDL domain, are in :mod:`knowledge.validation`.
+PDDL domain, are in :mod:`knowledge.validation`. :class:`RobotFile` is the schema of
+the file; the component, task and planner schemas are those of
+:mod:`knowledge.description`.
 """
 
 from __future__ import annotations
 
-from importlib.metadata import entry_points
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
-import yaml
-
+from knowledge.conventions import (
+    Check,
+    Exists,
+    Label,
+    Named,
+    OneOrMore,
+    OrDefault,
+    Required,
+)
 from knowledge.description import (
     DEFAULT_ENDPOINT,
     SAFE_NAME,
     SAFE_NAME_RULE,
     BehaviorSpec,
     FunctionalitySpec,
-    GoalArg,
-    Kind,
-    ObserverSpec,
     PlannerSpec,
     RobotDescription,
     TaskSpec,
 )
 from knowledge.errors import ConfigError
 from knowledge.finding import Finding, Report
-from knowledge.ros2_components import read_component_ros2
-from knowledge.ros2_spec import read_ros2
-from knowledge.sensing_spec import read_sensing
-from knowledge.yamlsource import Section, compose, describe, line_of, paths, to_python
+from knowledge.ros2_spec import Ros2Spec
+from knowledge.sensing_spec import SensingRuleSpec, unique_names
+from knowledge.typed_reader import Entry, read
+from knowledge.yamlsource import DocumentSource, read_file
 
-ENGINES = ("kairos", "aries", "fast-downward", "tamer")
+__all__ = ["BusSpec", "RobotFile", "load_robot", "read_robot"]
 
-
-def _path(base: Path, value: str | None) -> Path | None:
-    if value is None:
-        return None
-    p = Path(value).expanduser()
-    return p if p.is_absolute() else (base / p).resolve()
+Files = Annotated[tuple[Annotated[Path, Exists()], ...], OneOrMore()]  # each must exist
 
 
-def _files(top: Section, key: str, base: Path, *, required: bool = False) -> tuple[Path, ...]:
-    """Paths under a key, resolved against the description's folder; each must exist."""
-    out: list[Path] = []
-    for value in top.texts(key, required=required):
-        file = _path(base, value)
-        if file is None:
-            continue
-        if not file.is_file():
-            top.report.error(top.key_line(key), f"'{key}' names no file: {value}")
-        out.append(file)
-    return tuple(out)
+@dataclass(frozen=True)
+class BusSpec:
+    """How the robot's processes reach each other."""
+
+    endpoint: Annotated[str, OrDefault()] = DEFAULT_ENDPOINT
 
 
-def _observers(section: Section, key: str, report: Report) -> tuple[ObserverSpec, ...]:
-    out: list[ObserverSpec] = []
-    for node in section.sequence(key):
-        entry = Section(node, f"observer in {section.what}", report)
-        if not entry.valid:
-            continue
-        kind = entry.text("type", required=True)
-        if kind is None:
-            continue
-        config = to_python(node)
-        out.append(
-            ObserverSpec(kind, config if isinstance(config, dict) else {}, entry.line, paths(node))
-        )
-    return tuple(out)
+@dataclass(frozen=True)
+class RobotFile:
+    """A robot description as written; paths are resolved against its folder."""
 
-
-def _common(s: Section, report: Report, kind: Kind) -> dict[str, Any]:
-    """The fields functionalities and behaviors share."""
-    ros2 = read_component_ros2(s.section("ros2"), kind, report)
-    program_optional = ros2 is not None and ros2.call is not None  # dura's own client runs it
-    return {
-        "ros2": ros2,
-        "command": s.texts("command", required=not program_optional),
-        "requires": s.texts("requires"),
-        "publishes": s.texts("publishes"),
-        "subscribes": s.texts("subscribes"),
-        "params": s.plain("params"),
-        "observers": _observers(s, "observers", report),
-        "startup_timeout": s.number("startup_timeout", 10.0, minimum=0.0),
-        "host": s.text("host"),
-        "line": s.line,
-        "lines": {k: s.key_line(k) for k in s.written()},
-    }
-
-
-def _functionality(
-    name: str, node: yaml.Node, line: int, report: Report
-) -> FunctionalitySpec | None:
-    s = Section(node, f"functionality '{name}'", report, line)
-    if not s.valid:
-        return None
-    f = FunctionalitySpec(
-        name=name,
-        provides=s.texts("provides"),
-        shareable=s.flag("shareable", True),
-        rating=s.number("rating", 1.0, minimum=0.0),
-        max_faults=s.integer("max_faults", 3, minimum=1),
-        standby=s.flag("standby", False),
-        **_common(s, report, Kind.FUNCTIONALITY),
+    robot: Annotated[str, Required()] = ""
+    domain: Annotated[Files, Required()] = ()
+    problem: Files = ()
+    planner: PlannerSpec = PlannerSpec()  # noqa: RUF009 - frozen: one default for all
+    bus: BusSpec = BusSpec()
+    knowledge_base: Path | None = None
+    rules: Files = ()
+    integrity: Files = ()
+    functionalities: Annotated[Mapping[str, FunctionalitySpec], Named("functionality '{name}'")] = (
+        field(default_factory=dict)
     )
-    s.close()
-    return f
-
-
-def _behavior(name: str, node: yaml.Node, line: int, report: Report) -> BehaviorSpec | None:
-    s = Section(node, f"behavior '{name}'", report, line)
-    if not s.valid:
-        return None
-    b = BehaviorSpec(
-        name=name,
-        interruptible=s.flag("interruptible", True),
-        reconfigurable=s.flag("reconfigurable", True),
-        max_restarts=s.integer("max_restarts", 2, minimum=0),
-        **_common(s, report, Kind.BEHAVIOR),
+    behaviors: Annotated[Mapping[str, BehaviorSpec], Named("behavior '{name}'")] = field(
+        default_factory=dict
     )
-    s.close()
-    return b
+    tasks: Annotated[Mapping[str, TaskSpec], Named("task '{name}'")] = field(default_factory=dict)
+    ros2: Ros2Spec | None = None
+    objects: Annotated[  # each PDDL object's properties, for goal fields
+        Mapping[str, Mapping[str, Any]], Named("the properties of object '{name}'")
+    ] = field(default_factory=dict)
+    sensing: Annotated[tuple[SensingRuleSpec, ...], Label("sensing rule"), Check(unique_names)] = ()
 
-
-def _task(action: str, node: yaml.Node, line: int, report: Report) -> TaskSpec | None:
-    s = Section(node, f"task '{action}'", report, line)
-    if not s.valid:
-        return None
-    behavior = s.text("behavior", required=True)
-    goal: dict[str, GoalArg] = {}
-    lines = {k: s.key_line(k) for k in s.written()}
-    for field, value, field_line in s.named("goal"):
-        lines[f"goal.{field}"] = field_line
-        if isinstance(value, yaml.ScalarNode) and value.tag == "tag:yaml.org,2002:str":
-            text = str(value.value)
-            if text.startswith("?"):
-                parameter, _, prop = text[1:].partition(".")  # ?to.pose: a property of ?to
-                goal[field] = GoalArg(parameter=parameter, property=prop or None)
-                continue
-        if not isinstance(value, yaml.ScalarNode):
-            report.error(
-                line_of(value),
-                f"goal field '{field}' of task '{action}' must be a ?parameter or a constant, "
-                f"not {describe(value)}",
-            )
-            continue
-        goal[field] = GoalArg(constant=to_python(value))
-    s.close()
-    if behavior is None:
-        return None
-    return TaskSpec(action, behavior, goal, s.line, lines)
-
-
-def _objects(top: Section, report: Report) -> dict[str, dict[str, Any]]:
-    """Read ``objects:``: each PDDL object's properties (a mapping), for goal fields."""
-    out: dict[str, dict[str, Any]] = {}
-    for name, node, line in top.named("objects"):
-        value = to_python(node)
-        if not isinstance(value, dict):
-            report.error(
-                line, f"the properties of object '{name}' must be a mapping, not {describe(node)}"
-            )
-            continue
-        out[name] = value
-    return out
-
-
-def _planner(s: Section | None, report: Report) -> PlannerSpec:
-    if s is None or not s.valid:
-        return PlannerSpec()
-    engine = s.text("engine", "kairos") or "kairos"
-    plugins = sorted(ep.name for ep in entry_points(group="dura.planners"))
-    if engine not in ENGINES and engine not in plugins:
-        report.error(
-            s.key_line("engine"),
-            f"unknown planner engine '{engine}' (choose from {', '.join((*ENGINES, *plugins))})",
-        )
-    timeout = s.number("timeout", 30.0, minimum=0.1)
-    s.close()
-    return PlannerSpec(engine, timeout)
+    def after_read(self, entry: Entry) -> RobotFile:
+        """Name the robot after its file if the description does not; check the name."""
+        name = self.robot or Path(str(entry.source.context)).stem
+        if not SAFE_NAME.fullmatch(name):
+            entry.error("robot", f"robot name '{name}' {SAFE_NAME_RULE}")
+        return dataclasses.replace(self, robot=name)
 
 
 def read_robot(
@@ -193,64 +96,32 @@ def read_robot(
     """
     path = Path(path)
     report = Report(str(path))
-    node = compose(path, report, text)
-    if node is None:
+    found = read_file(path, report, text)
+    if found is None:
         if not report.findings:
             report.error(None, "is empty")
         return None, report.findings
-    top = Section(node, "the robot description", report)
-    if not top.valid:
-        return None, report.findings
     base = path.resolve().parent
-    name = top.text("robot", required=True) or path.stem
-    if not SAFE_NAME.fullmatch(name):
-        report.error(top.key_line("robot"), f"robot name '{name}' {SAFE_NAME_RULE}")
-    domain = next(iter(_files(top, "domain", base, required=True)), None)
-    problem = next(iter(_files(top, "problem", base)), None)
-    planner = _planner(top.section("planner"), report)
-    bus = top.section("bus")
-    endpoint = DEFAULT_ENDPOINT
-    if bus is not None and bus.valid:
-        endpoint = bus.text("endpoint", DEFAULT_ENDPOINT) or DEFAULT_ENDPOINT
-        bus.close()
-    kb = _path(base, top.text("knowledge_base"))
-    rules = _files(top, "rules", base)
-    integrity = _files(top, "integrity", base)
-    functionalities = {}
-    for fname, fnode, fline in top.named("functionalities"):
-        f = _functionality(fname, fnode, fline, report)
-        if f is not None:
-            functionalities[fname] = f
-    behaviors = {}
-    for bname, bnode, bline in top.named("behaviors"):
-        b = _behavior(bname, bnode, bline, report)
-        if b is not None:
-            behaviors[bname] = b
-    tasks = {}
-    for action, tnode, tline in top.named("tasks"):
-        t = _task(action, tnode, tline, report)
-        if t is not None:
-            tasks[action] = t
-    ros2 = read_ros2(top.section("ros2"), base, report)
-    objects = _objects(top, report)
-    sensing = read_sensing(top, report)
-    top.close()
+    source = DocumentSource(found, report, folder=base, context=path)
+    written = read(RobotFile, found.value, source, "the robot description")
+    if written is None:
+        return None, report.findings
     robot = RobotDescription(
-        name=name,
+        name=written.robot,
         path=path.resolve(),
-        domain=domain or base / "domain.pddl",
-        functionalities=functionalities,
-        behaviors=behaviors,
-        tasks=tasks,
-        problem=problem,
-        rules=rules,
-        integrity=integrity,
-        planner=planner,
-        endpoint=endpoint,
-        knowledge_base=kb,
-        ros2=ros2,
-        objects=objects,
-        sensing=sensing,
+        domain=next(iter(written.domain), base / "domain.pddl"),
+        functionalities=written.functionalities,
+        behaviors=written.behaviors,
+        tasks=written.tasks,
+        problem=next(iter(written.problem), None),
+        rules=written.rules,
+        integrity=written.integrity,
+        planner=written.planner,
+        endpoint=written.bus.endpoint,
+        knowledge_base=written.knowledge_base,
+        ros2=written.ros2,
+        objects=written.objects,
+        sensing=written.sensing,
     )
     return robot, report.findings
 

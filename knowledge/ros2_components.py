@@ -27,16 +27,17 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-from knowledge.description import Kind
-from knowledge.errors import ConfigError
-from knowledge.finding import Report
+from knowledge.conventions import AtLeast, Check
+from knowledge.description import FunctionalitySpec
+from knowledge.errors import ConfigError, did_you_mean
 from knowledge.ros2_messages import message_store
-from knowledge.yamlsource import Section, did_you_mean
+from knowledge.typed_reader import MISSING, Entry, Place, open_entry
 
 if TYPE_CHECKING:
     from knowledge.description import RobotDescription
+    from knowledge.finding import Report
 
 CALLS = ("action", "service")
 _NAMED = 2  # rosbags' Nodetype.NAME: a field that is a message
@@ -95,58 +96,55 @@ def interface_type(name: str, kind: str) -> str:
     return f"{parts[0]}/{folder}/{parts[1]}" if len(parts) == 2 else "/".join(parts)
 
 
-def read_component_ros2(
-    section: Section | None, kind: Kind, report: Report
-) -> Ros2ComponentSpec | None:
-    """Read a component's ``ros2:`` key."""
-    if section is None or not section.valid:
-        return None
-    node = _name(section, "node", "node")
-    lifecycle = section.flag("lifecycle", False)
-    calls = [c for c in CALLS if section.has(c)]
+def _ros_name(what: str) -> Any:
+    """A ROS 2 name of a kind (``node``, ``action``, ``service``), qualified."""
+
+    def qualified(text: str, place: Place) -> Any:
+        try:
+            return ros_name(text, what)
+        except ConfigError as e:
+            place.entry.error(place.key, f"{place.entry.what}: {e}")
+            return MISSING
+
+    return Annotated[str, Check(qualified)]
+
+
+def read_component_ros2(value: Any, place: Place) -> Any:
+    """Read a component's ``ros2:`` key (the component's schema says its kind)."""
+    s = open_entry(value, place.source, place.path, f"'ros2' of {place.entry.what}", place=place)
+    if s is None:
+        return MISSING
+    node = s.read("node", _ros_name("node"), None)
+    lifecycle = s.read("lifecycle", bool, False)
+    calls = [c for c in CALLS if s.has(c)]
     if len(calls) > 1:
-        report.error(section.key_line(calls[1]), f"{section.what} has both an action and a service")
-    call = _call(section, calls[0]) if calls else None
-    if not calls and section.has("type"):
-        section.node("type")
-        report.error(
-            section.key_line("type"), f"'type' of {section.what} needs an 'action' or a 'service'"
-        )
-    section.close()
+        s.error(calls[1], f"{s.what} has both an action and a service")
+    call = _call(s, calls[0]) if calls else None
+    if not calls and s.has("type"):
+        s.known("type")
+        s.error("type", f"'type' of {s.what} needs an 'action' or a 'service'")
+    s.close()
     if lifecycle and node is None:
-        report.error(section.line, f"{section.what}: a lifecycle node needs its 'node' name")
-    if kind is Kind.FUNCTIONALITY:
+        s.error(None, f"{s.what}: a lifecycle node needs its 'node' name")
+    schema = place.entry.schema
+    if schema is not None and issubclass(schema, FunctionalitySpec):
         if call is not None:
-            report.error(
-                section.key_line(call.kind),
-                f"{section.what}: a functionality takes no goals; an {call.kind} belongs to a behavior",
+            s.error(
+                call.kind,
+                f"{s.what}: a functionality takes no goals; an {call.kind} belongs to a behavior",
             )
             call = None
         if node is None:
-            report.error(section.line, f"{section.what} needs the 'node' name of its program")
+            s.error(None, f"{s.what} needs the 'node' name of its program")
     elif call is None and node is not None:
-        report.error(
-            section.line,
-            f"{section.what}: a ROS 2 behavior needs an 'action' or a 'service' for its goals",
-        )
-    return Ros2ComponentSpec(node, lifecycle, call, section.line)
+        s.error(None, f"{s.what}: a ROS 2 behavior needs an 'action' or a 'service' for its goals")
+    return Ros2ComponentSpec(node, lifecycle, call, s.line or 0)
 
 
-def _name(section: Section, key: str, what: str) -> str | None:
-    text = section.text(key)
-    if text is None:
-        return None
-    try:
-        return ros_name(text, what)
-    except ConfigError as e:
-        section.report.error(section.key_line(key), f"{section.what}: {e}")
-        return None
-
-
-def _call(section: Section, kind: str) -> Ros2Call | None:
-    name = _name(section, kind, kind)
-    kind_type = section.text("type", required=True)
-    wait = section.number("wait", DEFAULT_WAIT, minimum=0.0)  # only with a call
+def _call(s: Entry, kind: str) -> Ros2Call | None:
+    name = s.read(kind, _ros_name(kind), None)
+    kind_type = s.read("type", str, None, required=True)
+    wait = s.read("wait", Annotated[float, AtLeast(0.0)], DEFAULT_WAIT)  # only with a call
     if name is None or kind_type is None:
         return None
     return Ros2Call(kind, name, interface_type(kind_type, kind), wait)

@@ -26,9 +26,8 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from knowledge.errors import ConfigError
+from knowledge.errors import ConfigError, did_you_mean
 from knowledge.finding import Finding, Report
-from knowledge.yamlsource import did_you_mean
 
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore

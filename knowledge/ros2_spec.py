@@ -24,15 +24,25 @@ publishers alike).
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Annotated, Any
 
-import yaml
-
-from knowledge.errors import ConfigError
-from knowledge.finding import Report
+from knowledge.conventions import (
+    AtLeast,
+    AtMost,
+    Check,
+    Convert,
+    EntryLine,
+    FromKey,
+    OneOf,
+    OneOrMore,
+    OrDefault,
+)
+from knowledge.errors import ConfigError, did_you_mean
 from knowledge.ros2_messages import (
     DEFAULT_DISTRIBUTION,
     DISTRIBUTIONS,
@@ -40,7 +50,7 @@ from knowledge.ros2_messages import (
     read_definitions,
     standard_store,
 )
-from knowledge.yamlsource import Section, did_you_mean, line_of
+from knowledge.typed_reader import MISSING, Entry, Place, read
 
 TRANSPORTS = ("dds",)
 RELIABILITY = ("reliable", "best_effort")
@@ -74,13 +84,40 @@ OBSERVED_PROFILE = "sensor_data"
 
 
 @dataclass(frozen=True)
+class QosSpec:
+    """The QoS policies of a topic as written: what is not written is ``sensor_data``'s."""
+
+    reliability: Annotated[str, OrDefault(), OneOf(RELIABILITY, "reliability")] = "best_effort"
+    durability: Annotated[str, OrDefault(), OneOf(DURABILITY, "durability")] = "volatile"
+    history: Annotated[str, OrDefault(), OneOf(HISTORY, "history")] = "keep_last"
+    depth: Annotated[int, AtLeast(1)] = 5
+
+
+def _qos(value: Any, place: Place) -> Any:
+    """A QoS profile: its name, or its policies."""
+    if isinstance(value, str):
+        if value not in PROFILES:
+            return place.error(
+                f"unknown QoS profile '{value}' of {place.entry.what} (choose from "
+                f"{', '.join(PROFILES)}){did_you_mean(value, PROFILES)}"
+            )
+        return PROFILES[value]
+    what = f"the QoS of {place.entry.what}"
+    written = read(QosSpec, value, place.source, what, path=place.path)
+    if written is None:
+        return MISSING
+    return QosProfile(written.reliability, written.durability, written.history, written.depth)
+
+
+@dataclass(frozen=True)
 class Ros2TopicSpec:
     """One ROS 2 topic dura observes: its fully qualified name, type and QoS."""
 
-    name: str  # e.g. /scan
-    type: str | None = None  # e.g. sensor_msgs/msg/LaserScan; None: learnt from discovery
-    qos: QosProfile = PROFILES[OBSERVED_PROFILE]
-    line: int = 0
+    name: Annotated[str, FromKey()]  # e.g. /scan
+    # e.g. sensor_msgs/msg/LaserScan; None: learnt from discovery
+    type: Annotated[str | None, Check(lambda kind, place: normalize_type(kind))] = None
+    qos: Annotated[QosProfile, Convert(_qos)] = PROFILES[OBSERVED_PROFILE]
+    line: Annotated[int, EntryLine()] = 0
 
     @property
     def observed_as(self) -> str:
@@ -88,24 +125,98 @@ class Ros2TopicSpec:
         return self.name.strip("/")
 
 
+def _node(name: str, place: Place) -> str:
+    if not _TOKEN.fullmatch(name):
+        place.entry.error(place.key, f"invalid ROS 2 node name '{name}'")
+    return name
+
+
+def _optional_topic(value: Any, place: Place) -> Any:
+    """A topic name, or null: none."""
+    if value is None:
+        return None
+    if not isinstance(value, str):
+        return place.error(f"'{place.key}' of {place.entry.what} must be a topic name")
+    try:
+        return topic_name(value)
+    except ConfigError as e:
+        return place.error(f"'{place.key}' of {place.entry.what}: {e}")
+
+
+def _topics(value: Any, place: Place) -> Any:
+    """The ROS 2 topics observers may name, by observed name."""
+    if place.source.blank(value):
+        return {}
+    if not isinstance(value, Mapping):
+        return place.wrong("a mapping of names to entries", value)
+    source = place.source
+    out: dict[str, Ros2TopicSpec] = {}
+    for name, item in value.items():
+        path = (*place.path, str(name))
+        line = source.key_line(path)
+        try:
+            full = topic_name(str(name))
+        except ConfigError as e:
+            source.error(line, str(e))
+            continue
+        if item is None:
+            topic: Ros2TopicSpec | None = Ros2TopicSpec(full, line=line or 0)
+        else:
+            what = f"ROS 2 topic '{full}'"
+            topic = read(Ros2TopicSpec, item, source, what, path=path, line=line, name=full)
+        if topic is None:
+            continue
+        if topic.observed_as in out:
+            source.error(line, f"ROS 2 topic '{topic.name}' is listed twice")
+        out[topic.observed_as] = topic
+    return out
+
+
 @dataclass(frozen=True)
 class Ros2Spec:
     """How dura joins the robot's ROS 2 graph."""
 
-    domain_id: int = 0
-    distribution: str = DEFAULT_DISTRIBUTION
-    transport: str = "dds"
-    node: str = "dura"
-    messages: tuple[Path, ...] = ()
-    topics: Mapping[str, Ros2TopicSpec] = field(default_factory=dict)  # by observed name
-    diagnostics: str | None = "/diagnostics"
-    events: str | None = "/dura/events"
-    goals: str | None = "/dura/goals"
-    line: int = 0
+    domain_id: Annotated[int, AtLeast(0), AtMost(MAX_DOMAIN_ID)] = 0
+    distribution: Annotated[str, OrDefault(), OneOf(DISTRIBUTIONS, "distribution")] = (
+        DEFAULT_DISTRIBUTION
+    )
+    transport: Annotated[str, OrDefault(), OneOf(TRANSPORTS, "transport")] = "dds"
+    node: Annotated[str, OrDefault(), Check(_node)] = "dura"
+    messages: Annotated[tuple[Path, ...], OneOrMore()] = ()
+    topics: Annotated[Mapping[str, Ros2TopicSpec], Convert(_topics)] = field(
+        default_factory=dict
+    )  # by observed name
+    diagnostics: Annotated[str | None, Convert(_optional_topic)] = "/diagnostics"
+    events: Annotated[str | None, Convert(_optional_topic)] = "/dura/events"
+    goals: Annotated[str | None, Convert(_optional_topic)] = "/dura/goals"
+    line: Annotated[int, EntryLine()] = 0
 
     def topic(self, observed_as: str) -> Ros2TopicSpec | None:
         """Find the ROS 2 topic observers call ``observed_as`` (``scan`` or ``/scan``)."""
         return self.topics.get(observed_as.strip("/"))
+
+    def after_read(self, entry: Entry) -> Ros2Spec:
+        """Read the message definitions (their problems are reported too) and check the
+        topics' types against them."""
+        store = standard_store(self.distribution)
+        definitions, findings = read_definitions(self.messages, store.fielddefs)
+        if entry.source.report is not None:
+            entry.source.report.findings.extend(findings)
+        known = sorted({*store.fielddefs, *definitions})
+        topics = dict(self.topics)
+        written = entry.written.get("topics")
+        for key in written if isinstance(written, Mapping) else ():
+            topic = topics.get(str(key).strip("/"))
+            if topic is None or topic.type is None or topic.type in known:
+                continue
+            line = entry.source.key_line((*entry.path, "topics", str(key), "type"))
+            entry.source.error(
+                line or topic.line,
+                f"ROS 2 topic '{topic.name}' has unknown message type '{topic.type}'"
+                f"{did_you_mean(topic.type, known)}",
+            )
+            topics[topic.observed_as] = dataclasses.replace(topic, type=None)
+        return dataclasses.replace(self, topics=topics)
 
 
 def topic_name(name: str) -> str:
@@ -122,139 +233,3 @@ def topic_name(name: str) -> str:
             "not starting with a digit, separated by single '/')"
         )
     return full
-
-
-def read_ros2(section: Section | None, base: Path, report: Report) -> Ros2Spec | None:
-    """Read the ``ros2:`` section; message definition problems are reported too."""
-    if section is None or not section.valid:
-        return None
-    domain_id = section.integer("domain_id", 0, minimum=0)
-    if domain_id > MAX_DOMAIN_ID:
-        report.error(
-            section.key_line("domain_id"),
-            f"'domain_id' of {section.what} must be at most {MAX_DOMAIN_ID}, not {domain_id}",
-        )
-        domain_id = 0
-    distribution = _choice(section, "distribution", DISTRIBUTIONS, DEFAULT_DISTRIBUTION)
-    transport = _choice(section, "transport", TRANSPORTS, "dds")
-    node = section.text("node", "dura") or "dura"
-    if not _TOKEN.fullmatch(node):
-        report.error(section.key_line("node"), f"invalid ROS 2 node name '{node}'")
-    messages = tuple(
-        p if p.is_absolute() else (base / p).resolve()
-        for p in (Path(t).expanduser() for t in section.texts("messages"))
-    )
-    diagnostics = _optional_topic(section, "diagnostics", "/diagnostics")
-    events = _optional_topic(section, "events", "/dura/events")
-    goals = _optional_topic(section, "goals", "/dura/goals")
-    entries = list(section.named("topics"))
-    section.close()
-    store = standard_store(distribution)
-    definitions, findings = read_definitions(messages, store.fielddefs)
-    for finding in findings:
-        report.findings.append(finding)
-    known = sorted({*store.fielddefs, *definitions})
-    topics: dict[str, Ros2TopicSpec] = {}
-    for name, node_, line in entries:
-        topic = _topic(name, node_, line, report, known)
-        if topic is None:
-            continue
-        if topic.observed_as in topics:
-            report.error(line, f"ROS 2 topic '{topic.name}' is listed twice")
-        topics[topic.observed_as] = topic
-    return Ros2Spec(
-        domain_id,
-        distribution,
-        transport,
-        node,
-        messages,
-        topics,
-        diagnostics,
-        events,
-        goals,
-        section.line,
-    )
-
-
-def _choice(section: Section, key: str, choices: tuple[str, ...], default: str) -> str:
-    value = section.text(key, default) or default
-    if value not in choices:
-        section.report.error(
-            section.key_line(key),
-            f"unknown {key} '{value}' in {section.what} (choose from {', '.join(choices)})"
-            f"{did_you_mean(value, choices)}",
-        )
-        return default
-    return value
-
-
-def _optional_topic(section: Section, key: str, default: str) -> str | None:
-    node = section.node(key)
-    if node is None:
-        return default
-    if isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:null":
-        return None
-    if not isinstance(node, yaml.ScalarNode) or node.tag != "tag:yaml.org,2002:str":
-        section.report.error(line_of(node), f"'{key}' of {section.what} must be a topic name")
-        return default
-    try:
-        return topic_name(str(node.value))
-    except ConfigError as e:
-        section.report.error(line_of(node), f"'{key}' of {section.what}: {e}")
-        return default
-
-
-def _topic(
-    name: str, node: yaml.Node, line: int, report: Report, known: list[str]
-) -> Ros2TopicSpec | None:
-    try:
-        full = topic_name(name)
-    except ConfigError as e:
-        report.error(line, str(e))
-        return None
-    if isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:null":
-        return Ros2TopicSpec(full, line=line)
-    s = Section(node, f"ROS 2 topic '{full}'", report, line)
-    if not s.valid:
-        return None
-    kind = s.text("type")
-    if kind is not None:
-        kind = normalize_type(kind)
-        if kind not in known:
-            report.error(
-                s.key_line("type"),
-                f"ROS 2 topic '{full}' has unknown message type '{kind}'"
-                f"{did_you_mean(kind, known)}",
-            )
-            kind = None
-    qos = _qos(s)
-    s.close()
-    return Ros2TopicSpec(full, kind, qos, line)
-
-
-def _qos(s: Section) -> QosProfile:
-    node = s.node("qos")
-    if node is None:
-        return PROFILES[OBSERVED_PROFILE]
-    if isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:str":
-        name = str(node.value)
-        if name not in PROFILES:
-            s.report.error(
-                line_of(node),
-                f"unknown QoS profile '{name}' of {s.what} (choose from {', '.join(PROFILES)})"
-                f"{did_you_mean(name, PROFILES)}",
-            )
-            return PROFILES[OBSERVED_PROFILE]
-        return PROFILES[name]
-    q = Section(node, f"the QoS of {s.what}", s.report)
-    if not q.valid:
-        return PROFILES[OBSERVED_PROFILE]
-    base = PROFILES[OBSERVED_PROFILE]
-    profile = QosProfile(
-        _choice(q, "reliability", RELIABILITY, base.reliability),
-        _choice(q, "durability", DURABILITY, base.durability),
-        _choice(q, "history", HISTORY, base.history),
-        q.integer("depth", base.depth, minimum=1),
-    )
-    q.close()
-    return profile

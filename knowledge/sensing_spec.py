@@ -25,15 +25,25 @@ boolean. Names are checked against the domain and the objects by ``dura validate
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-import yaml
-
+from knowledge.conventions import (
+    AtLeast,
+    Convert,
+    Default,
+    EntryLine,
+    Key,
+    KeyLines,
+    Required,
+    Titles,
+)
+from knowledge.errors import did_you_mean
 from knowledge.finding import Report
-from knowledge.yamlsource import Section, did_you_mean, line_of, to_python
+from knowledge.typed_reader import Entry, Place
 
 if TYPE_CHECKING:
     from knowledge.description import RobotDescription
@@ -43,27 +53,43 @@ FIELD_PATH = re.compile(r"[A-Za-z_][A-Za-z0-9_]*|-?\d+")
 CONDITIONS = ("below", "above", "equals")
 
 
+def _scalar(value: Any, place: Place) -> Any:
+    if value is None or isinstance(value, Mapping | list):
+        return place.error(f"'equals' of {place.entry.what} must be a number, string or boolean")
+    return value
+
+
+# the name, else the fact, else the value names the rule, once they are read
+Naming = Titles("sensing rule '{value}'", after="value")
+
+
 @dataclass(frozen=True)
 class SensingRuleSpec:
     """One sensing rule, as written (see the module docstring)."""
 
-    name: str
-    topic: str
-    path: str  # the ``field`` as written: a dotted path
-    fact: str | None = None  # a ground atom, ``(battery_low)``
-    value: str | None = None  # a ground function, ``(battery_level)``
+    name: Annotated[str, Default(""), Naming]  # default: the fact or value
+    topic: Annotated[str, Required(), Default(None)]
+    path: Annotated[str, Key("field"), Required(), Default(None)]  # a dotted path
+    fact: Annotated[str | None, Naming] = None  # a ground atom, ``(battery_low)``
+    value: Annotated[str | None, Naming] = None  # a ground function, ``(battery_level)``
     below: float | None = None
     above: float | None = None
-    equals: Any = None
+    equals: Annotated[Any, Convert(_scalar)] = None
     clear_above: float | None = None
     clear_below: float | None = None
-    hold: float = 0.0
-    min_change: float = 0.0
-    line: int = 0
-    lines: Mapping[str, int] = field(default_factory=dict, compare=False, repr=False)
+    hold: Annotated[float, AtLeast(0.0)] = 0.0
+    min_change: Annotated[float, AtLeast(0.0)] = 0.0
+    line: Annotated[int, EntryLine()] = 0
+    lines: Annotated[Mapping[str, int], KeyLines()] = field(
+        default_factory=dict, compare=False, repr=False
+    )
 
     def line_of(self, key: str) -> int:
         return self.lines.get(key, self.line)
+
+    def after_read(self, entry: Entry) -> SensingRuleSpec | None:
+        """The rule with its name (else its fact or value), if its parts fit together."""
+        return _checked(self, entry)
 
     @property
     def condition(self) -> str:
@@ -88,83 +114,58 @@ def field_problem(path: str) -> str:
     return ""
 
 
-def read_sensing(top: Section, report: Report) -> tuple[SensingRuleSpec, ...]:
-    """Read the ``sensing:`` list of a robot description (problems go to ``report``)."""
-    rules: list[SensingRuleSpec] = []
+def unique_names(rules: tuple[SensingRuleSpec, ...], place: Place) -> tuple[SensingRuleSpec, ...]:
+    """The rules, each name once (a rule whose name is taken is reported and left out)."""
     names: set[str] = set()
-    for node in top.sequence("sensing"):
-        rule = _rule(node, report)
-        if rule is None:
-            continue
+    kept: list[SensingRuleSpec] = []
+    for rule in rules:
         if rule.name in names:
-            report.error(rule.line, f"duplicate sensing rule name '{rule.name}'")
+            place.source.error(rule.line, f"duplicate sensing rule name '{rule.name}'")
             continue
         names.add(rule.name)
-        rules.append(rule)
-    return tuple(rules)
+        kept.append(rule)
+    return tuple(kept)
 
 
-def _optional(s: Section, key: str) -> float | None:
-    return s.number(key, 0.0) if s.has(key) else None
-
-
-def _rule(node: yaml.Node, report: Report) -> SensingRuleSpec | None:
-    s = Section(node, "sensing rule", report)
-    if not s.valid:
-        return None
-    topic = s.text("topic", required=True)
-    path = s.text("field", required=True)
-    fact, value = s.text("fact"), s.text("value")
-    name = s.text("name") or fact or value or f"sensing rule at line {s.line}"
-    s.what = f"sensing rule '{name}'"
-    below, above = _optional(s, "below"), _optional(s, "above")
-    equals_node = s.node("equals")
-    equals = to_python(equals_node) if isinstance(equals_node, yaml.ScalarNode) else None
-    clear_above, clear_below = _optional(s, "clear_above"), _optional(s, "clear_below")
-    hold = s.number("hold", 0.0, minimum=0.0)
-    min_change = s.number("min_change", 0.0, minimum=0.0)
-    lines = {k: s.key_line(k) for k in s.written()}
-    s.close()
-    ok = topic is not None and path is not None
+def _checked(rule: SensingRuleSpec, entry: Entry) -> SensingRuleSpec | None:
+    """The rule with its name, if its parts fit together (the problems reported)."""
+    name = rule.name or rule.fact or rule.value or f"sensing rule at line {entry.line}"
+    entry.what = f"sensing rule '{name}'"
+    fact, value, path = rule.fact, rule.value, rule.path
+    ok = rule.topic is not None and path is not None
     if path is not None and field_problem(path):
-        report.error(s.key_line("field"), f"{s.what}: {field_problem(path)}")
+        entry.error("field", f"{entry.what}: {field_problem(path)}")
         ok = False
     if (fact is None) == (value is None):
-        report.error(s.line, f"{s.what} needs exactly one of 'fact' and 'value'")
+        entry.error(None, f"{entry.what} needs exactly one of 'fact' and 'value'")
         ok = False
-    given = [k for k in CONDITIONS if s.has(k)]
-    if equals_node is not None and equals is None:
-        report.error(
-            line_of(equals_node), f"'equals' of {s.what} must be a number, string or boolean"
-        )
-        ok = False
+    given = [k for k in CONDITIONS if entry.has(k)]
+    if entry.has("equals") and rule.equals is None:
+        ok = False  # reported as it was read
     if fact is not None and len(given) != 1:
-        report.error(s.line, f"{s.what}: a fact needs exactly one of {', '.join(CONDITIONS)}")
+        entry.error(None, f"{entry.what}: a fact needs exactly one of {', '.join(CONDITIONS)}")
         ok = False
     if value is not None and given:
-        report.error(s.key_line(given[0]), f"{s.what}: a value takes no '{given[0]}'")
+        entry.error(given[0], f"{entry.what}: a value takes no '{given[0]}'")
         ok = False
     for clear, level, goes_with, limit in (
-        ("clear_above", clear_above, "below", below),
-        ("clear_below", clear_below, "above", above),
+        ("clear_above", rule.clear_above, "below", rule.below),
+        ("clear_below", rule.clear_below, "above", rule.above),
     ):
-        if level is None:
-            continue
+        if level is None or (limit is None and entry.has(goes_with)):
+            continue  # not given, or not a number (reported)
         if limit is None:
-            report.error(s.key_line(clear), f"{s.what}: '{clear}' goes with '{goes_with}'")
+            entry.error(clear, f"{entry.what}: '{clear}' goes with '{goes_with}'")
             ok = False
         elif (level < limit) if goes_with == "below" else (level > limit):
-            report.error(
-                s.key_line(clear),
-                f"{s.what}: '{clear}' ({level:g}) must not undo '{goes_with}' ({limit:g})",
+            entry.error(
+                clear,
+                f"{entry.what}: '{clear}' ({level:g}) must not undo '{goes_with}' ({limit:g})",
             )
             ok = False
-    if not ok or topic is None or path is None:
+    if not ok or rule.topic is None:
         return None
-    return SensingRuleSpec(
-        name, topic.strip("/"), path, fact, value, below, above, equals, clear_above,
-        clear_below, hold, min_change, s.line, lines,
-    )  # fmt: skip
+    return dataclasses.replace(rule, name=name, topic=rule.topic.strip("/"))
 
 
 def check_sensing(

@@ -23,12 +23,11 @@ from knowledge.description import (
     RobotDescription,
 )
 from knowledge.domain import DomainInfo, parse_problem, read_domain
-from knowledge.errors import DomainError
+from knowledge.errors import DomainError, did_you_mean
 from knowledge.finding import Finding, Report, Severity, finding_of
 from knowledge.robot import read_robot
 from knowledge.ros2_components import check_ros2_components
 from knowledge.sensing_spec import check_sensing
-from knowledge.yamlsource import did_you_mean
 
 RESERVED_PREFIXES = ("AB", "/AB")
 

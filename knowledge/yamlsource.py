@@ -1,21 +1,24 @@
-"""Read YAML against a schema, keeping the line of every value for error messages.
+"""YAML documents as plain values with the line of every place, for the typed reader.
 
-PyYAML's composer gives nodes with source marks; :class:`Section` reads a mapping
-node key by key with typed accessors, reports each type error once with its line,
-and at :meth:`Section.close` reports every key that no accessor asked for as
-unknown, with a did-you-mean. Readers therefore never list allowed keys twice.
+:func:`compose` parses a file (refusing what no robot needs: too large, too deep, alias
+bombs; duplicate keys are problems); :func:`document` turns the nodes into plain values
+and the lines of their keys and values; :class:`DocumentSource` lets
+:mod:`knowledge.typed_reader` read them against a schema with ``file:line`` messages
+that show each scalar as it is written.
 """
 
 from __future__ import annotations
 
-import difflib
-from collections.abc import Iterator
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from knowledge.field_plan import PathPart, dotted
 from knowledge.finding import Report
+from knowledge.value_source import Source
 
 MAX_BYTES = 1 << 20  # a robot description, rules or observers file is far smaller
 MAX_DEPTH = 64  # levels of nesting: the schemas need about ten
@@ -23,28 +26,10 @@ MAX_VALUES = 100_000  # values a document may hold once its aliases are expanded
 # libyaml when it is there: it is faster, and refuses pathological nesting by itself
 _LOADER: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
-_NUMBER_TAGS = ("tag:yaml.org,2002:int", "tag:yaml.org,2002:float")
-_TAG_NAMES = {
-    "tag:yaml.org,2002:str": "a string",
-    "tag:yaml.org,2002:int": "an integer",
-    "tag:yaml.org,2002:float": "a number",
-    "tag:yaml.org,2002:bool": "a boolean",
-    "tag:yaml.org,2002:null": "empty",
-    "tag:yaml.org,2002:map": "a mapping",
-    "tag:yaml.org,2002:seq": "a list",
-}
-
 
 def line_of(node: yaml.Node) -> int:
     """The 1-based line a node starts on."""
     return int(node.start_mark.line) + 1
-
-
-def describe(node: yaml.Node) -> str:
-    """How a value reads in an error message: its text for scalars, else its kind."""
-    if isinstance(node, yaml.ScalarNode):
-        return repr(node.value) if node.value != "" else "empty"
-    return _TAG_NAMES.get(node.tag, node.tag)
 
 
 def to_python(node: yaml.Node) -> Any:
@@ -155,197 +140,87 @@ def _check_duplicate_keys(node: yaml.Node, report: Report) -> None:
             _check_duplicate_keys(item, report)
 
 
-def paths(node: yaml.Node, prefix: str = "") -> dict[str, int]:
-    """The line of every key and list item below a node, by dotted path."""
-    out: dict[str, int] = {}
-    if isinstance(node, yaml.MappingNode):
-        for key, value in node.value:
-            path = f"{prefix}{key.value}"
-            out[path] = line_of(key)
-            out.update(paths(value, path + "."))
-    elif isinstance(node, yaml.SequenceNode):
-        for i, item in enumerate(node.value):
-            path = f"{prefix}{i}"
-            out[path] = line_of(item)
-            out.update(paths(item, path + "."))
-    return out
+@dataclass
+class Document:
+    """A YAML document as plain values, with the line of each key and list item, the
+    line where each value starts, and the text of each scalar as written (by dotted
+    path: ``functionalities.lidar.observers.0.type``)."""
+
+    value: Any
+    key_lines: dict[str, int] = field(default_factory=dict)
+    value_lines: dict[str, int] = field(default_factory=dict)
+    texts: dict[str, str] = field(default_factory=dict)
 
 
-def did_you_mean(word: str, choices: object) -> str:
-    """`` (did you mean 'x'?)`` for the closest choice, or an empty string."""
-    names = [str(c) for c in choices]  # type: ignore[attr-defined]
-    close = difflib.get_close_matches(word, names, n=1, cutoff=0.6)
-    return f" (did you mean '{close[0]}'?)" if close else ""
-
-
-class Section:
-    """A YAML mapping read against a schema, key by key.
-
-    ``what`` names the mapping in messages, e.g. ``functionality 'lidar'``.
-    """
-
-    def __init__(self, node: yaml.Node, what: str, report: Report, line: int | None = None) -> None:
-        self.what = what
-        self.report = report
-        self.line = line or line_of(node)
-        self._values: dict[str, yaml.Node] = {}
-        self._key_lines: dict[str, int] = {}
-        self._read: set[str] = set()
-        if isinstance(node, yaml.MappingNode):
+def document(root: yaml.Node) -> Document:
+    """The plain values of a composed document and the places of its parts (where a key
+    is written twice, the last one counts, as in the values)."""
+    found = Document(to_python(root))
+    stack: list[tuple[str, yaml.Node]] = [("", root)]
+    while stack:
+        path, node = stack.pop()
+        found.value_lines[path] = line_of(node)
+        prefix = f"{path}." if path else ""
+        children: list[tuple[str, yaml.Node]] = []
+        if isinstance(node, yaml.ScalarNode):
+            found.texts[path] = str(node.value)
+        elif isinstance(node, yaml.MappingNode):
             for key, value in node.value:
-                name = key.value if isinstance(key, yaml.ScalarNode) else str(key.value)
-                self._values.setdefault(str(name), value)
-                self._key_lines.setdefault(str(name), line_of(key))
-        self.valid = isinstance(node, yaml.MappingNode)
-        if not self.valid:
-            report.error(self.line, f"{what} must be a mapping, not {describe(node)}")
+                found.key_lines[f"{prefix}{key.value}"] = line_of(key)
+                children.append((f"{prefix}{key.value}", value))
+        elif isinstance(node, yaml.SequenceNode):
+            for i, item in enumerate(node.value):
+                found.key_lines[f"{prefix}{i}"] = line_of(item)
+                children.append((f"{prefix}{i}", item))
+        stack.extend(reversed(children))  # in the document's order: the last one counts
+    return found
 
-    # --- access ---------------------------------------------------------------
 
-    def written(self) -> list[str]:
-        """The keys as written, in order."""
-        return list(self._values)
+class DocumentSource(Source):
+    """A YAML document read against a schema: problems go to ``report`` with their
+    lines; a null is a value (wrong where the field takes none); a scalar reads as the
+    text written where a text is expected, and shows so in messages."""
 
-    def has(self, key: str) -> bool:
-        return key in self._values
+    null_is_absent = False
+    strict = False  # a description with problems is still read: later checks run on it
 
-    def node(self, key: str) -> yaml.Node | None:
-        """The raw node of a key (marks it as read)."""
-        self._read.add(key)
-        return self._values.get(key)
+    def __init__(
+        self,
+        found: Document,
+        report: Report,
+        *,
+        folder: Path | None = None,
+        context: Any = None,
+    ) -> None:
+        super().__init__(report, folder=folder, context=context)
+        self.document = found
 
-    def key_line(self, key: str) -> int:
-        return self._key_lines.get(key, self.line)
+    def key_line(self, path: Sequence[PathPart]) -> int | None:
+        return self.document.key_lines.get(dotted(path))
 
-    def _missing(self, key: str, required: bool) -> None:
-        if required:
-            self.report.error(self.line, f"{self.what} has no '{key}'")
+    def value_line(self, path: Sequence[PathPart]) -> int | None:
+        key = dotted(path)
+        line = self.document.value_lines.get(key)
+        return line if line is not None else self.document.key_lines.get(key)
 
-    def _wrong(self, key: str, node: yaml.Node, expected: str) -> None:
-        self.report.error(
-            line_of(node),
-            f"'{key}' of {self.what} must be {expected}, not {describe(node)}",
-        )
+    def text(self, value: Any, path: Sequence[PathPart]) -> str | None:
+        return self.document.texts.get(dotted(path))
 
-    def text(self, key: str, default: str | None = None, *, required: bool = False) -> str | None:
-        node = self.node(key)
-        if node is None:
-            self._missing(key, required)
-            return default
-        if not isinstance(node, yaml.ScalarNode) or node.tag == "tag:yaml.org,2002:null":
-            self._wrong(key, node, "a string")
-            return default
-        return str(node.value)
+    def blank(self, value: Any) -> bool:
+        return value is None or value in ("", "~", "null")  # as written, or quoted
 
-    def number(self, key: str, default: float, *, minimum: float | None = None) -> float:
-        node = self.node(key)
-        if node is None:
-            return default
-        if not isinstance(node, yaml.ScalarNode) or node.tag not in _NUMBER_TAGS:
-            self._wrong(key, node, "a number")
-            return default
-        value = float(to_python(node))
-        if minimum is not None and value < minimum:
-            self.report.error(
-                line_of(node),
-                f"'{key}' of {self.what} must be at least {minimum:g}, not {value:g}",
-            )
-            return default
-        return value
+    def describe(self, value: Any, path: Sequence[PathPart]) -> str:
+        text = self.document.texts.get(dotted(path))
+        if text is None:
+            return super().describe(value, path)
+        return repr(text) if text != "" else "empty"
 
-    def integer(self, key: str, default: int, *, minimum: int | None = None) -> int:
-        node = self.node(key)
-        if node is None:
-            return default
-        if not isinstance(node, yaml.ScalarNode) or node.tag != "tag:yaml.org,2002:int":
-            self._wrong(key, node, "an integer")
-            return default
-        value = int(to_python(node))
-        if minimum is not None and value < minimum:
-            self.report.error(
-                line_of(node),
-                f"'{key}' of {self.what} must be at least {minimum}, not {value}",
-            )
-            return default
-        return value
+    def describe_number(self, raw: Any, value: float, path: Sequence[PathPart]) -> str:
+        return f"{value:g}" if isinstance(value, float) else str(value)
 
-    def flag(self, key: str, default: bool) -> bool:
-        node = self.node(key)
-        if node is None:
-            return default
-        if not isinstance(node, yaml.ScalarNode) or node.tag != "tag:yaml.org,2002:bool":
-            self._wrong(key, node, "true or false")
-            return default
-        return bool(to_python(node))
 
-    def texts(self, key: str, *, required: bool = False) -> tuple[str, ...]:
-        """A list of strings; a single string is accepted as a list of one."""
-        node = self.node(key)
-        if node is None:
-            self._missing(key, required)
-            return ()
-        if isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:str":
-            return (str(node.value),)
-        if isinstance(node, yaml.ScalarNode) and node.tag == "tag:yaml.org,2002:null":
-            return ()
-        if not isinstance(node, yaml.SequenceNode):
-            self._wrong(key, node, "a list of strings")
-            return ()
-        out: list[str] = []
-        for item in node.value:
-            if not isinstance(item, yaml.ScalarNode) or item.tag == "tag:yaml.org,2002:null":
-                self.report.error(
-                    line_of(item),
-                    f"'{key}' of {self.what} must list strings, not {describe(item)}",
-                )
-            else:
-                out.append(str(item.value))
-        return tuple(out)
-
-    def section(self, key: str, *, required: bool = False) -> Section | None:
-        node = self.node(key)
-        if node is None:
-            self._missing(key, required)
-            return None
-        return Section(node, f"'{key}' of {self.what}", self.report)
-
-    def named(self, key: str) -> Iterator[tuple[str, yaml.Node, int]]:
-        """Entries of a mapping keyed by name: (name, value node, line)."""
-        node = self.node(key)
-        if node is None or (isinstance(node, yaml.ScalarNode) and node.value in ("", "~", "null")):
-            return
-        if not isinstance(node, yaml.MappingNode):
-            self._wrong(key, node, "a mapping of names to entries")
-            return
-        for k, v in node.value:
-            yield str(k.value), v, line_of(k)
-
-    def sequence(self, key: str) -> list[yaml.Node]:
-        node = self.node(key)
-        if node is None or (isinstance(node, yaml.ScalarNode) and node.value in ("", "~", "null")):
-            return []
-        if not isinstance(node, yaml.SequenceNode):
-            self._wrong(key, node, "a list")
-            return []
-        return list(node.value)
-
-    def plain(self, key: str) -> dict[str, Any]:
-        """A mapping of free-form values (e.g. component parameters)."""
-        node = self.node(key)
-        if node is None:
-            return {}
-        if not isinstance(node, yaml.MappingNode):
-            self._wrong(key, node, "a mapping")
-            return {}
-        value = to_python(node)
-        return dict(value) if isinstance(value, dict) else {}
-
-    # --- end ------------------------------------------------------------------
-
-    def close(self) -> None:
-        """Report every key no accessor read as unknown, with a did-you-mean."""
-        known = self._read
-        for key in self._values:
-            if key not in known:
-                hint = did_you_mean(key, sorted(known))
-                self.report.error(self.key_line(key), f"unknown key '{key}' in {self.what}{hint}")
+def read_file(path: Path, report: Report, text: str | None = None) -> Document | None:
+    """A YAML file as a :class:`Document` (``None`` if it cannot be read, is refused,
+    or is empty: reported, but for an empty one)."""
+    node = compose(path, report, text)
+    return document(node) if node is not None else None

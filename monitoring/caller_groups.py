@@ -20,13 +20,14 @@ every publisher. Leading slashes of ROS names (``/scan``, ``/nodeA``) are droppe
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Generic, TypeVar
+from typing import Annotated, Any, Generic, TypeVar
 
 from executive.bus.session import check_name
+from knowledge.conventions import Check, Convert, Label, Names
 from knowledge.errors import BusError
-from monitoring.config_entry import Entry
+from knowledge.typed_reader import MISSING, Place, open_entry, read_inline, read_value
+from monitoring.filter import Text
 
 S = TypeVar("S")
 
@@ -48,53 +49,69 @@ class TopicGroups(Generic[S]):
     groups: tuple[CallerGroup[S], ...]
 
 
-def topic_name(entry: Entry, key: str) -> str | None:
-    """A topic name usable on the bus (reported if not)."""
-    name = entry.text(key, required=True)
-    if name is None:
-        return None
+def _bus_name(name: str, place: Place) -> Any:
     try:
         return check_name(name, "topic name")
     except BusError as e:
-        entry.error(key, f"{entry.what}: {e}")
-        return None
+        place.entry.error(place.key, f"{place.entry.what}: {e}")
+        return MISSING
 
 
-def read_topics(
-    owner: Entry, read_settings: Callable[[Entry], S | None]
-) -> tuple[TopicGroups[S], ...]:
-    """The ``topics`` of an observer entry, each with its caller-id groups."""
-    topics: list[TopicGroups[S]] = []
-    for entry in owner.entries("topics", f"topic {{n}} of the {owner.what}", required=True):
-        if not entry.valid:
-            continue
-        name = topic_name(entry, "name")
+TopicName = Annotated[Text, Check(_bus_name)]
+"""A topic name usable on the bus (reported if not)."""
+
+CallerIds = Annotated[tuple[str, ...], Names()]
+
+
+def topics_with(settings: type[S]) -> Convert:
+    """How the ``topics`` of an observer entry are read (``Annotated`` metadata of a
+    ``tuple[TopicGroups[S], ...]``) whose caller-id groups have ``settings``: a
+    dataclass read from the keys of the group (or of the topic, without groups)."""
+
+    def read_topic(value: Any, place: Place) -> Any:
+        entry = open_entry(value, place.source, place.path, place.label or "", place=place)
+        if entry is None:
+            return MISSING
+        name = entry.read("name", TopicName, None, required=True)
         if name is not None:
-            entry.what = f"topic '{name}' of the {owner.what}"
+            entry.what = f"topic '{name}' of the {entry.owner}"
         groups: list[CallerGroup[S]] = []
         if entry.has("callerids"):
-            whats = f"caller-id group {{n}} of {entry.what}"
-            for group in entry.entries("callerids", whats, required=True):
-                if group.valid:
-                    callerids = group.names("callerid")
-                    settings = read_settings(group)
-                    group.close()
-                    if settings is not None:
-                        groups.append(CallerGroup(callerids, settings))
+            each = Annotated[
+                tuple[Annotated[Any, Convert(read_group)], ...],
+                Label("caller-id group {n} of {what}"),
+            ]
+            groups = list(entry.read("callerids", each, (), required=True))
         else:
-            settings = read_settings(entry)
-            if settings is not None:
-                groups.append(CallerGroup((), settings))
+            found = read_inline(settings, entry)
+            if found is not MISSING:
+                groups.append(CallerGroup((), found))
         entry.close()
         seen: set[frozenset[str]] = set()
-        for found in groups:
-            key = frozenset(found.callerids)
+        for group in groups:
+            key = frozenset(group.callerids)
             if key in seen:
                 entry.error(
                     "callerids",
-                    f"{entry.what} has the caller-id group {list(found.callerids)} twice",
+                    f"{entry.what} has the caller-id group {list(group.callerids)} twice",
                 )
             seen.add(key)
-        if name is not None:
-            topics.append(TopicGroups(name, tuple(groups)))
-    return tuple(topics)
+        return TopicGroups(name, tuple(groups)) if name is not None else MISSING
+
+    def read_group(value: Any, place: Place) -> Any:
+        entry = open_entry(value, place.source, place.path, place.label or "", place=place)
+        if entry is None:
+            return MISSING
+        callerids = entry.read("callerid", CallerIds, ())
+        found = read_inline(settings, entry)
+        entry.close()
+        return CallerGroup(callerids, found) if found is not MISSING else MISSING
+
+    each = Annotated[
+        tuple[Annotated[Any, Convert(read_topic)], ...], Label("topic {n} of the {what}")
+    ]
+
+    def read_topics(value: Any, place: Place) -> Any:
+        return read_value(each, value, place)
+
+    return Convert(read_topics)

@@ -22,9 +22,13 @@ import statistics
 from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Annotated
 
-from knowledge.yamlsource import did_you_mean
-from monitoring.config_entry import Entry
+from knowledge.conventions import AtLeast, Inside, NonEmpty, OneOf, Required, When
+from knowledge.typed_reader import Entry
+
+Text = Annotated[str, NonEmpty(blank=True)]
+"""A text of an observer configuration: not empty (blanks are text, refused later)."""
 
 VALUE_FILTERS = ("nofilter", "mean", "median", "kmeans", "ewma")
 DEVIATION_FILTERS = ("std", "min_max")
@@ -35,14 +39,23 @@ WINDOWED = ("median", "kmeans")  # these need a window
 class FilterConfig:
     """A filter as configured; :meth:`make` gives a fresh filter."""
 
-    type: str = "nofilter"
-    window_size: int | None = None
-    k_size: int | None = None
-    decay_rate: float | None = None
-    deviation_type: str | None = None
+    type: Annotated[Text, Required(), OneOf(VALUE_FILTERS, "filter type")] = "nofilter"
+    window_size: Annotated[int | None, AtLeast(2)] = None
+    k_size: Annotated[int | None, AtLeast(1), Required(), When("type", "kmeans")] = None
+    decay_rate: Annotated[float | None, Inside(0.0, 1.0), Required(), When("type", "ewma")] = None
+    deviation_type: Annotated[Text | None, OneOf(DEVIATION_FILTERS, "deviation type")] = None
 
     def make(self) -> Filter:
         return Filter(self)
+
+    def after_read(self, entry: Entry) -> FilterConfig:
+        """Report a window a windowed filter lacks, and a k larger than the window."""
+        kind, window, k = self.type, self.window_size, self.k_size
+        if kind in WINDOWED and window is None and not entry.has("window_size"):
+            entry.error(None, f"{entry.what} ({kind}) has no 'window_size'")
+        if k is not None and window is not None and k > window:
+            entry.error("k_size", f"'k_size' of {entry.what} ({k}) exceeds its window ({window})")
+        return self
 
 
 @dataclass(frozen=True)
@@ -146,41 +159,3 @@ class Filter:
         k = min(self.config.k_size or len(ordered), len(ordered))
         start = (len(ordered) - k) // 2
         return math.fsum(ordered[start : start + k]) / k
-
-
-def read_filter(entry: Entry | None) -> FilterConfig | None:
-    """A filter configuration; ``None`` if there is none or it is invalid (reported)."""
-    if entry is None or not entry.valid:
-        return None
-    errors = len(entry.source.report.errors)
-    kind = entry.text("type", required=True)
-    if kind is not None and kind not in VALUE_FILTERS:
-        entry.error(
-            "type",
-            f"unknown filter type '{kind}' in {entry.what} "
-            f"(choose from {', '.join(VALUE_FILTERS)}){did_you_mean(kind, VALUE_FILTERS)}",
-        )
-    window = entry.integer("window_size", minimum=2)
-    if kind in WINDOWED and window is None and not entry.has("window_size"):
-        entry.error(None, f"{entry.what} ({kind}) has no 'window_size'")
-    k_size = None
-    if kind == "kmeans":
-        k_size = entry.integer("k_size", required=True, minimum=1)
-        if k_size is not None and window is not None and k_size > window:
-            entry.error(
-                "k_size", f"'k_size' of {entry.what} ({k_size}) exceeds its window ({window})"
-            )
-    decay = None
-    if kind == "ewma":
-        decay = entry.number("decay_rate", required=True, above=0.0, below=1.0)
-    deviation = entry.text("deviation_type")
-    if deviation is not None and deviation not in DEVIATION_FILTERS:
-        entry.error(
-            "deviation_type",
-            f"unknown deviation type '{deviation}' in {entry.what} "
-            f"(choose from {', '.join(DEVIATION_FILTERS)}){did_you_mean(deviation, DEVIATION_FILTERS)}",
-        )
-    entry.close()
-    if kind is None or len(entry.source.report.errors) > errors:
-        return None
-    return FilterConfig(kind, window, k_size, decay, deviation)

@@ -20,6 +20,7 @@ the ``now`` of a loop and the ``received`` (and ``sent``) times of messages.
 
 from __future__ import annotations
 
+import builtins
 import functools
 import importlib
 import logging
@@ -27,13 +28,12 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
-from typing import Any, ClassVar
+from typing import Annotated, Any, ClassVar
 
 from executive.bus.payloads import ObservationInfo
 from executive.bus.session import Message
-from knowledge.errors import ConfigError
-from knowledge.yamlsource import did_you_mean
-from monitoring.config_entry import Entry
+from knowledge.conventions import Above, AtLeast
+from knowledge.errors import ConfigError, did_you_mean
 from monitoring.state import Verdict
 
 log = logging.getLogger("dura.observers")
@@ -46,18 +46,12 @@ StateOf = Callable[[str], Any]  # component name -> its last Lifecycle, or None
 
 @dataclass(frozen=True, kw_only=True)
 class ObserverConfig:
-    """What every observer configuration has; types add their own fields."""
+    """What every observer configuration has; types add their own fields (the schema of
+    the configuration, read by :mod:`knowledge.typed_reader`)."""
 
-    type: str
-    start_up_time: float = 0.0
-    main_loop_rate: float | None = None  # None: the type's default
-
-    def common(self) -> dict[str, Any]:
-        return {
-            "type": self.type,
-            "start_up_time": self.start_up_time,
-            "main_loop_rate": self.main_loop_rate,
-        }
+    type: str  # the type's canonical name (the entry's ``type`` may be an alias)
+    start_up_time: Annotated[float, AtLeast(0.0)] = 0.0
+    main_loop_rate: Annotated[float | None, Above(0.0)] = None  # None: the type's default
 
 
 @dataclass(frozen=True)
@@ -88,10 +82,15 @@ class ObserverResult:
 
 
 class Observer(ABC):
-    """One configured observer: it reads its configuration, receives messages, reports."""
+    """One configured observer: it receives messages and reports.
+
+    A type names the schema of its configuration, ``config_type``: a frozen keyword-only
+    dataclass extending :class:`ObserverConfig`, whose annotations say what a valid entry
+    holds (with ``after_read`` for checks across its fields)."""
 
     type: ClassVar[str]
     aliases: ClassVar[tuple[str, ...]] = ()  # other names of a plugin's type
+    config_type: ClassVar[builtins.type[ObserverConfig]] = ObserverConfig
 
     def __init__(self, config: ObserverConfig, environment: Environment | None = None) -> None:
         self.config = config
@@ -99,15 +98,6 @@ class Observer(ABC):
         self.started = 0.0
 
     # --- the type's parts -----------------------------------------------------------
-
-    @classmethod
-    @abstractmethod
-    def read(cls, entry: Entry, common: ObserverConfig) -> ObserverConfig | None:
-        """The typed configuration of an entry (``common`` holds the shared fields).
-
-        Problems go to the entry's report; the caller closes the entry and discards the
-        configuration if any were reported.
-        """
 
     @abstractmethod
     def _observe(self, now: float) -> list[ObserverResult]:

@@ -13,14 +13,13 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from executive.bus.keys import topic
 from knowledge.description import ObserverSpec, RobotDescription
-from knowledge.errors import ConfigError
+from knowledge.errors import ConfigError, did_you_mean
 from knowledge.finding import Finding, Report
-from knowledge.yamlsource import compose, did_you_mean, line_of, paths, to_python
-from monitoring.config_entry import Entry, Source
+from knowledge.typed_reader import MISSING, Source, open_entry, read_entry
+from knowledge.yamlsource import read_file
+from monitoring.filter import Text
 from monitoring.observer import ObserverConfig, make_observer, observer_class, unknown_type
 
 TOPIC_PREFIX = topic("")
@@ -32,11 +31,12 @@ def read_observer(value: object, source: Source, owner: str = "") -> ObserverCon
     ``owner`` names where the entry is, for messages (e.g. ``functionality 'lidar'``).
     """
     suffix = f" of {owner}" if owner else ""
-    entry = Entry(value, source, "", f"observer{suffix}")
-    if not entry.valid:
+    entry = open_entry(value, source, what=f"observer{suffix}")
+    report = source.report
+    if entry is None or report is None:
         return None
-    errors = len(source.report.errors)
-    name = entry.text("type", required=True)
+    errors = len(report.errors)
+    name = entry.read("type", Text, None, required=True)
     if name is None:
         return None
     kind = observer_class(name)
@@ -44,14 +44,10 @@ def read_observer(value: object, source: Source, owner: str = "") -> ObserverCon
         entry.error("type", unknown_type(name))
         return None
     entry.what = f"{kind.type} observer{suffix}"
-    common = ObserverConfig(
-        type=kind.type,
-        start_up_time=entry.number("start_up_time", 0.0, minimum=0.0) or 0.0,
-        main_loop_rate=entry.number("main_loop_rate", above=0.0),
-    )
-    config = kind.read(entry, common)
-    entry.close()
-    return config if len(source.report.errors) == errors else None
+    config = read_entry(kind.config_type, entry, type=kind.type)
+    if config is MISSING or len(report.errors) > errors:
+        return None
+    return config  # type: ignore[no-any-return]
 
 
 def check_observers(robot: RobotDescription) -> list[Finding]:
@@ -107,32 +103,33 @@ def observer_file(path: Path, report: Report) -> list[ObserverSpec] | None:
     A file is an observers file when its YAML is a list, or a mapping with ``setup``
     and no ``robot``. Problems of the file's shape go to the report.
     """
-    node = compose(path, Report(str(path)))
-    if isinstance(node, yaml.MappingNode):
-        keys = {k.value: v for k, v in node.value if isinstance(k, yaml.ScalarNode)}
+    found = read_file(path, Report(str(path)))
+    if found is None:
+        return None
+    root = found.value_lines.get("", 1)
+    if isinstance(found.value, Mapping):
+        keys = {str(k): v for k, v in found.value.items()}
         if "setup" not in keys or "robot" in keys:
             return None
         for key in keys:
             if key != "setup":
-                report.error(
-                    line_of(node), f"unknown key '{key}' in the observers file (only 'setup')"
-                )
+                report.error(root, f"unknown key '{key}' in the observers file (only 'setup')")
         items, prefix = keys["setup"], "setup."
-    elif isinstance(node, yaml.SequenceNode):
-        items, prefix = node, ""
+    elif isinstance(found.value, list):
+        items, prefix = found.value, ""
     else:
         return None
-    if not isinstance(items, yaml.SequenceNode):
-        report.error(line_of(items), "'setup' of the observers file must be a list of observers")
+    if not isinstance(items, list):
+        line = found.value_lines.get("setup", root)
+        report.error(line, "'setup' of the observers file must be a list of observers")
         return []
-    lines = paths(node)
     specs: list[ObserverSpec] = []
-    for i, item in enumerate(items.value):
+    for i, item in enumerate(items):
         start = f"{prefix}{i}."
-        own = {k[len(start) :]: v for k, v in lines.items() if k.startswith(start)}
-        value = to_python(item)
-        kind = value.get("type") if isinstance(value, dict) else None
-        specs.append(ObserverSpec(str(kind), value, line_of(item), own))
+        own = {k[len(start) :]: v for k, v in found.key_lines.items() if k.startswith(start)}
+        kind = item.get("type") if isinstance(item, Mapping) else None
+        line = found.value_lines.get(f"{prefix}{i}", root)
+        specs.append(ObserverSpec(str(kind), item, line, own))
     return specs
 
 

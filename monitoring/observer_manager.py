@@ -36,8 +36,7 @@ from executive.bus.session import Message
 from executive.bus.states import Lifecycle
 from executive.bus.topic_source import TopicSource
 from knowledge.description import ObserverSpec
-from knowledge.errors import ConfigError, DuraError
-from knowledge.yamlsource import did_you_mean
+from knowledge.errors import ConfigError, DuraError, did_you_mean
 from monitoring.observer import Environment, Handler, Observer, make_observer
 from monitoring.observer_api import serve_observers
 from monitoring.observer_config import config_of

@@ -15,11 +15,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Annotated, Any
 
 from executive.bus.payloads import NO_STATE_FITS
-from monitoring.check import Check, read_check
-from monitoring.config_entry import Entry
-from monitoring.filter import FilterState
+from knowledge.conventions import Convert, Label
+from knowledge.typed_reader import MISSING, Place, open_entry, read_value
+from monitoring.check import Check, CheckSpec
+from monitoring.filter import FilterState, Text
 
 
 @dataclass(frozen=True)
@@ -60,55 +62,57 @@ def classify(
     return Verdict(NO_STATE_FITS, "no state fits", f"{shown}; fits none of: {wanted}")
 
 
-def read_states(
-    owner: Entry,
-    quantities: tuple[str, ...],
-    *,
-    aliases: Mapping[str, str] | None = None,
-    every: bool = False,
-) -> tuple[ObserverState, ...]:
-    """The ``states`` of an observed resource.
+def states_checking(
+    *quantities: str, aliases: Mapping[str, str] | None = None, every: bool = False
+) -> Convert:
+    """How the ``states`` of an observed resource are read (``Annotated`` metadata of a
+    ``tuple[ObserverState, ...]``; a state without a name or number is left out).
 
     Args:
-        owner: the mapping that holds ``states``.
         quantities: the quantities a state may check (keys of a state entry).
         aliases: legacy key spellings, e.g. ``{"frequenzy": "frequency"}``.
         every: each state must check every quantity (else: at least one).
     """
-    aliases = aliases or {}
-    out: list[ObserverState] = []
-    names: set[str] = set()
-    for entry in owner.entries("states", f"state {{n}} of {owner.what}", required=True):
-        if not entry.valid:
-            continue
-        name = entry.text("state", required=True)
-        number = entry.integer("number", required=True)
-        checks: dict[str, Check] = {}
-        for key in (*quantities, *aliases):
-            quantity = aliases.get(key, key)
-            sub = entry.entry(key, f"the {quantity} check of {entry.what}")
-            if sub is None:
-                continue
-            if quantity in checks:
-                entry.error(key, f"{entry.what} checks {quantity} twice ('{key}')")
-                continue
-            check = read_check(sub)
-            if check is not None:
-                checks[quantity] = check
-        missing = [q for q in quantities if q not in checks and not _has(entry, q, aliases)]
-        if every and missing:
-            entry.error(None, f"{entry.what} has no '{missing[0]}' check")
-        elif len(missing) == len(quantities):
-            entry.error(None, f"{entry.what} checks nothing (give one of: {', '.join(quantities)})")
-        entry.close()
-        if name is not None and name in names:
-            entry.error("state", f"{entry.what}: state '{name}' is defined twice")
-        if name is not None and number is not None:
+    spellings = aliases or {}
+
+    def read_states(value: Any, place: Place) -> Any:
+        names: set[str] = set()
+
+        def read_state(value: Any, place: Place) -> Any:
+            entry = open_entry(value, place.source, place.path, place.label or "", place=place)
+            if entry is None:
+                return MISSING
+            name = entry.read("state", Text, None, required=True)
+            number = entry.read("number", int, None, required=True)
+            checks: dict[str, Check] = {}
+            for key in (*quantities, *spellings):
+                quantity = spellings.get(key, key)
+                if entry.has(key) and quantity in checks:
+                    entry.known(key)
+                    entry.error(key, f"{entry.what} checks {quantity} twice ('{key}')")
+                    continue
+                label = Label(f"the {quantity} check of {{what}}")
+                check = entry.read(key, Annotated[CheckSpec, label], None)
+                if check is not None:
+                    checks[quantity] = check
+            written = {spellings.get(k, k) for k in entry.written if entry.has(k)}
+            missing = [q for q in quantities if q not in checks and q not in written]
+            if every and missing:
+                entry.error(None, f"{entry.what} has no '{missing[0]}' check")
+            elif len(missing) == len(quantities):
+                given = ", ".join(quantities)
+                entry.error(None, f"{entry.what} checks nothing (give one of: {given})")
+            entry.close()
+            if name is not None and name in names:
+                entry.error("state", f"{entry.what}: state '{name}' is defined twice")
+            if name is None or number is None:
+                return MISSING
             names.add(name)
-            out.append(ObserverState(name, number, checks))
-    return tuple(out)
+            return ObserverState(name, number, checks)
 
+        each = Annotated[
+            tuple[Annotated[Any, Convert(read_state)], ...], Label("state {n} of {what}")
+        ]
+        return read_value(each, value, place)
 
-def _has(entry: Entry, quantity: str, aliases: Mapping[str, str]) -> bool:
-    """Whether the entry names a check of a quantity (valid or not)."""
-    return entry.has(quantity) or any(entry.has(k) for k, q in aliases.items() if q == quantity)
+    return Convert(read_states)

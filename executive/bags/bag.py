@@ -26,8 +26,7 @@ from pathlib import Path
 from executive.bus.keys import DIAGNOSES, EVENTS, RESOURCES, topic
 from executive.bus.session import Message
 from knowledge.description import RobotDescription
-from knowledge.errors import BagError
-from knowledge.yamlsource import did_you_mean
+from knowledge.errors import BagError, did_you_mean
 
 DURA_PROFILE = "dura"  # the MCAP profile of dura's recordings
 DURA_KEYS = (RESOURCES, DIAGNOSES, EVENTS)  # replayed as they are, besides topics and states

@@ -9,7 +9,7 @@ from __future__ import annotations
 from typing import Any
 
 from executive.bus.reports import DIAGNOSIS_STATUSES, DiagnosisInfo
-from executive.bus.schema import Payload, PayloadError, Text, payload, read
+from executive.bus.schema import Payload, PayloadError, Text, payload, read_record
 from executive.bus.states import GoalStatus, Lifecycle
 from knowledge.records import Event
 
@@ -251,7 +251,6 @@ def read_event(payload: object) -> Event | None:
     """The payload of ``events`` (an event the knowledge base logged) as its record;
     ``None`` if it is not one."""
     try:
-        event: Event = read(Event, payload, "event")
+        return read_record(Event, payload)
     except PayloadError:
         return None
-    return event

@@ -28,18 +28,29 @@ import enum
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any, NamedTuple
 
 from executive.bus.clock import Clock
 from executive.planning.expression import Expression, Signature, WorldState, parse
 from executive.planning.goals import normalized, submit
+from knowledge.conventions import (
+    AtLeast,
+    Convert,
+    Default,
+    EntryLine,
+    Key,
+    Label,
+    Required,
+    Titles,
+)
 from knowledge.description import RobotDescription
 from knowledge.domain import DomainInfo
-from knowledge.errors import ConfigError, DomainError
+from knowledge.errors import ConfigError, DomainError, did_you_mean
 from knowledge.finding import Report
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Goal, GoalState
-from knowledge.yamlsource import Section, compose, did_you_mean, line_of
+from knowledge.typed_reader import Entry, Place, read, read_value
+from knowledge.yamlsource import DocumentSource, read_file
 
 
 class Trigger(enum.Enum):
@@ -68,6 +79,105 @@ class IntegrityRule:
     keep: bool = False  # post a maintenance goal
 
 
+class _Context(NamedTuple):
+    """What the rules of a file are checked against, and the names of those read."""
+
+    robot: RobotDescription
+    signature: Signature
+    path: str
+    names: set[str]
+
+
+@dataclass(frozen=True)
+class When:
+    """What makes a rule fire, as written: exactly one trigger and its subject."""
+
+    permanent_fault: str | None = None
+    diagnosis: str | None = None
+    condition: str | None = None
+
+    def after_read(self, entry: Entry) -> When | None:
+        if len([k for k in entry.written if k in TRIGGERS]) != 1:
+            entry.error(None, f"{entry.what} needs exactly one of {', '.join(TRIGGERS)}")
+            return None
+        return self
+
+    @property
+    def trigger(self) -> tuple[Trigger, str] | None:
+        """The trigger given and its subject."""
+        for trigger in Trigger:
+            subject = getattr(self, trigger.value)
+            if subject is not None:
+                return trigger, subject
+        return None
+
+
+@dataclass(frozen=True)
+class RuleEntry:
+    """An integrity rule as written (see the module docstring)."""
+
+    name: Annotated[str, Titles("integrity rule '{value}'"), Required(), Default(None)]
+    goal: Annotated[str, Required(), Default(None)]
+    priority: int = 0
+    deadline: Annotated[float | None, AtLeast(0.001)] = None
+    hold: Annotated[float, Key("for"), AtLeast(0.0)] = 0.0
+    keep: bool = False
+    when: Annotated[When | None, Required()] = None
+    line: Annotated[int, EntryLine()] = 0
+
+    def after_read(self, entry: Entry) -> IntegrityRule | None:
+        """The rule, if its goal and trigger fit the robot and its domain."""
+        context: _Context = entry.source.context
+        goal: str | None = self.goal
+        if goal is not None:
+            try:
+                parse(goal, context.signature)
+            except DomainError as e:
+                entry.error("goal", f"{entry.what}: {e}")
+                goal = None
+        found = self.when.trigger if self.when is not None else None
+        trigger, subject = found if found is not None else (None, None)
+        line = self.line
+        if trigger is not None:
+            line = entry.source.key_line((*entry.path, "when", trigger.value)) or line
+        components = context.robot.components
+        if trigger in (Trigger.PERMANENT_FAULT, Trigger.DIAGNOSIS) and subject not in components:
+            entry.source.error(
+                line,
+                f"{entry.what} names unknown component '{subject}'"
+                f"{did_you_mean(str(subject), sorted(components))}",
+            )
+            trigger = None
+        if trigger is Trigger.CONDITION and subject is not None:
+            try:
+                parse(subject, context.signature, "condition")
+            except DomainError as e:
+                entry.source.error(line, f"{entry.what}: {e}")
+                trigger = None
+        if self.name is None or goal is None or trigger is None or subject is None:
+            return None
+        if self.name in context.names:
+            entry.error(None, f"duplicate rule name '{self.name}'")  # kept, as the first
+        context.names.add(self.name)
+        return IntegrityRule(
+            self.name, trigger, subject, normalized(goal), self.priority, self.deadline,
+            self.hold, f"{context.path}:{self.line}", self.keep,
+        )  # fmt: skip
+
+
+def _rule(value: Any, place: Place) -> Any:
+    return read_value(RuleEntry, value, place)  # an IntegrityRule, by its after_read
+
+
+@dataclass(frozen=True)
+class IntegrityFile:
+    """A file of integrity rules, as written."""
+
+    goals: Annotated[
+        tuple[Annotated[IntegrityRule, Convert(_rule)], ...], Label("integrity rule")
+    ] = ()
+
+
 def read_rules(
     path: Path,
     robot: RobotDescription,
@@ -86,85 +196,17 @@ def read_rules(
     own = report is None
     report = report or Report(str(path))
     rules: list[IntegrityRule] = []
-    node = compose(path, report)
-    signature = Signature.of(domain, objects)
-    if node is not None:
-        top = Section(node, "the integrity rules", report)
-        names: set[str] = set()
-        for item in top.sequence("goals") if top.valid else []:
-            rule = _rule(item, report, robot, signature)
-            if rule is None:
-                continue
-            if rule.name in names:
-                report.error(line_of(item), f"duplicate rule name '{rule.name}'")
-            names.add(rule.name)
-            rules.append(rule)
-        if top.valid:
-            top.close()
+    found = read_file(path, report)
+    if found is not None:
+        context = _Context(robot, Signature.of(domain, objects), report.path, set())
+        source = DocumentSource(found, report, context=context)
+        written = read(IntegrityFile, found.value, source, "the integrity rules")
+        rules = list(written.goals) if written is not None else []
     elif not report.findings:
         report.error(None, "is empty")
     if own and report.errors:
         raise ConfigError("\n".join(str(f) for f in report.errors))
     return rules
-
-
-def _rule(
-    node: Any, report: Report, robot: RobotDescription, signature: Signature
-) -> IntegrityRule | None:
-    s = Section(node, "integrity rule", report)
-    if not s.valid:
-        return None
-    name = s.text("name", required=True)
-    if name is not None:
-        s.what = f"integrity rule '{name}'"
-    goal = s.text("goal", required=True)
-    priority = s.integer("priority", 0)
-    deadline_node = s.has("deadline")
-    deadline = s.number("deadline", 0.0, minimum=0.001) if deadline_node else None
-    hold = s.number("for", 0.0, minimum=0.0)
-    keep = s.flag("keep", False)
-    when = s.section("when", required=True)
-    s.close()
-    where = f"{report.path}:{s.line}"
-    trigger: Trigger | None = None
-    subject = None
-    if when is not None and when.valid:
-        written = when.written()
-        for key in written:
-            if key in TRIGGERS:
-                subject = when.text(key, required=True)
-                trigger = Trigger(key) if subject is not None else None
-        if len([k for k in written if k in TRIGGERS]) != 1:
-            report.error(
-                when.line, f"'when' of {s.what} needs exactly one of {', '.join(TRIGGERS)}"
-            )
-            trigger = None
-        when.close()
-    if goal is not None:
-        try:
-            parse(goal, signature)
-        except DomainError as e:
-            report.error(s.key_line("goal"), f"{s.what}: {e}")
-            goal = None
-    trigger_line = when.key_line(trigger.value) if when is not None and trigger else s.line
-    if trigger in (Trigger.PERMANENT_FAULT, Trigger.DIAGNOSIS) and subject not in robot.components:
-        report.error(
-            trigger_line,
-            f"{s.what} names unknown component '{subject}'"
-            f"{did_you_mean(str(subject), sorted(robot.components))}",
-        )
-        trigger = None
-    if trigger is Trigger.CONDITION and subject is not None:
-        try:
-            parse(subject, signature, "condition")
-        except DomainError as e:
-            report.error(trigger_line, f"{s.what}: {e}")
-            trigger = None
-    if name is None or goal is None or trigger is None or subject is None:
-        return None
-    return IntegrityRule(
-        name, trigger, subject, normalized(goal), priority, deadline, hold, where, keep
-    )
 
 
 @dataclass

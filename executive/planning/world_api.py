@@ -26,9 +26,8 @@ from executive.planning.expression import (
 )
 from executive.planning.integrity import Trigger
 from executive.planning.warm_up import WarmUp
-from knowledge.errors import DuraError, KnowledgeError
+from knowledge.errors import DuraError, KnowledgeError, did_you_mean
 from knowledge.transitions import PlanState
-from knowledge.yamlsource import did_you_mean
 
 WORLD_WAIT = 25.0  # seconds state/get waits for a new robot's world (callers wait 30)
 

@@ -26,9 +26,8 @@ from rosbags.interfaces import Nodetype
 
 from executive.ros2.cdr import Decoder
 from executive.ros2.names import dds_type, ros_type
-from knowledge.errors import ConfigError
+from knowledge.errors import ConfigError, did_you_mean
 from knowledge.ros2_messages import message_store, normalize_type
-from knowledge.yamlsource import did_you_mean
 
 if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore

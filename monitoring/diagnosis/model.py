@@ -13,8 +13,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from knowledge.errors import ConfigError
-from knowledge.yamlsource import did_you_mean
+from knowledge.errors import ConfigError, did_you_mean
 
 DEFAULT_BEHAVIOR = "velocity"  # what a movement observer blames when it names no behavior
 

@@ -18,45 +18,56 @@ nodes it watches, e.g. a behavior watching the functionalities it needs. The tug
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Annotated, Any
 
 from executive.bus.keys import RESOURCES
 from executive.bus.payloads import GENERAL_OK, NOT_AVAILABLE, NodeInfo
 from executive.bus.session import Message
 from executive.bus.states import Lifecycle
-from monitoring.config_entry import Entry
+from knowledge.conventions import Convert, Label
+from knowledge.typed_reader import MISSING, Place, open_entry, read_value
+from monitoring.filter import Text
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
-from monitoring.observers.resources import absence, node_infos, node_name
+from monitoring.observers.resources import NodeName, absence, node_infos
 from monitoring.state import Verdict
+
+
+def _nodes(value: Any, place: Place) -> Any:
+    """Nodes by name, or as entries ``{name: ...}``; each once."""
+    names: list[str] = []
+
+    def node(item: Any, place: Place) -> Any:
+        if isinstance(item, str) and item.strip("/"):
+            names.append(item.strip("/"))
+            return MISSING
+        what = f"node {len(names) + 1} of the {place.entry.what}"
+        entry = open_entry(item, place.source, place.path, what, place=place)
+        if entry is not None:
+            name = entry.read("name", NodeName, None, required=True)
+            entry.close()
+            if name is not None:
+                names.append(name)
+        return MISSING
+
+    each = Annotated[tuple[Annotated[Any, Convert(node)], ...], Label("node {n}")]
+    read_value(each, value, place)
+    return tuple(dict.fromkeys(names))
 
 
 @dataclass(frozen=True, kw_only=True)
 class ComponentConfig(ObserverConfig):
-    nodes: tuple[str, ...]
+    resource_topic: Text | None = None  # tug's: accepted and ignored
+    nodes: Annotated[tuple[str, ...], Convert(_nodes), Label("node {n}")]
 
 
 class ComponentObserver(Observer):
     type = "component"
+    config_type = ComponentConfig
     config: ComponentConfig
 
     def __init__(self, config: ComponentConfig, environment: Environment | None = None) -> None:
         super().__init__(config, environment)
         self._infos: dict[str, NodeInfo] | None = None
-
-    @classmethod
-    def read(cls, entry: Entry, common: ObserverConfig) -> ComponentConfig | None:
-        entry.text("resource_topic")
-        nodes: list[str] = []
-        for where, item in entry.items("nodes", required=True):
-            if isinstance(item, str) and item.strip("/"):
-                nodes.append(item.strip("/"))
-                continue
-            node = Entry(item, entry.source, where, f"node {len(nodes) + 1} of the {entry.what}")
-            if node.valid:
-                name = node_name(node)
-                node.close()
-                if name is not None:
-                    nodes.append(name)
-        return ComponentConfig(**common.common(), nodes=tuple(dict.fromkeys(nodes)))
 
     def inputs(self) -> list[tuple[str, Handler]]:
         return [(RESOURCES, self._on_resources)]

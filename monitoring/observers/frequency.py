@@ -36,38 +36,37 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field
+from typing import Annotated
 
 from executive.bus.keys import topic
 from executive.bus.payloads import TIMEOUT
 from executive.bus.session import Message
-from monitoring.caller_groups import CallerGroup, TopicGroups, read_topics
-from monitoring.config_entry import Entry
-from monitoring.filter import Filter, FilterConfig, FilterState, read_filter
+from knowledge.conventions import Above, Label
+from knowledge.typed_reader import Entry
+from monitoring.caller_groups import CallerGroup, TopicGroups, topics_with
+from monitoring.filter import Filter, FilterConfig, FilterState
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
-from monitoring.state import ObserverState, Verdict, classify, read_states
+from monitoring.state import ObserverState, Verdict, classify, states_checking
 
 _SHORTEST = 1e-9  # a period of two messages received at once
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class FrequencySettings:
-    filter: FilterConfig
-    states: tuple[ObserverState, ...]
-    timeout: float | None = None
+    filter: Annotated[FilterConfig, Label("the filter of {what}")]
+    timeout: Annotated[float | None, Above(0.0)] = None
+    states: Annotated[
+        tuple[ObserverState, ...],
+        states_checking("frequency", aliases={"frequenzy": "frequency"}, every=True),
+    ]
+
+    def after_read(self, entry: Entry) -> FrequencySettings | None:
+        return self if self.states else None
 
 
 @dataclass(frozen=True, kw_only=True)
 class FrequencyConfig(ObserverConfig):
-    topics: tuple[TopicGroups[FrequencySettings], ...]
-
-
-def read_settings(entry: Entry) -> FrequencySettings | None:
-    filter_config = read_filter(entry.entry("filter", f"the filter of {entry.what}", required=True))
-    timeout = entry.number("timeout", above=0.0)
-    states = read_states(entry, ("frequency",), aliases={"frequenzy": "frequency"}, every=True)
-    if filter_config is None or not states:
-        return None
-    return FrequencySettings(filter_config, states, timeout)
+    topics: Annotated[tuple[TopicGroups[FrequencySettings], ...], topics_with(FrequencySettings)]
 
 
 @dataclass
@@ -124,12 +123,8 @@ def total(states: list[FilterState]) -> FilterState:
 
 class FrequencyObserver(Observer):
     type = "frequency"
+    config_type = FrequencyConfig
     config: FrequencyConfig
-
-    @classmethod
-    def read(cls, entry: Entry, common: ObserverConfig) -> FrequencyConfig | None:
-        topics = read_topics(entry, read_settings)
-        return FrequencyConfig(**common.common(), topics=topics)
 
     def __init__(self, config: FrequencyConfig, environment: Environment | None = None) -> None:
         super().__init__(config, environment)

@@ -34,18 +34,18 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
-from typing import Any
+from typing import Annotated, Any
 
 from executive.bus.keys import topic
 from executive.bus.session import Message
-from knowledge.errors import BusError
-from knowledge.yamlsource import did_you_mean
-from monitoring.caller_groups import topic_name
-from monitoring.config_entry import Entry
+from knowledge.conventions import Above, Convert, Label
+from knowledge.errors import BusError, did_you_mean
+from knowledge.typed_reader import MISSING, Place, open_entry
+from monitoring.caller_groups import CallerIds, TopicName
 from monitoring.field_path import read_number
-from monitoring.filter import Filter, FilterConfig, FilterState, read_filter
+from monitoring.filter import Filter, FilterConfig, FilterState, Text
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
-from monitoring.state import ObserverState, classify, read_states
+from monitoring.state import ObserverState, classify, states_checking
 
 AXES = ("x", "y", "z", "rot_x", "rot_y", "rot_z")
 
@@ -84,16 +84,26 @@ class Correlation:
     max_delay: float = 0.5
 
 
-@dataclass(frozen=True, kw_only=True)
-class MovementConfig(ObserverConfig):
-    correlations: tuple[Correlation, ...]
+@dataclass(frozen=True)
+class Fields:
+    """The field of a message that holds each axis (a dotted path)."""
+
+    x: Text | None = None
+    y: Text | None = None
+    z: Text | None = None
+    rot_x: Text | None = None
+    rot_y: Text | None = None
+    rot_z: Text | None = None
 
 
-def read_source(entry: Entry | None, axes: list[str]) -> Source | None:
-    if entry is None or not entry.valid:
-        return None
-    name = topic_name(entry, "topic")
-    kind = entry.text("type")
+def _source(value: Any, place: Place, axes: list[str]) -> Any:
+    """A source of motion: its topic, and where each compared axis is in its messages."""
+    what = f"{place.key} of {place.entry.what}"
+    entry = open_entry(value, place.source, place.path, what, place=place)
+    if entry is None:
+        return MISSING
+    name = entry.read("topic", TopicName, None, required=True)
+    kind = entry.read("type", Text, None)
     fields: dict[str, tuple[str, ...]] = {}
     if kind is not None:
         if kind in SOURCE_TYPES:
@@ -104,36 +114,40 @@ def read_source(entry: Entry | None, axes: list[str]) -> Source | None:
                 f"unknown source type '{kind}' in {entry.what} (choose from "
                 f"{', '.join(SOURCE_TYPES)}, or give 'fields'){did_you_mean(kind, SOURCE_TYPES)}",
             )
-    explicit = entry.entry("fields", f"the fields of {entry.what}")
-    if explicit is not None and explicit.valid:
-        for axis in AXES:
-            path = explicit.text(axis)
-            if path is not None:
-                fields[axis] = (path,)
-        explicit.close()
-    callerids = entry.names("callerid")
+    explicit = entry.read("fields", Annotated[Fields, Label("the fields of {what}")], None)
+    for axis in AXES if explicit is not None else ():
+        if getattr(explicit, axis) is not None:
+            fields[axis] = (getattr(explicit, axis),)
+    callerids = entry.read("callerid", CallerIds, ())
     entry.close()
     for axis in axes:
         if axis not in fields:
             entry.error(None, f"{entry.what} has no field for the compared axis '{axis}'")
-    return Source(name, fields, callerids) if name is not None else None
+    return Source(name, fields, callerids) if name is not None else MISSING
 
 
-def read_correlation(entry: Entry, owner: str) -> Correlation | None:
+def _correlation(value: Any, place: Place) -> Any:
+    """Two sources whose motions must agree, on the axes it has filters for."""
+    entry = open_entry(value, place.source, place.path, place.label or "", place=place)
+    if entry is None:
+        return MISSING
     filters: dict[str, FilterConfig] = {}
     for axis in AXES:
-        sub = entry.entry(f"{axis}_filter", f"the {axis} filter of {entry.what}")
-        config = read_filter(sub)
+        label = Label(f"the {axis} filter of {{what}}")
+        config = entry.read(f"{axis}_filter", Annotated[FilterConfig, label], None)
         if config is not None:
             filters[axis] = config
     axes = [a for a in AXES if entry.has(f"{a}_filter")]
     if not axes:
         entry.error(None, f"{entry.what} compares no axis (give e.g. 'rot_z_filter')")
-    a = read_source(entry.entry("source_A", f"source_A of {entry.what}", required=True), axes)
-    b = read_source(entry.entry("source_B", f"source_B of {entry.what}", required=True), axes)
-    behavior = entry.text("behavior")
-    max_delay = entry.number("max_delay", 0.5, above=0.0)
-    states = read_states(entry, AXES)
+    source = Annotated[Source, Convert(lambda v, p: _source(v, p, axes))]
+    a = entry.read("source_A", source, None, required=True)
+    b = entry.read("source_B", source, None, required=True)
+    behavior = entry.read("behavior", Text, None)
+    max_delay = entry.read("max_delay", Annotated[float, Above(0.0)], 0.5)
+    states = entry.read(
+        "states", Annotated[tuple[ObserverState, ...], states_checking(*AXES)], (), required=True
+    )
     for state in states:
         for axis in state.checks:
             if axis not in axes:
@@ -142,9 +156,17 @@ def read_correlation(entry: Entry, owner: str) -> Correlation | None:
                     f"state '{state.name}' of {entry.what} checks '{axis}', which has no filter",
                 )
     entry.close()
-    if a is None or b is None or not axes or not states or max_delay is None:
-        return None
+    if a is None or b is None or not axes or not states:
+        return MISSING
     return Correlation(a, b, filters, states, behavior, max_delay)
+
+
+@dataclass(frozen=True, kw_only=True)
+class MovementConfig(ObserverConfig):
+    correlations: Annotated[
+        tuple[Annotated[Correlation, Convert(_correlation)], ...],
+        Label("correlation {n} of the {what}"),
+    ]
 
 
 def _number(payload: dict[str, Any], paths: tuple[str, ...]) -> float | None:
@@ -210,22 +232,12 @@ class _Comparison:
 
 class MovementObserver(Observer):
     type = "movement"
+    config_type = MovementConfig
     config: MovementConfig
 
     def __init__(self, config: MovementConfig, environment: Environment | None = None) -> None:
         super().__init__(config, environment)
         self._comparisons = [_Comparison(c) for c in config.correlations]
-
-    @classmethod
-    def read(cls, entry: Entry, common: ObserverConfig) -> MovementConfig | None:
-        what = f"correlation {{n}} of the {entry.what}"
-        found = [
-            read_correlation(e, entry.what)
-            for e in entry.entries("correlations", what, required=True)
-        ]
-        return MovementConfig(
-            **common.common(), correlations=tuple(c for c in found if c is not None)
-        )
 
     def inputs(self) -> list[tuple[str, Handler]]:
         out: list[tuple[str, Handler]] = []

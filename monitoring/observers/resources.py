@@ -25,51 +25,44 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+from typing import Annotated, Any
 
 from executive.bus.keys import RESOURCES
 from executive.bus.payloads import NOT_AVAILABLE, NodeInfo
 from executive.bus.session import Message
+from knowledge.conventions import Check, Label, Titles
 from knowledge.errors import BusError
-from monitoring.config_entry import Entry
-from monitoring.filter import FilterConfig, FilterState, read_filter
+from knowledge.typed_reader import MISSING, Entry, Place
+from monitoring.filter import FilterConfig, FilterState, Text
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
-from monitoring.state import ObserverState, Verdict, classify, read_states
+from monitoring.state import ObserverState, Verdict, classify, states_checking
 
 NO_FILTER = FilterConfig("nofilter")
 
 
-@dataclass(frozen=True)
+def _node(name: str, place: Place) -> Any:
+    return name.strip("/") or MISSING  # a name of slashes names no node
+
+
+NodeName = Annotated[Text, Check(_node)]
+"""The name of a node (a leading '/', ROS's, dropped)."""
+
+
+@dataclass(frozen=True, kw_only=True)
 class WatchedNode:
-    name: str
-    cpu_filter: FilterConfig
-    mem_filter: FilterConfig
-    states: tuple[ObserverState, ...]
+    name: Annotated[NodeName, Titles("node '{value}' of the {owner}")]
+    cpu_filter: Annotated[FilterConfig, Label("the CPU filter of {what}")] = NO_FILTER
+    mem_filter: Annotated[FilterConfig, Label("the memory filter of {what}")] = NO_FILTER
+    states: Annotated[tuple[ObserverState, ...], states_checking("cpu", "memory")]
+
+    def after_read(self, entry: Entry) -> WatchedNode | None:
+        return self if self.states else None
 
 
 @dataclass(frozen=True, kw_only=True)
 class ResourcesConfig(ObserverConfig):
-    nodes: tuple[WatchedNode, ...]
-
-
-def node_name(entry: Entry) -> str | None:
-    name = entry.text("name", required=True)
-    return name.strip("/") if name is not None and name.strip("/") else None
-
-
-def read_node(entry: Entry, owner: str) -> WatchedNode | None:
-    name = node_name(entry)
-    if name is not None:
-        entry.what = f"node '{name}' of the {owner}"
-    filters = []
-    for key, label in (("cpu_filter", "CPU"), ("mem_filter", "memory")):
-        sub = entry.entry(key, f"the {label} filter of {entry.what}")
-        filters.append(read_filter(sub) if sub is not None else NO_FILTER)
-    states = read_states(entry, ("cpu", "memory"))
-    entry.close()
-    cpu, memory = filters
-    if name is None or cpu is None or memory is None or not states:
-        return None
-    return WatchedNode(name, cpu, memory, states)
+    resource_topic: Text | None = None  # tug's: accepted and ignored
+    nodes: Annotated[tuple[WatchedNode, ...], Label("node {n} of the {what}")]
 
 
 def node_infos(message: Message) -> dict[str, NodeInfo] | None:
@@ -94,6 +87,7 @@ def absence(name: str, info: NodeInfo | None) -> str | None:
 
 class ResourcesObserver(Observer):
     type = "resources"
+    config_type = ResourcesConfig
     config: ResourcesConfig
 
     def __init__(self, config: ResourcesConfig, environment: Environment | None = None) -> None:
@@ -101,13 +95,6 @@ class ResourcesObserver(Observer):
         self._queue: deque[Message] = deque()
         self._filters = [(n.cpu_filter.make(), n.mem_filter.make()) for n in config.nodes]
         self._latest: dict[str, NodeInfo] | None = None
-
-    @classmethod
-    def read(cls, entry: Entry, common: ObserverConfig) -> ResourcesConfig | None:
-        entry.text("resource_topic")
-        what = f"node {{n}} of the {entry.what}"
-        nodes = [read_node(e, entry.what) for e in entry.entries("nodes", what, required=True)]
-        return ResourcesConfig(**common.common(), nodes=tuple(n for n in nodes if n is not None))
 
     def inputs(self) -> list[tuple[str, Handler]]:
         return [(RESOURCES, self._queue.append)]

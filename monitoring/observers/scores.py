@@ -22,61 +22,47 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+from typing import Annotated
 
 from executive.bus.keys import topic
 from executive.bus.payloads import GENERAL_ERROR
 from executive.bus.session import Message
+from knowledge.conventions import Key, Label, Titles
 from knowledge.errors import BusError
-from monitoring.caller_groups import topic_name
-from monitoring.config_entry import Entry
+from knowledge.typed_reader import Entry
+from monitoring.caller_groups import CallerIds, TopicName
 from monitoring.field_path import read_number
-from monitoring.filter import Filter, FilterConfig, read_filter
+from monitoring.filter import Filter, FilterConfig, Text
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
-from monitoring.state import ObserverState, Verdict, classify, read_states
+from monitoring.state import ObserverState, Verdict, classify, states_checking
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ScoredTopic:
-    name: str
-    field: str
-    callerids: tuple[str, ...]
-    filter: FilterConfig
-    states: tuple[ObserverState, ...]
+    name: Annotated[TopicName, Titles("topic '{value}' of the {owner}")]
+    field: Text = "data"  # the dotted path of the score in a message
+    callerids: Annotated[CallerIds, Key("callerid")] = ()
+    filter: Annotated[FilterConfig, Label("the filter of {what}")]
+    states: Annotated[tuple[ObserverState, ...], states_checking("score", every=True)]
+
+    def after_read(self, entry: Entry) -> ScoredTopic | None:
+        return self if self.states else None
 
 
 @dataclass(frozen=True, kw_only=True)
 class ScoresConfig(ObserverConfig):
-    topics: tuple[ScoredTopic, ...]
-
-
-def read_topic(entry: Entry, owner: str) -> ScoredTopic | None:
-    name = topic_name(entry, "name")
-    if name is not None:
-        entry.what = f"topic '{name}' of the {owner}"
-    field = entry.text("field", "data") or "data"
-    callerids = entry.names("callerid")
-    filter_config = read_filter(entry.entry("filter", f"the filter of {entry.what}", required=True))
-    states = read_states(entry, ("score",), every=True)
-    entry.close()
-    if name is None or filter_config is None or not states:
-        return None
-    return ScoredTopic(name, field, callerids, filter_config, states)
+    topics: Annotated[tuple[ScoredTopic, ...], Label("topic {n} of the {what}")]
 
 
 class ScoresObserver(Observer):
     type = "scores"
+    config_type = ScoresConfig
     config: ScoresConfig
 
     def __init__(self, config: ScoresConfig, environment: Environment | None = None) -> None:
         super().__init__(config, environment)
         self._queues: list[deque[Message]] = [deque() for _ in config.topics]
         self._filters: list[Filter] = [t.filter.make() for t in config.topics]
-
-    @classmethod
-    def read(cls, entry: Entry, common: ObserverConfig) -> ScoresConfig | None:
-        what = f"topic {{n}} of the {entry.what}"
-        topics = [read_topic(e, entry.what) for e in entry.entries("topics", what, required=True)]
-        return ScoresConfig(**common.common(), topics=tuple(t for t in topics if t is not None))
 
     def inputs(self) -> list[tuple[str, Handler]]:
         return [

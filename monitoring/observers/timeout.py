@@ -22,35 +22,31 @@ the first report. The default loop rate is
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Annotated
 
 from executive.bus.keys import topic
 from executive.bus.payloads import GENERAL_OK, TIMEOUT
 from executive.bus.session import Message
-from monitoring.caller_groups import TopicGroups, read_topics
-from monitoring.config_entry import Entry
+from knowledge.conventions import Above, AtLeast
+from monitoring.caller_groups import TopicGroups, topics_with
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
 from monitoring.state import Verdict
 
 
 @dataclass(frozen=True)
 class TimeoutSettings:
-    timeout: float
-    max_timeouts_in_a_row: int | None = None
+    timeout: Annotated[float, Above(0.0)]
+    max_timeouts_in_a_row: Annotated[int | None, AtLeast(1)] = None
 
 
 @dataclass(frozen=True, kw_only=True)
 class TimeoutConfig(ObserverConfig):
-    topics: tuple[TopicGroups[TimeoutSettings], ...]
-
-
-def read_settings(entry: Entry) -> TimeoutSettings | None:
-    timeout = entry.number("timeout", required=True, above=0.0)
-    in_a_row = entry.integer("max_timeouts_in_a_row", minimum=1)
-    return TimeoutSettings(timeout, in_a_row) if timeout is not None else None
+    topics: Annotated[tuple[TopicGroups[TimeoutSettings], ...], topics_with(TimeoutSettings)]
 
 
 class TimeoutObserver(Observer):
     type = "timeout"
+    config_type = TimeoutConfig
     config: TimeoutConfig
 
     def __init__(self, config: TimeoutConfig, environment: Environment | None = None) -> None:
@@ -58,10 +54,6 @@ class TimeoutObserver(Observer):
         self._last: list[dict[str, float]] = [{} for _ in config.topics]  # caller -> last
         # (topic, group) -> the last message before the silence reported as TIMEOUT
         self._reported: dict[tuple[int, int], float | None] = {}
-
-    @classmethod
-    def read(cls, entry: Entry, common: ObserverConfig) -> TimeoutConfig | None:
-        return TimeoutConfig(**common.common(), topics=read_topics(entry, read_settings))
 
     def default_rate(self) -> float:
         timeouts = [g.settings.timeout for t in self.config.topics for g in t.groups]

@@ -27,47 +27,43 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+from typing import Annotated
 
 from executive.bus.keys import topic
 from executive.bus.payloads import GENERAL_ERROR
 from executive.bus.session import Message
+from knowledge.conventions import Label
 from knowledge.errors import BusError
-from monitoring.caller_groups import TopicGroups, read_topics
-from monitoring.config_entry import Entry
-from monitoring.filter import Filter, FilterConfig, read_filter
+from knowledge.typed_reader import Entry
+from monitoring.caller_groups import TopicGroups, topics_with
+from monitoring.filter import Filter, FilterConfig
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
-from monitoring.state import ObserverState, Verdict, classify, read_states
+from monitoring.state import ObserverState, Verdict, classify, states_checking
 
 
 @dataclass(frozen=True)
 class TimestampSettings:
-    filter: FilterConfig
-    states: tuple[ObserverState, ...]
+    filter: Annotated[FilterConfig, Label("the filter of {what}")]
+    states: Annotated[tuple[ObserverState, ...], states_checking("age", every=True)]
+
+    def after_read(self, entry: Entry) -> TimestampSettings | None:
+        return self if self.states else None
 
 
 @dataclass(frozen=True, kw_only=True)
 class TimestampConfig(ObserverConfig):
-    topics: tuple[TopicGroups[TimestampSettings], ...]
-
-
-def read_settings(entry: Entry) -> TimestampSettings | None:
-    filter_config = read_filter(entry.entry("filter", f"the filter of {entry.what}", required=True))
-    states = read_states(entry, ("age",), every=True)
-    return TimestampSettings(filter_config, states) if filter_config and states else None
+    topics: Annotated[tuple[TopicGroups[TimestampSettings], ...], topics_with(TimestampSettings)]
 
 
 class TimestampObserver(Observer):
     type = "timestamp"
+    config_type = TimestampConfig
     config: TimestampConfig
 
     def __init__(self, config: TimestampConfig, environment: Environment | None = None) -> None:
         super().__init__(config, environment)
         self._queues: list[deque[Message]] = [deque() for _ in config.topics]
         self._filters = [[g.settings.filter.make() for g in t.groups] for t in config.topics]
-
-    @classmethod
-    def read(cls, entry: Entry, common: ObserverConfig) -> TimestampConfig | None:
-        return TimestampConfig(**common.common(), topics=read_topics(entry, read_settings))
 
     def inputs(self) -> list[tuple[str, Handler]]:
         return [

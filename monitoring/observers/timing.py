@@ -28,25 +28,32 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+from typing import Annotated
 
 from executive.bus.keys import topic
 from executive.bus.session import Message
-from monitoring.caller_groups import topic_name
-from monitoring.config_entry import Entry
-from monitoring.filter import FilterConfig, read_filter
+from knowledge.conventions import Key, Label, Titles
+from knowledge.typed_reader import Entry
+from monitoring.caller_groups import CallerIds, TopicName
+from monitoring.filter import FilterConfig
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult
-from monitoring.state import ObserverState, classify, read_states
+from monitoring.state import ObserverState, classify, states_checking
+
+PAIR = "topics '{topic_a}' -> '{topic_b}' of the {owner}"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class TopicPair:
-    topic_a: str
-    callerids_a: tuple[str, ...]
-    topic_b: str
-    callerids_b: tuple[str, ...]
-    single_shot_mode: bool
-    filter: FilterConfig
-    states: tuple[ObserverState, ...]
+    topic_a: Annotated[TopicName, Key("topicA")]
+    topic_b: Annotated[TopicName, Key("topicB"), Titles(PAIR)]
+    callerids_a: Annotated[CallerIds, Key("calleridA")] = ()
+    callerids_b: Annotated[CallerIds, Key("calleridB")] = ()
+    single_shot_mode: bool = False
+    filter: Annotated[FilterConfig, Label("the filter of {what}")]
+    states: Annotated[tuple[ObserverState, ...], states_checking("delay", every=True)]
+
+    def after_read(self, entry: Entry) -> TopicPair | None:
+        return self if self.states else None
 
     @property
     def callerids(self) -> tuple[str, ...]:
@@ -55,23 +62,8 @@ class TopicPair:
 
 @dataclass(frozen=True, kw_only=True)
 class TimingConfig(ObserverConfig):
-    topics: tuple[TopicPair, ...]
-
-
-def read_pair(entry: Entry, owner: str) -> TopicPair | None:
-    a = topic_name(entry, "topicA")
-    b = topic_name(entry, "topicB")
-    if a is not None and b is not None:
-        entry.what = f"topics '{a}' -> '{b}' of the {owner}"
-    callerids_a = entry.names("calleridA")
-    callerids_b = entry.names("calleridB")
-    single_shot = entry.flag("single_shot_mode", False)
-    filter_config = read_filter(entry.entry("filter", f"the filter of {entry.what}", required=True))
-    states = read_states(entry, ("delay",), every=True)
-    entry.close()
-    if a is None or b is None or filter_config is None or not states:
-        return None
-    return TopicPair(a, callerids_a, b, callerids_b, single_shot, filter_config, states)
+    use_global_subscriber: bool = False  # tug's: accepted and ignored
+    topics: Annotated[tuple[TopicPair, ...], Label("topic pair {n} of the {what}")]
 
 
 class _Pairing:
@@ -111,18 +103,12 @@ class _Pairing:
 
 class TimingObserver(Observer):
     type = "timing"
+    config_type = TimingConfig
     config: TimingConfig
 
     def __init__(self, config: TimingConfig, environment: Environment | None = None) -> None:
         super().__init__(config, environment)
         self._pairs = [_Pairing(p) for p in config.topics]
-
-    @classmethod
-    def read(cls, entry: Entry, common: ObserverConfig) -> TimingConfig | None:
-        entry.flag("use_global_subscriber", False)
-        what = f"topic pair {{n}} of the {entry.what}"
-        pairs = [read_pair(e, entry.what) for e in entry.entries("topics", what, required=True)]
-        return TimingConfig(**common.common(), topics=tuple(p for p in pairs if p is not None))
 
     def inputs(self) -> list[tuple[str, Handler]]:
         out: list[tuple[str, Handler]] = []

@@ -1,9 +1,11 @@
 """Repair actions: what a rule does when it fires (thesis 5.3, 6.3.4).
 
-An action is configured from its rule's YAML entry and run by the rule engine on a
-worker thread; each action bounds its own waiting by ``timeout`` seconds. Built-in
-actions live in ``monitoring/repair/actions/``; others register in the entry-point
-group ``dura.actions`` (name = the rule ``type``, value = an :class:`Action` subclass).
+An action is a frozen dataclass whose fields are its keys in the rule's YAML entry (the
+typed reader reads them, :mod:`knowledge.typed_reader`); the rule engine runs it on a
+worker thread, and it bounds its own waiting by ``timeout`` seconds. Built-in actions
+live in ``monitoring/repair/actions/``; others register in the entry-point group
+``dura.actions`` (name = the rule ``type``, value = an :class:`Action` subclass, a
+frozen keyword-only dataclass).
 """
 
 from __future__ import annotations
@@ -14,11 +16,11 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Annotated, Any, ClassVar
 
 from executive.bus.session import Bus
+from knowledge.conventions import AtLeast
 from knowledge.errors import ConfigError
-from knowledge.yamlsource import Section
 
 log = logging.getLogger("dura.repair")
 
@@ -49,18 +51,12 @@ class ActionContext:
     folder: Path = field(default_factory=Path.cwd)
 
 
+@dataclass(frozen=True, kw_only=True)
 class Action(ABC):
-    """One kind of repair action."""
+    """One kind of repair action: its fields are the keys of a rule that configure it."""
 
     type: ClassVar[str]
-
-    def __init__(self, timeout: float = DEFAULT_TIMEOUT) -> None:
-        self.timeout = timeout
-
-    @classmethod
-    @abstractmethod
-    def configure(cls, entry: Section, timeout: float) -> Action:
-        """Read the action's own keys from a rule entry (errors go to its report)."""
+    timeout: Annotated[float, AtLeast(0.001)] = DEFAULT_TIMEOUT  # seconds it may take
 
     def run(self, context: ActionContext, firing: Firing) -> None:
         """Carry the action out; raises :class:`DuraError` (or OSError) if it failed."""
@@ -72,10 +68,6 @@ class Action(ABC):
     def describe(self) -> str:
         """What the action does, in a few words."""
         return self.type
-
-    @staticmethod
-    def _require(entry: Section, key: str) -> str:
-        return entry.text(key, required=True) or ""
 
     @staticmethod
     def _bus(context: ActionContext) -> Bus:

@@ -21,19 +21,59 @@ asp: [more_rules.lp]             # optional: rules written in ASP (see rules.lp)
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-
-import yaml
+from typing import Annotated, Any, TypeVar
 
 from executive.bus.payloads import ObservationInfo
-from knowledge.errors import ConfigError, DuraError
+from knowledge.conventions import (
+    AtLeast,
+    Convert,
+    Default,
+    EntryLine,
+    Exists,
+    Key,
+    OneOrMore,
+    OrDefault,
+    Required,
+)
+from knowledge.errors import ConfigError, DuraError, did_you_mean
 from knowledge.finding import Report
-from knowledge.yamlsource import Section, compose, describe, did_you_mean, line_of
+from knowledge.typed_reader import MISSING, Entry, Place, open_entry, read_entry
+from knowledge.yamlsource import DocumentSource, read_file
 from monitoring.diagnosis.model import observer_type
-from monitoring.repair.action import ALIASES, DEFAULT_TIMEOUT, Action, action_types
+from monitoring.repair.action import ALIASES, Action, action_types
 
 VERDICTS = ("failed", "ok")
+
+
+def _verdict(value: Any, place: Place) -> Any:
+    """A number, ``failed`` or ``ok``."""
+    if (isinstance(value, int) and not isinstance(value, bool)) or value in VERDICTS:
+        return value
+    return place.wrong("a number, 'failed' or 'ok'", value)
+
+
+C = TypeVar("C", "ObservationCondition", "FaultCondition")
+
+
+def _window(condition: C, entry: Entry) -> C:
+    """The condition with its window (``occurrences`` unless given), if not smaller."""
+    window = condition.window if condition.window is not None else condition.occurrences
+    if window < condition.occurrences:
+        entry.error(
+            "window_size",
+            f"'window_size' of {entry.what} ({window}) is smaller than 'occurrences' "
+            f"({condition.occurrences})",
+        )
+    return dataclasses.replace(condition, window=window)
+
+
+Occurrences = Annotated[int, AtLeast(1)]
+Window = Annotated[int, Key("window_size"), AtLeast(1), Default(None)]
+Resources = Annotated[tuple[str, ...], Key("resource"), OneOrMore(), Required()]
 
 
 @dataclass(frozen=True)
@@ -45,12 +85,24 @@ class ObservationCondition:
     """
 
     type: str  # canonical observer type
-    resource: tuple[str, ...]
-    observation: int | str | None = "failed"  # a number, 'failed', 'ok', or None (any)
-    message: str | None = None
-    occurrences: int = 1
-    window: int = 1
-    line: int = 0
+    resource: Annotated[tuple[str, ...], OneOrMore(), Required()] = ()
+    # a number, 'failed', 'ok', or None (any: the message alone decides)
+    observation: Annotated[int | str | None, Convert(_verdict)] = "failed"
+    message: Annotated[str | None, Key("observation_msg")] = None
+    occurrences: Occurrences = 1
+    window: Window = 1
+    line: Annotated[int, EntryLine()] = 0
+
+    def after_read(self, entry: Entry) -> ObservationCondition | None:
+        """The condition with its observer type's canonical name."""
+        found = _window(self, entry)
+        if self.message is not None and not entry.has("observation"):
+            found = dataclasses.replace(found, observation=None)
+        try:
+            return dataclasses.replace(found, type=observer_type(self.type).value)
+        except DuraError as e:
+            entry.error("type", f"{entry.what}: {e}")
+            return None
 
     @property
     def key(self) -> tuple[str, tuple[str, ...]]:
@@ -71,10 +123,27 @@ class FaultCondition:
     """Holds when any of ``resources`` is possibly faulty (named by some diagnosis) in
     at least ``occurrences`` of the newest ``window`` diagnoses."""
 
-    resources: tuple[str, ...]
-    occurrences: int = 1
-    window: int = 1
-    line: int = 0
+    resources: Resources = ()
+    occurrences: Occurrences = 1
+    window: Window = 1
+    line: Annotated[int, EntryLine()] = 0
+
+    def after_read(self, entry: Entry) -> FaultCondition | None:
+        found: FaultCondition = _window(self, entry)
+        return found if found.resources else None
+
+
+@dataclass(frozen=True)
+class Conditions:
+    """When a rule fires, as written (the keys of a rule besides its action's)."""
+
+    positive_observations: tuple[ObservationCondition, ...] = ()
+    negative_observations: tuple[ObservationCondition, ...] = ()
+    positive_possible_faulty_resources: tuple[FaultCondition, ...] = ()
+    negative_possible_faulty_resources: tuple[FaultCondition, ...] = ()
+    recall_duration: Annotated[float | None, AtLeast(0.0)] = None
+    single_shot: bool = False
+    priority: int = 0
 
 
 @dataclass(frozen=True)
@@ -119,109 +188,49 @@ def observation_key(info: ObservationInfo) -> tuple[str, tuple[str, ...]] | None
         return None
 
 
-def _window(entry: Section) -> tuple[int, int]:
-    occurrences = entry.integer("occurrences", 1, minimum=1)
-    window = entry.integer("window_size", occurrences, minimum=1)
-    if window < occurrences:
-        entry.report.error(
-            entry.key_line("window_size"),
-            f"'window_size' of {entry.what} ({window}) is smaller than 'occurrences' ({occurrences})",
-        )
-    return occurrences, window
-
-
-def _observation(node: yaml.Node, what: str, report: Report) -> ObservationCondition | None:
-    entry = Section(node, what, report)
-    if not entry.valid:
-        return None
-    kind = entry.text("type", required=True)
-    resource = entry.texts("resource", required=True)
-    value: int | str | None = "failed"
-    raw = entry.node("observation")
-    if raw is not None:
-        if isinstance(raw, yaml.ScalarNode) and raw.tag == "tag:yaml.org,2002:int":
-            value = int(raw.value)
-        elif isinstance(raw, yaml.ScalarNode) and raw.value in VERDICTS:
-            value = raw.value
-        else:
-            report.error(
-                line_of(raw),
-                f"'observation' of {what} must be a number, 'failed' or 'ok', not {describe(raw)}",
-            )
-    message = entry.text("observation_msg")
-    if message is not None and raw is None:
-        value = None  # the message alone decides
-    occurrences, window = _window(entry)
-    entry.close()
-    if kind is None:
-        return None
-    try:
-        canonical = observer_type(kind).value
-    except DuraError as e:
-        report.error(entry.key_line("type"), f"{what}: {e}")
-        return None
-    return ObservationCondition(
-        canonical, resource, value, message, occurrences, window, entry.line
-    )
-
-
-def _fault(node: yaml.Node, what: str, report: Report) -> FaultCondition | None:
-    entry = Section(node, what, report)
-    if not entry.valid:
-        return None
-    resources = entry.texts("resource", required=True)
-    occurrences, window = _window(entry)
-    entry.close()
-    return FaultCondition(resources, occurrences, window, entry.line) if resources else None
-
-
-def _rule(
-    node: yaml.Node, number: int, kinds: dict[str, type[Action]], report: Report
-) -> Rule | None:
-    entry = Section(node, f"rule {number}", report)
-    if not entry.valid:
-        return None
-    name = entry.text("name", f"rule{number}") or f"rule{number}"
+def _rule(value: Any, place: Place) -> Any:
+    """A rule: its name, its action (by ``type``), its condition."""
+    number = int(place.path[-1]) + 1
+    entry = open_entry(value, place.source, place.path, f"rule {number}", place=place)
+    if entry is None:
+        return MISSING
+    name = entry.read("name", Annotated[str, OrDefault()], f"rule{number}")
     entry.what = f"rule '{name}'"
-    kind = entry.text("type", required=True)
-
-    def conditions(key: str, read: object) -> list[object]:
-        found = [read(item, f"'{key}' of rule '{name}'", report) for item in entry.sequence(key)]  # type: ignore[operator]
-        return [c for c in found if c is not None]
-
-    positive_observations = conditions("positive_observations", _observation)
-    negative_observations = conditions("negative_observations", _observation)
-    positive_faults = conditions("positive_possible_faulty_resources", _fault)
-    negative_faults = conditions("negative_possible_faulty_resources", _fault)
-    recall = entry.number("recall_duration", -1.0, minimum=0.0)
-    single_shot = entry.flag("single_shot", False)
-    priority = entry.integer("priority", 0)
-    timeout = entry.number("timeout", DEFAULT_TIMEOUT, minimum=0.001)
+    kind = entry.read("type", str, None, required=True)
+    written = entry.read_fields(Conditions)
     action: Action | None = None
     if kind is not None:
+        kinds: Mapping[str, type[Action]] = place.source.context
         action_class = kinds.get(ALIASES.get(kind, kind))
-        if action_class is None:
-            report.error(
-                entry.key_line("type"),
+        if action_class is None:  # its keys unknown, unknown keys say nothing
+            entry.error(
+                "type",
                 f"rule '{name}' has unknown action type '{kind}'{did_you_mean(kind, sorted(kinds))}",
             )
         else:
-            action = action_class.configure(entry, timeout)
-            entry.close()  # without the action's keys known, unknown keys say nothing
-    if action is None:
-        return None
+            action = read_entry(action_class, entry)
+    if action is None or action is MISSING or written is None:
+        return MISSING
     return Rule(
         name,
         action,
-        tuple(positive_observations),  # type: ignore[arg-type]
-        tuple(negative_observations),  # type: ignore[arg-type]
-        tuple(positive_faults),  # type: ignore[arg-type]
-        tuple(negative_faults),  # type: ignore[arg-type]
-        recall if recall >= 0 else None,
-        single_shot,
-        priority,
-        entry.line,
+        written["positive_observations"],
+        written["negative_observations"],
+        written["positive_possible_faulty_resources"],
+        written["negative_possible_faulty_resources"],
+        written["recall_duration"],
+        written["single_shot"],
+        written["priority"],
+        entry.line or 0,
     )
+
+
+@dataclass(frozen=True)
+class RulesFile:
+    """A rules file as written."""
+
+    rules: tuple[Annotated[Rule, Convert(_rule)], ...] = ()
+    asp: Annotated[tuple[Annotated[Path, Exists()], ...], OneOrMore()] = ()
 
 
 def read_rules(path: Path, report: Report | None = None) -> RuleSet:
@@ -233,24 +242,19 @@ def read_rules(path: Path, report: Report | None = None) -> RuleSet:
     own = report is None
     report = report or Report(str(path))
     rules: list[Rule] = []
-    asp: list[Path] = []
-    node = compose(path, report)
-    if node is not None:
-        top = Section(node, "the rules file", report)
-        if top.valid:
-            kinds = action_types()
-            for number, item in enumerate(top.sequence("rules"), 1):
-                rule = _rule(item, number, kinds, report)
-                if rule is None:
-                    continue
+    asp: tuple[Path, ...] = ()
+    found = read_file(path, report)
+    if found is not None:
+        source = DocumentSource(found, report, folder=path.parent, context=action_types())
+        top = open_entry(found.value, source, what="the rules file")
+        if top is not None:
+            written = top.read_fields(RulesFile)
+            rules_read: tuple[Rule, ...] = written["rules"] if written else ()
+            asp = written["asp"] if written else ()
+            for rule in rules_read:
                 if any(r.name == rule.name for r in rules):
                     report.error(rule.line, f"rule '{rule.name}' is defined twice")
                 rules.append(rule)
-            for name in top.texts("asp"):
-                file = (path.parent / name).resolve()
-                if not file.is_file():
-                    report.error(top.key_line("asp"), f"'asp' names no file: {name}")
-                asp.append(file)
             for rule in rules:
                 if not rule.has_condition and not asp:
                     report.error(

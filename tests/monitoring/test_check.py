@@ -5,15 +5,15 @@ from __future__ import annotations
 import pytest
 
 from knowledge.finding import Report
-from monitoring.check import Check, read_check
-from monitoring.config_entry import Entry, Source
+from knowledge.typed_reader import Source, read
+from monitoring.check import Check, CheckSpec
 from monitoring.filter import FilterState
 from monitoring.t_distribution import critical_value
 
 
 def check(**config: object) -> Check:
     report = Report("test")
-    found = read_check(Entry(config, Source(report), "", "the check"))
+    found = read(CheckSpec, config, Source(report), "the check")
     assert found is not None, [str(f) for f in report.findings]
     return found
 
@@ -97,5 +97,5 @@ def test_checks_read_as_requirements() -> None:
 )
 def test_a_bad_check_is_reported(config: dict[str, object], message: str) -> None:
     report = Report("test")
-    assert read_check(Entry(config, Source(report), "", "the check")) is None
+    assert read(CheckSpec, config, Source(report), "the check") is None
     assert any(message in f.message for f in report.findings), [f.message for f in report.findings]

@@ -160,17 +160,20 @@ def test_dura_validate_checks_a_tug_observers_file(dura: Dura, tmp_path: Path) -
 
 
 PLUGIN = """\
+from dataclasses import dataclass
+
 from monitoring.observer import Observer, ObserverConfig
+
+
+@dataclass(frozen=True, kw_only=True)
+class BeaconConfig(ObserverConfig):
+    colour: str
 
 
 class Beacon(Observer):
     type = "beacon"
     aliases = ("lighthouse",)
-
-    @classmethod
-    def read(cls, entry, common):
-        entry.text("colour", required=True)
-        return common
+    config_type = BeaconConfig
 
     def _observe(self, now):
         return []

@@ -8,9 +8,8 @@ import re
 from dataclasses import dataclass
 
 from executive.planning.expression.reader import Sexp, Signature, read_sexp, show_sexp
-from knowledge.errors import DomainError
+from knowledge.errors import DomainError, did_you_mean
 from knowledge.records import Fact
-from knowledge.yamlsource import did_you_mean
 
 _NAME = re.compile(r"[^\W\d_][\w-]*")
 _NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")

@@ -29,9 +29,8 @@ from executive.planning.expression.nodes import (
     conjunction,
 )
 from knowledge.domain import DomainInfo
-from knowledge.errors import DomainError
+from knowledge.errors import DomainError, did_you_mean
 from knowledge.records import Fact
-from knowledge.yamlsource import did_you_mean
 
 
 @dataclass(frozen=True)

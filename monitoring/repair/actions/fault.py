@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import ClassVar
 
 from executive.bus.api import tasks as api
@@ -9,6 +10,7 @@ from executive.bus.verb import Verb
 from monitoring.repair.actions.restart import RestartAction
 
 
+@dataclass(frozen=True, kw_only=True)
 class FaultAction(RestartAction):
     """``component/fault`` of the task executor with ``{name, reason}``; configured as
     restart."""

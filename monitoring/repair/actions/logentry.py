@@ -4,39 +4,43 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
-from knowledge.yamlsource import Section
 from monitoring.repair.action import Action, ActionContext, Firing
 
 log = logging.getLogger("dura.repair")
 
 
+@dataclass(frozen=True, kw_only=True)
 class LogAction(Action):
-    """Append ``message`` with a time stamp to ``file`` (relative to the robot's folder)."""
+    """Append ``message`` with a time stamp to ``file`` (relative to the robot's folder);
+    tug's ``log_entry`` and ``log_file`` say the same."""
 
     type = "log"
+    message: str | None = None
+    log_entry: str | None = None
+    file: str | None = None
+    log_file: str | None = None
 
-    def __init__(self, message: str, file: str | None, timeout: float) -> None:
-        super().__init__(timeout)
-        self.message = message
-        self.file = file
+    @property
+    def text(self) -> str:
+        return self.message or self.log_entry or "rule $rule fired"
 
-    @classmethod
-    def configure(cls, entry: Section, timeout: float) -> Action:
-        message = entry.text("message") or entry.text("log_entry") or "rule $rule fired"
-        return cls(message, entry.text("file") or entry.text("log_file"), timeout)
+    @property
+    def path(self) -> str | None:
+        return self.file or self.log_file
 
     def _run(self, context: ActionContext, firing: Firing) -> None:
-        text = firing.fill(self.message)
-        if self.file is None:
+        text = firing.fill(self.text)
+        if self.path is None:
             log.warning("%s", text)
             return
-        path = context.folder / Path(self.file)
+        path = context.folder / Path(self.path)
         path.parent.mkdir(parents=True, exist_ok=True)
         stamp = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(firing.stamp or time.time()))
         with path.open("a", encoding="utf-8") as f:
             f.write(f"{stamp} {text}\n")
 
     def describe(self) -> str:
-        return f"log to {self.file or 'the dura log'}"
+        return f"log to {self.path or 'the dura log'}"

@@ -3,57 +3,32 @@
 from __future__ import annotations
 
 import smtplib
+from dataclasses import dataclass
 from email.message import EmailMessage
+from typing import Annotated
 
-from knowledge.yamlsource import Section
+from knowledge.conventions import AtLeast, Key, OneOrMore, OrDefault, Required
 from monitoring.repair.action import Action, ActionContext, Firing
 
 
+@dataclass(frozen=True, kw_only=True)
 class MailAction(Action):
     """Mail ``content`` to ``to_address`` through ``host:port`` (STARTTLS and login optional)."""
 
     type = "mail"
+    host: Annotated[str, OrDefault()] = "localhost"
+    port: Annotated[int, AtLeast(1)] = 25
+    sender: Annotated[str, Key("from_address"), Required()] = ""
+    recipients: Annotated[tuple[str, ...], Key("to_address"), OneOrMore(), Required()] = ()
+    subject: str = "dura: rule $rule fired"
+    content: str = "Rule $rule fired. Possibly faulty: $faulty."
+    username: str | None = None
+    password: str | None = None
+    starttls: bool = False
 
-    def __init__(
-        self,
-        *,
-        host: str,
-        port: int,
-        sender: str,
-        recipients: tuple[str, ...],
-        subject: str,
-        content: str,
-        login: tuple[str, str] | None,
-        starttls: bool,
-        timeout: float,
-    ) -> None:
-        super().__init__(timeout)
-        self.host, self.port = host, port
-        self.sender, self.recipients = sender, recipients
-        self.subject, self.content = subject, content
-        self.login, self.starttls = login, starttls
-
-    @classmethod
-    def configure(cls, entry: Section, timeout: float) -> Action:
-        host = entry.text("host", "localhost") or "localhost"
-        port = entry.integer("port", 25, minimum=1)
-        sender = cls._require(entry, "from_address")
-        recipients = entry.texts("to_address", required=True)
-        subject = entry.text("subject", "dura: rule $rule fired") or ""
-        content = entry.text("content", "Rule $rule fired. Possibly faulty: $faulty.") or ""
-        username, password = entry.text("username"), entry.text("password")
-        login = (username, password or "") if username else None
-        return cls(
-            host=host,
-            port=port,
-            sender=sender,
-            recipients=recipients,
-            subject=subject,
-            content=content,
-            login=login,
-            starttls=entry.flag("starttls", False),
-            timeout=timeout,
-        )
+    @property
+    def login(self) -> tuple[str, str] | None:
+        return (self.username, self.password or "") if self.username else None
 
     def _run(self, context: ActionContext, firing: Firing) -> None:
         message = EmailMessage()

@@ -5,38 +5,44 @@ from __future__ import annotations
 import os
 import signal
 import subprocess
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Annotated, Any
 
+from knowledge.conventions import Convert, Key, OneOrMore
 from knowledge.errors import DuraError
-from knowledge.yamlsource import Section, describe
+from knowledge.typed_reader import MISSING, Entry, Place, read_value
 from monitoring.repair.action import Action, ActionContext, Firing
 
 
+def _argv(value: Any, place: Place) -> Any:
+    """An argv list; a text or a number is refused (dura never runs a shell)."""
+    what = f"'process' of {place.entry.what}"
+    if not isinstance(value, list | Mapping):
+        shown = place.source.describe(value, place.path)
+        place.entry.error(
+            "process",
+            f"{what} must be an argv list such as [kill, -9, '1234'], not {shown} "
+            "(dura never runs a shell)",
+        )
+        return MISSING
+    argv = read_value(Annotated[tuple[str, ...], OneOrMore()], value, place)
+    if argv is MISSING or not argv:  # nothing to run (a mapping, reported, is no list)
+        place.entry.error("process", f"{what} is empty")
+    return argv
+
+
+@dataclass(frozen=True, kw_only=True)
 class ProcessAction(Action):
     """Run ``process`` (an argv list) in the robot's folder; kill it after ``timeout``."""
 
     type = "process"
+    argv: Annotated[tuple[str, ...], Key("process"), Convert(_argv)] = ()
 
-    def __init__(self, argv: tuple[str, ...], timeout: float) -> None:
-        super().__init__(timeout)
-        self.argv = argv
-
-    @classmethod
-    def configure(cls, entry: Section, timeout: float) -> Action:
-        node = entry.node("process")
-        if node is None:
-            entry.report.error(entry.line, f"{entry.what} has no 'process' (an argv list)")
-            return cls((), timeout)
-        if not hasattr(node, "value") or not isinstance(node.value, list):
-            entry.report.error(
-                entry.key_line("process"),
-                f"'process' of {entry.what} must be an argv list such as [kill, -9, '1234'], "
-                f"not {describe(node)} (dura never runs a shell)",
-            )
-            return cls((), timeout)
-        argv = entry.texts("process")
-        if not argv:
-            entry.report.error(entry.key_line("process"), f"'process' of {entry.what} is empty")
-        return cls(argv, timeout)
+    def after_read(self, entry: Entry) -> ProcessAction:
+        if not entry.has("process"):
+            entry.error(None, f"{entry.what} has no 'process' (an argv list)")
+        return self
 
     def _run(self, context: ActionContext, firing: Firing) -> None:
         argv = [firing.fill(a) for a in self.argv]

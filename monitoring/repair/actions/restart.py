@@ -2,30 +2,24 @@
 
 from __future__ import annotations
 
-from typing import ClassVar
+from dataclasses import dataclass
+from typing import Annotated, ClassVar
 
 from executive.bus.api import tasks as api
 from executive.bus.verb import Verb
-from knowledge.yamlsource import Section
-from monitoring.repair.action import Action, ActionContext, Firing
+from knowledge.conventions import Required
+from monitoring.repair.action import ActionContext, Firing
 from monitoring.repair.actions.executive import ExecutiveAction
 
 
+@dataclass(frozen=True, kw_only=True)
 class RestartAction(ExecutiveAction):
     """``component/restart`` of the task executor with ``{name, reason}``."""
 
     type = "restart"
     verb: ClassVar[Verb[api.ComponentFault, api.FaultReply]] = api.COMPONENT_RESTART
-
-    def __init__(self, component: str, reason: str, timeout: float) -> None:
-        super().__init__(timeout)
-        self.component = component
-        self.reason = reason
-
-    @classmethod
-    def configure(cls, entry: Section, timeout: float) -> Action:
-        component = cls._require(entry, "component")
-        return cls(component, entry.text("reason", "rule $rule fired") or "", timeout)
+    component: Annotated[str, Required()] = ""
+    reason: str = "rule $rule fired"
 
     def _run(self, context: ActionContext, firing: Firing) -> None:
         request = api.ComponentFault(firing.fill(self.component), firing.fill(self.reason))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -171,4 +172,67 @@ def test_a_union_reads_the_first_option_that_fits() -> None:
 def test_a_bad_record_is_refused_with_the_field_and_the_value(point: Any, message: str) -> None:
     with pytest.raises(PayloadError) as raised:
         Carrying.from_payload({"point": point})
+    assert message in str(raised.value)
+
+
+def test_a_payload_class_is_frozen_as_a_frozen_dataclass_is() -> None:
+    declared = Declared("a")
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        declared.text = "b"  # type: ignore[misc]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        del declared.text  # type: ignore[misc]
+    assert dataclasses.replace(declared, text="b") == Declared("b")
+    assert Declared(text="a", tags=("t",)).tags == ("t",)
+    with pytest.raises(TypeError, match="missing the argument 'text'"):
+        Declared()  # type: ignore[call-arg]
+
+
+@dataclass(frozen=True)
+class Record:
+    """A knowledge record, as the knowledge base gives it: not a payload."""
+
+    name: str
+    state: Color
+    value: bool | float = False
+    note: str | None = None
+
+
+@payload
+class Records(Payload):
+    records: tuple[Record, ...]
+    by_name: Mapping[str, Record] = field(default_factory=dict)
+    inner: list[Inner] = field(default_factory=list)
+    extra: Any = None
+
+
+def test_a_payload_reads_nested_records_and_sends_them_back() -> None:
+    sent = Records(
+        (Record("a", Color.RED, 0.5), Record("b", Color.GREEN, True, "n")),
+        {"c": Record("c", Color.RED)},
+        [Inner("x")],
+        {"free": [1]},
+    )
+    assert Records.from_payload(sent.to_payload()) == sent
+    assert sent.to_payload()["records"][0] == {
+        "name": "a", "state": "red", "value": 0.5, "note": None
+    }  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("payload", "message"),
+    [
+        ({"records": [{"name": "a"}]}, "'records[0].state' must be one of red, green, not null"),
+        (
+            {"records": [{"name": "a", "state": "red", "value": "x"}]},
+            "'records[0].value' must be true or false or a number, not \"x\"",
+        ),
+        ({"records": [], "by_name": {"c": 1}}, "'by_name.c' must be an object, not 1"),
+        ({"records": [], "inner": [{"name": ""}]}, "'inner[0].name' must be a non-empty string"),
+    ],
+)
+def test_a_bad_nested_record_is_refused_with_its_place(
+    payload: dict[str, Any], message: str
+) -> None:
+    with pytest.raises(PayloadError) as raised:
+        Records.from_payload(payload)
     assert message in str(raised.value)
