@@ -24,7 +24,8 @@ it.
   (:mod:`.tables`), its migrations (:mod:`.schema`), whether it is sound and its repair
   (:mod:`.health`);
 - :mod:`.records` — what it stores, as typed frozen records; :mod:`.transitions` — the
-  states of goals, plans and tasks and the changes allowed;
+  states of goals, plans and tasks and the changes allowed; :mod:`.record_class` — how
+  every record class of dura is made (frozen, and cheap to define);
 - :mod:`.asp` — the one adapter of clingo;
 - :mod:`.errors` — :class:`~.errors.DuraError` and its subclasses.
 """

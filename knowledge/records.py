@@ -1,22 +1,20 @@
 """What the knowledge base stores, as typed frozen records (thesis tables 5.1-5.3).
 
-A record is a frozen dataclass declared with :func:`record`: compared, hashed and shown
-by its fields as ``@dataclass(frozen=True)`` makes one, but created at half the cost (a
-quick command such as ``dura status`` reads them, and its start-up is counted in
-milliseconds).
+A record is a frozen dataclass declared with :func:`~knowledge.record_class.record`:
+compared, hashed and shown by its fields as ``@dataclass(frozen=True)`` makes one, but
+made at a fraction of the cost (a quick command such as ``dura status`` reads them).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import enum
-import operator
-import reprlib
 import warnings
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
-from typing import Any, TypeVar, dataclass_transform
+from collections.abc import Mapping
+from dataclasses import field
+from typing import Any, TypeVar
 
+from knowledge.record_class import record
 from knowledge.transitions import (
     GOAL_TRANSITIONS,
     KEEP_TRANSITIONS,
@@ -47,49 +45,6 @@ __all__ = [  # the states live in knowledge.transitions; records names them too
 ]
 
 T = TypeVar("T")
-
-
-@dataclass_transform(frozen_default=True, field_specifiers=(dataclasses.field,))
-def record(cls: type[T]) -> type[T]:
-    """A frozen dataclass whose comparison, hash and repr (by its fields, those with
-    ``compare`` and ``repr``) are shared by every record rather than written and compiled
-    for each, as ``@dataclass(frozen=True)`` does: 0.26 ms to create a class instead of
-    0.45."""
-    made = dataclass(frozen=True, eq=False, repr=False)(cls)
-    fields = dataclasses.fields(made)  # type: ignore[arg-type]
-    made._record_values = _getter(tuple(f.name for f in fields if f.compare))  # type: ignore[attr-defined]
-    made._record_shown = tuple(f.name for f in fields if f.repr)  # type: ignore[attr-defined]
-    for name in ("__eq__", "__hash__", "__repr__"):
-        if made.__dict__.get(name) is None:
-            setattr(made, name, getattr(_ByFields, name))
-    return made
-
-
-def _getter(names: tuple[str, ...]) -> Callable[[Any], tuple[Any, ...]]:
-    """The values of these fields of a record, as a tuple."""
-    if len(names) > 1:
-        return operator.attrgetter(*names)  # a tuple of them, at C speed
-    return lambda value: tuple(getattr(value, name) for name in names)
-
-
-class _ByFields:
-    """The comparison, hash and repr of every record, by its fields."""
-
-    def __eq__(self, other: object) -> bool:
-        if other.__class__ is not self.__class__:
-            return NotImplemented
-        mine: tuple[Any, ...] = self._record_values(self)  # type: ignore[attr-defined]
-        theirs: tuple[Any, ...] = other._record_values(other)  # type: ignore[attr-defined]
-        return mine == theirs
-
-    def __hash__(self) -> int:
-        return hash(self._record_values(self))  # type: ignore[attr-defined]
-
-    @reprlib.recursive_repr()
-    def __repr__(self) -> str:
-        names: tuple[str, ...] = self._record_shown  # type: ignore[attr-defined]
-        shown = ", ".join(f"{name}={getattr(self, name)!r}" for name in names)
-        return f"{self.__class__.__qualname__}({shown})"
 
 
 class KeyAccess:

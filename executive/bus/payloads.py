@@ -9,8 +9,9 @@ from __future__ import annotations
 from typing import Any
 
 from executive.bus.reports import DIAGNOSIS_STATUSES, DiagnosisInfo
-from executive.bus.schema import Payload, PayloadError, Text, payload, read_record
+from executive.bus.schema import Payload, PayloadError, Text, read_record
 from executive.bus.states import GoalStatus, Lifecycle
+from knowledge.record_class import record
 from knowledge.records import Event
 
 __all__ = [  # the diagnosis result is a report (executive.bus.reports), named here too
@@ -31,7 +32,7 @@ __all__ = [  # the diagnosis result is a report (executive.bus.reports), named h
 ]
 
 
-@payload
+@record
 class ComponentState:
     """The payload of ``component/<name>/state``."""
 
@@ -77,7 +78,7 @@ NOT_AVAILABLE = -3
 TIMEOUT = -4
 
 
-@payload
+@record
 class ObservationInfo:
     """The payload of ``observations``: what one observer saw of its resources.
 
@@ -132,7 +133,7 @@ class ObservationInfo:
 # --- resources (thesis 6.2.4) ------------------------------------------------------------
 
 
-@payload
+@record
 class NodeInfo:
     """CPU and memory of one component's process tree; ``error`` says it vanished."""
 
@@ -168,7 +169,7 @@ class NodeInfo:
 # The payload of ``resources``: {"stamp": float, "hostname": str, "nodes": [NodeInfo payloads]}
 
 
-@payload
+@record
 class ResourceInfo:
     """The payload of ``resources``, published by the resource monitor at its rate."""
 
@@ -192,7 +193,7 @@ class ResourceInfo:
         )
 
 
-@payload
+@record
 class GoalResult:
     """The payload of ``component/<name>/result``: how a behavior's goal ended.
 
@@ -233,7 +234,7 @@ class GoalResult:
         )
 
 
-@payload
+@record
 class GoalFeedback(Payload):
     """The payload of ``component/<name>/feedback``, published while a goal runs."""
 

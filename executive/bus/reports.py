@@ -17,8 +17,9 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 from executive.bus.api.free_form import GoalFields, Result
-from executive.bus.schema import Payload, payload
+from executive.bus.schema import Payload
 from executive.bus.states import Lifecycle
+from knowledge.record_class import record
 from knowledge.records import KeyAccess
 
 if TYPE_CHECKING:
@@ -27,7 +28,7 @@ if TYPE_CHECKING:
 # --- the high level: the plan executor and the goal planner ---------------------------
 
 
-@payload
+@record
 class StepStatus:
     """A step of the plan under way: its index, its label (``move_to(dock, lab)``) and
     its state."""
@@ -37,7 +38,7 @@ class StepStatus:
     state: str
 
 
-@payload
+@record
 class GoalProgress:
     """A goal of the plan under way, and whether it is achieved."""
 
@@ -45,7 +46,7 @@ class GoalProgress:
     achieved: bool
 
 
-@payload
+@record
 class ExecutionStatus:
     """How the execution stands, as of the plan executor's last job (for ``dura
     status``)."""
@@ -72,7 +73,7 @@ class RoundPhase(enum.Enum):
     SEARCHING = "searching"  # the planner searches for a plan
 
 
-@payload
+@record
 class PlannerStatus:
     """What the goal planner is doing, as of its last job (for ``dura status``)."""
 
@@ -88,7 +89,7 @@ class PlannerStatus:
 # --- the task executor ----------------------------------------------------------------
 
 
-@payload
+@record
 class ExecutorTask:
     """A task as the task executor holds it: its name (the action and its objects, or
     the behavior), the behavior and its goal, its state (``waiting``, ``starting``,
@@ -110,7 +111,7 @@ class ExecutorTask:
     result: Result | None = None
 
 
-@payload
+@record
 class ScheduledTask(ExecutorTask):
     """A waiting or running task placed in time: seconds from now."""
 
@@ -121,7 +122,7 @@ class ScheduledTask(ExecutorTask):
 # --- the launcher ---------------------------------------------------------------------
 
 
-@payload
+@record
 class ComponentEntry(KeyAccess, Payload):
     """A component as lists show it: its kind (``functionality``, ``behavior``), the
     host it runs on, its state as ``component/<name>/state`` reports it (a pid only
@@ -144,7 +145,7 @@ class ComponentEntry(KeyAccess, Payload):
 DIAGNOSIS_STATUSES = ("OK", "DIAGNOSED", "INCONSISTENT", "TIMEOUT")
 
 
-@payload
+@record
 class DiagnosisInfo:
     """The payload of ``diagnoses``: the newest diagnosis result.
 

@@ -14,9 +14,10 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Generic, Protocol, Self, TypeVar
 
-from executive.bus.schema import Payload, payload
+from executive.bus.schema import Payload
 from executive.bus.session import Bus
 from knowledge.errors import DuraError
+from knowledge.record_class import record
 
 
 class Codec(Protocol):
@@ -32,7 +33,7 @@ Req = TypeVar("Req", bound=Codec)
 Rep = TypeVar("Rep", bound=Codec)
 
 
-@payload
+@record
 class Empty(Payload):
     """A request or reply without fields."""
 

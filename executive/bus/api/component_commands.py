@@ -8,8 +8,9 @@ from dataclasses import field
 from typing import Any, ClassVar
 
 from executive.bus.api.free_form import GoalFields, Params, Value
-from executive.bus.schema import Payload, PayloadError, Text, payload
+from executive.bus.schema import Payload, PayloadError, Text
 from executive.bus.states import Command, ComponentPhase
+from knowledge.record_class import record
 
 
 class ComponentCommand(Payload):
@@ -39,7 +40,7 @@ class ComponentCommand(Payload):
         return command.from_payload(request)
 
 
-@payload
+@record
 class Configure(ComponentCommand):
     """Parameters, and the achievements kept for a warm start."""
 
@@ -48,28 +49,28 @@ class Configure(ComponentCommand):
     achievements: Params = field(default_factory=dict)
 
 
-@payload
+@record
 class Start(ComponentCommand):
     """Start running (after configure)."""
 
     verb = Command.START
 
 
-@payload
+@record
 class Pause(ComponentCommand):
     """Pause until resumed."""
 
     verb = Command.PAUSE
 
 
-@payload
+@record
 class Resume(ComponentCommand):
     """Resume after a pause."""
 
     verb = Command.RESUME
 
 
-@payload
+@record
 class Reconfigure(ComponentCommand):
     """Changed parameters only."""
 
@@ -77,14 +78,14 @@ class Reconfigure(ComponentCommand):
     params: Params = field(default_factory=dict)
 
 
-@payload
+@record
 class Stop(ComponentCommand):
     """Stop and exit."""
 
     verb = Command.STOP
 
 
-@payload
+@record
 class TakeGoal(ComponentCommand):
     """A behavior's goal: the reply comes at once, the result later on
     ``component/<name>/result``."""
@@ -94,7 +95,7 @@ class TakeGoal(ComponentCommand):
     goal: GoalFields = field(default_factory=dict)
 
 
-@payload
+@record
 class CancelGoal(ComponentCommand):
     """Cancel the goal the behavior is carrying out."""
 
@@ -102,7 +103,7 @@ class CancelGoal(ComponentCommand):
     goal_id: Text
 
 
-@payload
+@record
 class InjectFault(ComponentCommand):
     """``"crash"`` or ``{"mode": "crash", ...}`` (see :mod:`executive.sdk.fault_injection`)."""
 
@@ -123,7 +124,7 @@ COMMANDS: tuple[type[ComponentCommand], ...] = (
 )
 
 
-@payload
+@record
 class CommandReply(Payload):
     """Where the component is after the command."""
 

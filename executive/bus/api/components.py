@@ -11,27 +11,28 @@ from executive.bus.api.free_form import Value
 from executive.bus.keys import api
 from executive.bus.payloads import ComponentState
 from executive.bus.reports import ComponentEntry
-from executive.bus.schema import Between, Payload, Text, payload
+from executive.bus.schema import Between, Payload, Text
 from executive.bus.verb import Empty, Verb
+from knowledge.record_class import record
 
 MAX_LOG_LINES = 10_000
 
 
-@payload
+@record
 class ComponentName(Payload):
     """A component, by name."""
 
     name: Text
 
 
-@payload
+@record
 class ComponentsReply(Payload):
     """Each component as lists show it."""
 
     components: list[ComponentEntry]
 
 
-@payload
+@record
 class LogQuery(Payload):
     """The last ``lines`` lines of a component's log."""
 
@@ -39,7 +40,7 @@ class LogQuery(Payload):
     lines: Annotated[int, Between(0, MAX_LOG_LINES)] = 50
 
 
-@payload
+@record
 class LogReply(Payload):
     """The last lines of a component's log, and where the log is."""
 
@@ -48,7 +49,7 @@ class LogReply(Payload):
     lines: list[str]
 
 
-@payload
+@record
 class Achievement(Payload):
     """A behavior's achievement, kept for a warm start."""
 
@@ -57,7 +58,7 @@ class Achievement(Payload):
     value: Value = None
 
 
-@payload
+@record
 class Injection(Payload):
     """A fault to inject into a running component: a mode of the SDK's fault injection
     (:mod:`executive.sdk.fault_injection`) and its options (numbers)."""

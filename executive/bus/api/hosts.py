@@ -13,14 +13,15 @@ from __future__ import annotations
 
 from executive.bus.api.components import LogQuery, LogReply
 from executive.bus.keys import host
-from executive.bus.schema import Payload, Text, payload
+from executive.bus.schema import Payload, Text
 from executive.bus.verb import Empty, Verb
+from knowledge.record_class import record
 
 SPAWN_TIMEOUT = 10.0  # seconds: a fork, and a look for the program's pid
 SIGNAL_TIMEOUT = 2.0
 
 
-@payload
+@record
 class Spawn(Payload):
     """Start a component placed on the host under its supervisor. ``instance`` names the
     process's liveliness token; ``user`` and ``password`` are the component's own bus
@@ -33,7 +34,7 @@ class Spawn(Payload):
     password: str | None = None
 
 
-@payload
+@record
 class Spawned(Payload):
     """The started process: its supervisor's pid, the program's (once forked), and where
     its log is on the host."""
@@ -43,7 +44,7 @@ class Spawned(Payload):
     program: int | None = None
 
 
-@payload
+@record
 class ProcessSignal(Payload):
     """A signal to a process the host started: to its whole process group, or only to
     its supervisor."""
@@ -53,7 +54,7 @@ class ProcessSignal(Payload):
     group: bool = True
 
 
-@payload
+@record
 class ProcessExit(Payload):
     """The payload of ``host/<name>/exit``: a process the host started has ended and was
     reaped (its exit code, or the signal that killed it)."""

@@ -8,11 +8,12 @@ from typing import Any
 
 from executive.bus.api.free_form import ObserverConfig
 from executive.bus.keys import DIAGNOSIS_EXONERATION, DIAGNOSIS_MODEL, observers_api
-from executive.bus.schema import Payload, Text, payload
+from executive.bus.schema import Payload, Text
 from executive.bus.verb import Empty, Verb
+from knowledge.record_class import record
 
 
-@payload
+@record
 class ObserverStatus:
     """What the observer manager says about one observer: its id, type and component
     (``None``: an observer of its own), whether it is enabled and observes now
@@ -27,14 +28,14 @@ class ObserverStatus:
     start_up_time: float
 
 
-@payload
+@record
 class ObserversReply(Payload):
     """Each observer."""
 
     observers: list[ObserverStatus]
 
 
-@payload
+@record
 class ObserverAdd(Payload):
     """An observer entry (the thesis/tug schema), of a component or of its own, with an
     optional name (its id)."""
@@ -44,7 +45,7 @@ class ObserverAdd(Payload):
     name: str | None = None
 
 
-@payload
+@record
 class ObserverChange(Payload):
     """A new configuration for an observer (it keeps its id)."""
 
@@ -52,14 +53,14 @@ class ObserverChange(Payload):
     config: ObserverConfig
 
 
-@payload
+@record
 class ObserverId(Payload):
     """An observer, by id (``<component>/<index>`` for those of the robot description)."""
 
     id: Text
 
 
-@payload
+@record
 class ObserverActive(Payload):
     """Whether the observer observes now (enabled, and its component READY)."""
 
@@ -67,7 +68,7 @@ class ObserverActive(Payload):
     active: bool
 
 
-@payload
+@record
 class LatestReply(Payload):
     """The last observation of every resource of every active observer, as published on
     ``observations``."""
@@ -75,7 +76,7 @@ class LatestReply(Payload):
     observations: list[dict[str, Any]]
 
 
-@payload
+@record
 class ModelChange(Payload):
     """A change of the diagnosis model: ADD, REMOVE, UPDATE, SET or GET, with nodes
     ``{name, sub_topic, pub_topic}`` and observers ``{type, resource, callerids}``."""
@@ -85,7 +86,7 @@ class ModelChange(Payload):
     observers: list[dict[str, Any]] = field(default_factory=list)
 
 
-@payload
+@record
 class ModelReply(Payload):
     """The model after the change, or why the change was refused (it changed nothing)."""
 
@@ -94,14 +95,14 @@ class ModelReply(Payload):
     error: str = ""
 
 
-@payload
+@record
 class ExonerationChange(Payload):
     """Switch exoneration on or off; without ``on``, only ask."""
 
     on: bool | None = None
 
 
-@payload
+@record
 class Exoneration(Payload):
     """Whether an OK topic observation means its topics are not abnormal (the thesis'
     model: off)."""

@@ -9,11 +9,12 @@ from __future__ import annotations
 
 from executive.bus.api.free_form import Params, Value
 from executive.bus.keys import api
-from executive.bus.schema import Payload, Text, payload
+from executive.bus.schema import Payload, Text
 from executive.bus.verb import Verb
+from knowledge.record_class import record
 
 
-@payload
+@record
 class ParameterChange(Payload):
     """A new value for one parameter of a component (what the ``parameter`` repair
     action sends)."""
@@ -23,7 +24,7 @@ class ParameterChange(Payload):
     value: Value = None
 
 
-@payload
+@record
 class ParameterKey(Payload):
     """One parameter of a component, by its key."""
 
@@ -31,14 +32,14 @@ class ParameterKey(Payload):
     key: Text
 
 
-@payload
+@record
 class ComponentParameters(Payload):
     """A component whose parameters to list."""
 
     component: Text
 
 
-@payload
+@record
 class ParameterReply(Payload):
     """A parameter's value and where it comes from (``description`` or ``knowledge
     base``); after a change, how the component took it: ``reconfigured`` (running, by
@@ -53,7 +54,7 @@ class ParameterReply(Payload):
     reason: str = ""
 
 
-@payload
+@record
 class ParametersReply(Payload):
     """Every parameter of a component with its value and source."""
 

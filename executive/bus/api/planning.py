@@ -23,8 +23,9 @@ from executive.bus.reports import (
     ExecutorTask,
     PlannerStatus,
 )
-from executive.bus.schema import Between, Payload, Text, payload
+from executive.bus.schema import Between, Payload, Text
 from executive.bus.verb import Empty, Verb
+from knowledge.record_class import record
 from knowledge.records import ComponentRecord, Event, Fact, Goal, KeyAccess, Plan
 from knowledge.transitions import GoalState
 
@@ -32,7 +33,7 @@ Count = Annotated[int, Between(0, 2**63 - 1)]
 Priority = Annotated[int, Between(-(10**9), 10**9)]  # what the CLI accepts too
 
 
-@payload
+@record
 class StepAfter:
     """What a planned step waits for: the start or the end (``at``) of another step."""
 
@@ -40,7 +41,7 @@ class StepAfter:
     at: str
 
 
-@payload
+@record
 class PlannedStep:
     """A step of a plan just found, as ``dura plan --offline --json`` prints it: when it
     starts (seconds from the plan's start), for how long, and the steps it comes after."""
@@ -53,7 +54,7 @@ class PlannedStep:
     after: tuple[StepAfter, ...] = ()
 
 
-@payload
+@record
 class DomainType:
     """A type of the domain and its parent (``object`` at the top)."""
 
@@ -61,7 +62,7 @@ class DomainType:
     parent: str
 
 
-@payload
+@record
 class DomainSignature:
     """A predicate or function of the domain and the types of its parameters."""
 
@@ -69,7 +70,7 @@ class DomainSignature:
     parameters: tuple[str, ...]
 
 
-@payload
+@record
 class DomainAction:
     """An action of the domain: its parameters (``?name``, type), whether it is durative,
     its duration as written, and the task that carries it out (its behavior and the
@@ -86,14 +87,14 @@ class DomainAction:
     blocked: str | None
 
 
-@payload
+@record
 class Unanswered:
     """A section of ``status`` that another service adds, when it did not answer: why."""
 
     error: str
 
 
-@payload
+@record
 class GoalAdd(Payload):
     """A goal expression with its priority, deadline (seconds from now) and source;
     ``keep``: a maintenance goal, re-posted whenever it stops holding."""
@@ -105,35 +106,35 @@ class GoalAdd(Payload):
     keep: bool = False
 
 
-@payload
+@record
 class GoalId(Payload):
     """A goal, by id."""
 
     id: int
 
 
-@payload
+@record
 class GoalQuery(Payload):
     """Goals in these states (all goals without)."""
 
     states: list[GoalState] | None = None
 
 
-@payload
+@record
 class GoalReply(Payload):
     """A goal as stored."""
 
     goal: Goal
 
 
-@payload
+@record
 class GoalsReply(Payload):
     """Goals as stored, by id."""
 
     goals: list[Goal]
 
 
-@payload
+@record
 class GoalHistory(Payload):
     """A goal and the events that name it."""
 
@@ -141,7 +142,7 @@ class GoalHistory(Payload):
     events: list[Event]
 
 
-@payload
+@record
 class PlanReply(Payload):
     """The newest plan (stored) and how its execution stands."""
 
@@ -149,7 +150,7 @@ class PlanReply(Payload):
     execution: ExecutionStatus
 
 
-@payload
+@record
 class DryRun(Payload):
     """Plan for the open goals, and the goal expressions ``goals`` as if they were added
     now, on the live state without executing (seconds to search; the robot's planner
@@ -159,7 +160,7 @@ class DryRun(Payload):
     goals: list[Text] = field(default_factory=list)
 
 
-@payload
+@record
 class DryRunReply(Payload):
     """What the planner would do now: the plan for the goals it reaches (``steps`` as
     ``dura plan --offline --json`` prints them), the goals that hold already, and why
@@ -179,14 +180,14 @@ class DryRunReply(Payload):
     asked: list[str] = field(default_factory=list)
 
 
-@payload
+@record
 class StateQuery(Payload):
     """Facts matching ``robot_at``, ``(robot_at lab)``, ``(robot_at *)`` (all without)."""
 
     pattern: str = ""
 
 
-@payload
+@record
 class StateReply(Payload):
     """Facts and objects (name -> type)."""
 
@@ -194,7 +195,7 @@ class StateReply(Payload):
     objects: dict[str, str]
 
 
-@payload
+@record
 class FactChange(Payload):
     """A fact to set or unset: ``(robot_at lab)``, ``(= (battery) 80)``; ``source`` names
     who changes it (a component's name, or ``user``), as the event log records it."""
@@ -203,14 +204,14 @@ class FactChange(Payload):
     source: Text = "user"
 
 
-@payload
+@record
 class FactReply(Payload):
     """The fact as it was set or unset."""
 
     fact: Fact
 
 
-@payload
+@record
 class ObjectAdd(Payload):
     """An object of a domain type."""
 
@@ -218,14 +219,14 @@ class ObjectAdd(Payload):
     type: Text
 
 
-@payload
+@record
 class ObjectName(Payload):
     """An object of the world, by name."""
 
     name: Text
 
 
-@payload
+@record
 class DomainReply(Payload):
     """The robot's domain: its types, predicates, functions and actions, and its
     constants by name, with their types."""
@@ -239,7 +240,7 @@ class DomainReply(Payload):
     constants: dict[str, str]
 
 
-@payload
+@record
 class EventQuery(Payload):
     """Events after a sequence number, of one kind (all without), oldest first: the
     newest ``limit`` of them, or with ``oldest`` the oldest ``limit`` (to page forward
@@ -251,19 +252,19 @@ class EventQuery(Payload):
     oldest: bool = False
 
 
-@payload
+@record
 class EventsReply(Payload):
     """Events of the log, oldest first."""
 
     events: list[Event]
 
 
-@payload
+@record
 class NoDiagnosis:
     """No diagnosis result yet: ``{}`` where ``status`` has one."""
 
 
-@payload
+@record
 class StatusReply(KeyAccess, Payload):
     """Everything at a glance. ``diagnoses`` is the newest diagnosis result, if any.
     ``tasks`` and ``components`` come from the task executor and the launcher, or say

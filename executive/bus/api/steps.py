@@ -14,13 +14,14 @@ import enum
 from dataclasses import field
 
 from executive.bus.api.free_form import Result
-from executive.bus.schema import Payload, Text, payload
+from executive.bus.schema import Payload, Text
 from executive.bus.verb import Empty, Verb
+from knowledge.record_class import record
 
 STEP_PROGRESS = "executive/steps/progress"  # StepProgress payloads, by run id
 
 
-@payload
+@record
 class StepSpec(Payload):
     """What the task executor needs of a plan step: its action and objects, the
     parameters they bind, its index and the planned duration."""
@@ -32,7 +33,7 @@ class StepSpec(Payload):
     duration: float | None = None
 
 
-@payload
+@record
 class StepRun(Payload):
     """Run a plan's step; ``run`` names it in the progress reports and controls."""
 
@@ -47,7 +48,7 @@ class StepAction(enum.Enum):
     CANCEL = "cancel"
 
 
-@payload
+@record
 class StepControl(Payload):
     """Pause, resume or cancel the step of a run."""
 
@@ -55,7 +56,7 @@ class StepControl(Payload):
     action: StepAction
 
 
-@payload
+@record
 class StepsUpcoming(Payload):
     """The steps of the current plan not dispatched yet (none: no plan)."""
 
@@ -63,7 +64,7 @@ class StepsUpcoming(Payload):
     steps: list[StepSpec] = field(default_factory=list)
 
 
-@payload
+@record
 class StepProgress(Payload):
     """How a step goes: ``started``, ``succeeded`` (``value``: the behavior's result) or
     ``failed`` (``value``: the reason); the names of

@@ -14,13 +14,14 @@ from executive.bus.api.free_form import GoalFields
 from executive.bus.keys import api
 from executive.bus.payloads import ComponentState
 from executive.bus.reports import ExecutorTask, ScheduledTask
-from executive.bus.schema import Between, Payload, Text, payload
+from executive.bus.schema import Between, Payload, Text
 from executive.bus.verb import Empty, Verb
+from knowledge.record_class import record
 
 Seconds = Annotated[float, Between(0.0, 1e9)]
 
 
-@payload
+@record
 class TaskStart(Payload):
     """A task of the robot (or a behavior) with its goal fields and constraints; times
     are seconds from now, ``together`` lists waiting tasks to start with."""
@@ -40,7 +41,7 @@ class TaskStart(Payload):
         return f"{self.task}({fields})" if fields else self.task
 
 
-@payload
+@record
 class TaskStarted(Payload):
     """The started task's id and the behavior that carries it out."""
 
@@ -48,28 +49,28 @@ class TaskStarted(Payload):
     behavior: str
 
 
-@payload
+@record
 class TaskId(Payload):
     """A task, by id."""
 
     id: Text
 
 
-@payload
+@record
 class TaskReply(Payload):
     """A task as the executor holds it."""
 
     task: ExecutorTask
 
 
-@payload
+@record
 class TasksReply(Payload):
     """Every task as the executor holds it."""
 
     tasks: list[ExecutorTask]
 
 
-@payload
+@record
 class ScheduleReply(Payload):
     """Waiting and running tasks in time, the running and the permanently faulty
     functionalities."""
@@ -79,7 +80,7 @@ class ScheduleReply(Payload):
     faulty: list[str]
 
 
-@payload
+@record
 class ComponentFault(Payload):
     """A fault of a component reported by a repair rule or a user."""
 
@@ -87,7 +88,7 @@ class ComponentFault(Payload):
     reason: str = ""
 
 
-@payload
+@record
 class FaultReply(Payload):
     """The component's state and its faults."""
 
@@ -96,14 +97,14 @@ class FaultReply(Payload):
     permanent: bool
 
 
-@payload
+@record
 class ComponentName(Payload):
     """A component, by name."""
 
     name: Text
 
 
-@payload
+@record
 class ResetReply(Payload):
     """The functionalities usable again."""
 

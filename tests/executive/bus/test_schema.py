@@ -10,7 +10,8 @@ from typing import Annotated, Any
 
 import pytest
 
-from executive.bus.schema import Between, Payload, PayloadError, Text, payload
+from executive.bus.schema import Between, Payload, PayloadError, Text
+from knowledge.record_class import record
 
 
 class Color(enum.Enum):
@@ -41,7 +42,7 @@ def test_a_full_payload_reads_back_to_what_it_was() -> None:
     assert sample.to_payload()["colors"] == ["red"]
 
 
-@payload
+@record
 class Declared(Payload):
     text: Text
     inner: Inner | None = None
@@ -67,12 +68,12 @@ def test_a_payload_class_compares_hashes_and_shows_as_a_frozen_dataclass_does() 
     assert repr(other) == "Declared(text='b', inner=None, tags=())"
 
 
-@payload
+@record
 class Single(Payload):
     name: str
 
 
-@payload
+@record
 class Bare(Payload):
     pass
 
@@ -132,7 +133,7 @@ class Point:
         object.__setattr__(self, "label", f"{self.name}@{self.at[0]:g},{self.at[1]:g}")
 
 
-@payload
+@record
 class Carrying(Payload):
     point: Point
     points: list[Point] = field(default_factory=list)
@@ -197,7 +198,7 @@ class Record:
     note: str | None = None
 
 
-@payload
+@record
 class Records(Payload):
     records: tuple[Record, ...]
     by_name: Mapping[str, Record] = field(default_factory=dict)
