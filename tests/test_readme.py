@@ -343,8 +343,8 @@ def counts_from_one(block: Block) -> bool:
 
 def numbered(robot: RobotProcess) -> bool:
     """Whether the robot has goals or tasks already."""
-    status = planning.STATUS.call(robot.bus).to_payload()
-    return bool(status["goals"] or status.get("tasks"))
+    status = planning.STATUS.call(robot.bus)
+    return bool(status.goals or status.tasks)
 
 
 def workspace(folder: Path, robot: RobotProcess) -> Path:
@@ -373,9 +373,10 @@ def run(command: Command, folder: Path) -> subprocess.CompletedProcess[str]:
 def wait_until_idle(robot: RobotProcess) -> None:
     deadline = time.monotonic() + IDLE
     while time.monotonic() < deadline:
-        status = planning.STATUS.call(robot.bus).to_payload()
-        goals = [g for g in status["goals"] if g["state"] in ("pending", "planned", "executing")]
-        tasks = [t for t in status.get("tasks") or [] if t["state"] not in _ENDED]
+        status = planning.STATUS.call(robot.bus)
+        goals = [g for g in status.goals if g.state.is_open]
+        assert not isinstance(status.tasks, planning.Unanswered), status.tasks
+        tasks = [t for t in status.tasks or [] if t.state not in _ENDED]
         if not goals and not tasks:
             return
         time.sleep(0.5)

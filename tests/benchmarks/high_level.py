@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from executive.testing.harness import RobotProcess, robot_variant
+from knowledge.records import Event
 from tests.conftest import ROOT
 
 TRANSPORT = ROOT / "examples" / "transport" / "robot.yaml"
@@ -48,8 +49,8 @@ def robot(folder: Path, changes: Mapping[str, Any], scale: float | None) -> Robo
     return RobotProcess(description, folder, time_scale=scale)
 
 
-def stamp(events: list[dict[str, Any]], kind: str, subject: str = "") -> float:
-    return next(e["stamp"] for e in events if e["kind"] == kind and subject in e["subject"])
+def stamp(events: list[Event], kind: str, subject: str = "") -> float:
+    return next(e.stamp for e in events if e.kind == kind and subject in e.subject)
 
 
 def delivery(changes: Mapping[str, Any], scale: float | None) -> tuple[float, float]:

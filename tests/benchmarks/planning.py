@@ -288,7 +288,7 @@ def _ready(robot_name: str, folder: Path, endpoint: str, began: float) -> tuple[
                         continue
                     if answered is None:
                         answered = time.monotonic() - began
-                    if not (status.planning or {}).get("starting"):
+                    if status.planning is None or not status.planning.starting:
                         return answered, time.monotonic() - began
                     time.sleep(0.005)
         except BusError:

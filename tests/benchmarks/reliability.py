@@ -165,7 +165,7 @@ def malformed_messages(count: int, folder: Path) -> Row:
                         pass
                 tried += 1
                 if tried % 50 == 0 or tried == count:
-                    ok = robot.running and robot.status()["robot"] == robot.robot.name
+                    ok = robot.running and robot.status().robot == robot.robot.name
                     survived = tried if ok else survived
         traceback = "Traceback" in robot.log_tail(1_000_000)
     return Row(

@@ -298,24 +298,24 @@ class KillRounds:
             did.append(f"killed {time.monotonic() - began:.1f} s after the start")
             return self._killed(began, did, before)
         deadline = time.monotonic() + 60
-        while robot.status()["planning"].get("starting"):  # its planner warms up
+        while (planning := robot.status().planning) is None or planning.starting:  # warming up
             assert time.monotonic() < deadline, "the planner did not start"
             time.sleep(0.02)
         if rng.random() < 0.3:  # a picture to take again
             for fact in robot.facts("picture_taken"):
                 robot.request("state/unset", {"fact": fact})
                 did.append(f"unset {fact}")
-        open_goals = [g for g in robot.goals() if g["state"] in ("pending", "planned", "executing")]
+        open_goals = [g for g in robot.goals() if g.state.is_open]
         if not open_goals:
             goal = rng.choice(GOALS)
             robot.submit_goal(goal)
             did.append(f"goal {goal}")
-        last = max((e["id"] for e in robot.events(limit=1)), default=0)
+        last = max((e.id for e in robot.events(limit=1)), default=0)
         moment = rng.uniform(0.0, longest)
         since = time.monotonic()
         if rng.random() < 0.6:  # a second goal while the first plan runs: a replan
             time.sleep(rng.uniform(0.0, moment))
-            last = max((e["id"] for e in robot.events(limit=1)), default=0)
+            last = max((e.id for e in robot.events(limit=1)), default=0)
             goal = rng.choice(GOALS)
             robot.submit_goal(goal)
             did.append(f"goal {goal} after {time.monotonic() - since:.1f} s")
@@ -335,10 +335,8 @@ class KillRounds:
         plans: list[int] = []
         while time.monotonic() < deadline:
             if not plans:
-                plans = [
-                    e["id"] for e in self.robot.events("PLAN_START", limit=5) if e["id"] > after
-                ]
-            elif any(e["id"] > min(plans) for e in self.robot.events("START", limit=5)):
+                plans = [e.id for e in self.robot.events("PLAN_START", limit=5) if e.id > after]
+            elif any(e.id > min(plans) for e in self.robot.events("START", limit=5)):
                 return
             time.sleep(0.01)
 

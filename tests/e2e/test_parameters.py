@@ -96,8 +96,8 @@ def test_a_rule_on_high_cpu_lowers_lidars_rate_and_the_frequency_observer_sees_i
     robot.inject_fault("lidar", "high_cpu")
     assert wait_for(lambda: robot.events("PARAMETER") != [], 60)
     changed = robot.events("PARAMETER")[0]
-    assert (changed["subject"], changed["data"]) == ("lidar", {"key": "rate", "value": 5.0})
-    assert any(e["subject"] == "slow_down_lidar" for e in robot.events("RULE_FIRED"))
+    assert (changed.subject, changed.data) == ("lidar", {"key": "rate", "value": 5.0})
+    assert any(e.subject == "slow_down_lidar" for e in robot.events("RULE_FIRED"))
     assert wait_for(lambda: 4.0 <= frequencies.latest() <= 6.0, 30), frequencies.latest()
     lidar = next(
         c for c in robot.request("component/list")["components"] if c["component"] == "lidar"

@@ -82,7 +82,7 @@ def test_a_recorded_run_replays_to_the_diagnoses_and_repairs_of_the_live_run(
         wait_for(lambda: False, 1.5)  # the diagnosis holds a while
         robot.inject_fault("lidar", "none")
         assert wait_for(lambda: lidar_observed_ok(robot), 30)  # publishing again
-        live_repairs = [e["subject"] for e in robot.events("RULE_FIRED")]
+        live_repairs = [e.subject for e in robot.events("RULE_FIRED")]
     finally:
         robot.stop()
         recorder.wait(30)  # it ends with the executive

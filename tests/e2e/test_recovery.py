@@ -36,12 +36,12 @@ def test_a_kill_while_the_replanned_drive_runs_leaves_the_robot_in_one_place(
 
     def second_plan_drives() -> bool:
         events = robot.events()
-        starts = [e["id"] for e in events if e["kind"] == "PLAN_START"]
+        starts = [e.id for e in events if e.kind == "PLAN_START"]
         return len(starts) >= 2 and any(
-            e["kind"] in ("START", "ADOPT") and e["subject"].startswith("move_to")
-            and e["id"] > starts[1] and not any(
-                later["kind"] in ("END", "FAIL", "CANCEL") and later["subject"] == e["subject"]
-                and later["id"] > e["id"] for later in events
+            e.kind in ("START", "ADOPT") and e.subject.startswith("move_to")
+            and e.id > starts[1] and not any(
+                later.kind in ("END", "FAIL", "CANCEL") and later.subject == e.subject
+                and later.id > e.id for later in events
             )
             for e in events
         )  # fmt: skip

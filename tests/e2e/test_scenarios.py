@@ -13,6 +13,7 @@ from typing import Any
 import pytest
 
 from executive.testing.harness import RobotProcess
+from knowledge.records import Event
 from tests.conftest import USECASE, wait_for
 
 pytestmark = pytest.mark.slow
@@ -26,8 +27,8 @@ NO_CAMERA = {
 }
 
 
-def events_of(robot: RobotProcess, *kinds: str) -> list[dict[str, Any]]:
-    return [e for e in robot.events() if e["kind"] in kinds]
+def events_of(robot: RobotProcess, *kinds: str) -> list[Event]:
+    return [e for e in robot.events() if e.kind in kinds]
 
 
 def task_state(robot: RobotProcess, task_id: str) -> str:
@@ -42,8 +43,7 @@ def start_task(robot: RobotProcess, task: str, **goal: str) -> str:
 def started(robot: RobotProcess, task_id: str, times: int = 1) -> bool:
     subject = f"task {task_id} "
     return (
-        len([e for e in events_of(robot, "TASK_STARTED") if e["subject"].startswith(subject)])
-        >= times
+        len([e for e in events_of(robot, "TASK_STARTED") if e.subject.startswith(subject)]) >= times
     )
 
 
@@ -56,7 +56,7 @@ def restart_lidar_three_times(robot: RobotProcess, task_id: str) -> list[dict[st
 
 
 def configurations(robot: RobotProcess) -> list[tuple[list[str], list[str]]]:
-    return [(e["data"]["start"], e["data"]["stop"]) for e in events_of(robot, "CONFIGURATION")]
+    return [(e.data["start"], e.data["stop"]) for e in events_of(robot, "CONFIGURATION")]
 
 
 def test_scenario_1_without_an_alternative_the_task_fails_after_the_third_fault(
@@ -68,14 +68,14 @@ def test_scenario_1_without_an_alternative_the_task_fails_after_the_third_fault(
     assert [(r["faults"], r["permanent"]) for r in replies] == [(1, False), (2, False), (3, True)]
     assert wait_for(lambda: task_state(robot, task) == "failed", 30)
     failed = events_of(robot, "TASK_FAILED")[-1]
-    assert "no provider for capability 'obstacle_scan'" in failed["data"]["reason"]
-    assert "lidar is permanently faulty" in failed["data"]["reason"]
-    kinds = [e["kind"] for e in events_of(robot, "TASK_STARTED", "TASK_RESTARTED", "TASK_FAILED")]
+    assert "no provider for capability 'obstacle_scan'" in failed.data["reason"]
+    assert "lidar is permanently faulty" in failed.data["reason"]
+    kinds = [e.kind for e in events_of(robot, "TASK_STARTED", "TASK_RESTARTED", "TASK_FAILED")]
     assert kinds == ["TASK_STARTED"] + ["TASK_RESTARTED", "TASK_STARTED"] * 2 + ["TASK_FAILED"]
     assert configurations(robot)[0] == (["lidar", "lidar_filter", "robot_base"], [])
     assert configurations(robot)[-1] == ([], ["robot_base", "lidar_filter", "lidar"])
-    faults = {c["name"]: c for c in robot.status()["faults"]}
-    assert faults["lidar"]["permanent_fault"] and faults["lidar"]["fault_count"] == 3
+    faults = {c.name: c for c in robot.status().faults}
+    assert faults["lidar"].permanent_fault and faults["lidar"].fault_count == 3
 
 
 def test_scenario_2_after_the_third_fault_move_to_switches_to_the_camera_and_succeeds(
@@ -87,8 +87,8 @@ def test_scenario_2_after_the_third_fault_move_to_switches_to_the_camera_and_suc
     assert wait_for(lambda: task_state(robot, task) == "succeeded", 60)
     switch = configurations(robot)[-2]
     assert switch == (["cam", "cam_to_lidar"], ["lidar_filter", "lidar"])
-    last = [e for e in events_of(robot, "TASK_STARTED") if e["subject"].startswith(f"task {task} ")]
-    assert set(last[-1]["data"]["providers"].values()) == {"cam", "cam_to_lidar", "robot_base"}
+    last = [e for e in events_of(robot, "TASK_STARTED") if e.subject.startswith(f"task {task} ")]
+    assert set(last[-1].data["providers"].values()) == {"cam", "cam_to_lidar", "robot_base"}
 
 
 def test_scenario_3_two_moves_share_lidar_but_not_the_base_so_they_run_in_turn(
@@ -100,9 +100,9 @@ def test_scenario_3_two_moves_share_lidar_but_not_the_base_so_they_run_in_turn(
     assert wait_for(lambda: task_state(robot, second) == "succeeded", 60)
     assert task_state(robot, first) == "succeeded"
     trace = [
-        (e["kind"], e["subject"].split()[1] if e["subject"].startswith("task") else e["subject"])
+        (e.kind, e.subject.split()[1] if e.subject.startswith("task") else e.subject)
         for e in robot.events()
-        if e["kind"] in ("TASK_STARTED", "TASK_SUCCEEDED", "COMPONENT_STOPPING")
+        if e.kind in ("TASK_STARTED", "TASK_SUCCEEDED", "COMPONENT_STOPPING")
     ]
     ran = [x for x in trace if x[0] != "COMPONENT_STOPPING"]
     assert ran == [
@@ -130,12 +130,12 @@ def test_scenario_4_move_and_pictures_share_the_camera_after_the_switch(
     events = robot.events()
     switched = next(
         i for i, e in enumerate(events)
-        if e["kind"] == "TASK_STARTED" and e["subject"].startswith(f"task {move} ")
-        and "cam_to_lidar" in e["data"]["providers"].values()
+        if e.kind == "TASK_STARTED" and e.subject.startswith(f"task {move} ")
+        and "cam_to_lidar" in e.data["providers"].values()
     )  # fmt: skip
     ended = next(
         i for i, e in enumerate(events)
-        if e["kind"] == "TASK_SUCCEEDED" and e["subject"].startswith(f"task {move} ")
+        if e.kind == "TASK_SUCCEEDED" and e.subject.startswith(f"task {move} ")
     )  # fmt: skip
-    stops = [e for e in events[switched:ended] if e["kind"] == "COMPONENT_STOPPING"]
-    assert all(e["subject"] != "cam" for e in stops)  # cam runs while move_to needs it
+    stops = [e for e in events[switched:ended] if e.kind == "COMPONENT_STOPPING"]
+    assert all(e.subject != "cam" for e in stops)  # cam runs while move_to needs it

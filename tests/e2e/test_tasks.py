@@ -15,6 +15,7 @@ from typing import Any
 import pytest
 
 from executive.testing.harness import RobotProcess
+from knowledge.records import Event
 from tests.conftest import USECASE, wait_for
 
 pytestmark = pytest.mark.slow
@@ -50,12 +51,12 @@ def start(dura: Dura, *args: str) -> str:
     return str(json.loads(done.stdout)["id"])
 
 
-def trace(robot: RobotProcess, task_id: str) -> list[dict[str, Any]]:
+def trace(robot: RobotProcess, task_id: str) -> list[Event]:
     """The task's events (TASK_*), oldest first."""
     return [
         e
         for e in robot.events()
-        if e["kind"].startswith("TASK_") and e["subject"].startswith(f"task {task_id} ")
+        if e.kind.startswith("TASK_") and e.subject.startswith(f"task {task_id} ")
     ]
 
 
@@ -90,7 +91,7 @@ def test_a_crashed_behavior_starts_again_warm_from_its_achievements(dura_robot: 
     robot, dura, move = crashing_move(dura_robot, after=4.0, max_restarts=1)
     assert wait_for(lambda: task(dura, move)["state"] in ("succeeded", "failed"), 60)
     assert task(dura, move)["state"] == "succeeded", task(dura, move)["reason"]
-    kinds = [e["kind"] for e in trace(robot, move)]
+    kinds = [e.kind for e in trace(robot, move)]
     assert kinds[-4:] == ["TASK_STARTED", "TASK_RESTARTED", "TASK_STARTED", "TASK_SUCCEEDED"]
 
 
@@ -100,14 +101,14 @@ def test_a_behavior_that_keeps_failing_fails_its_task_after_max_restarts(
     robot, dura, move = crashing_move(dura_robot, after=0.5, max_restarts=2)
     assert wait_for(lambda: task(dura, move)["state"] == "failed", 60)
     events = trace(robot, move)
-    kinds = [e["kind"] for e in events]
-    restarts = [e["data"]["reason"] for e in events if e["kind"] == "TASK_RESTARTED"]
+    kinds = [e.kind for e in events]
+    restarts = [e.data["reason"] for e in events if e.kind == "TASK_RESTARTED"]
     # on a busy machine a functionality may be repaired meanwhile (lidar's rate drops, its
     # rule restarts it): that restart is not the behavior's, and does not count
     repaired = restarts.count("configuration repaired")
     assert len(restarts) - repaired == 2 and kinds[-1] == "TASK_FAILED", restarts
     assert kinds.count("TASK_STARTED") == 3 + repaired
-    attempts = {kind: [e["data"]["attempt"] for e in events if e["kind"] == kind]
+    attempts = {kind: [e.data["attempt"] for e in events if e.kind == kind]
                 for kind in ("TASK_STARTED", "TASK_RESTARTED")}  # fmt: skip
     assert attempts == {"TASK_STARTED": list(range(1, 4 + repaired)),
                         "TASK_RESTARTED": list(range(1, 3 + repaired))}  # fmt: skip
@@ -123,9 +124,9 @@ def test_constraints_earliest_start_deadline_and_start_together(dura_robot: Star
     partner = start(dura, "take_picture", "--arg", "place=office", "--with", late)
     assert wait_for(lambda: task(dura, late)["state"] == "succeeded", 30)
     assert task(dura, partner)["state"] == "succeeded"
-    requested = trace(robot, late)[0]["stamp"]
+    requested = trace(robot, late)[0].stamp
     for task_id in (late, partner):
-        began = next(e["stamp"] for e in trace(robot, task_id) if e["kind"] == "TASK_STARTED")
+        began = next(e.stamp for e in trace(robot, task_id) if e.kind == "TASK_STARTED")
         assert began - requested >= 2.0 - 0.05  # neither started before the earliest start
 
     # one take_picture process cannot serve two tasks at the same time
@@ -138,7 +139,7 @@ def test_constraints_earliest_start_deadline_and_start_together(dura_robot: Star
                      "--duration", "5", "--deadline", "2")  # fmt: skip
     assert wait_for(lambda: task(dura, hopeless)["state"] == "failed", 30)
     assert task(dura, hopeless)["reason"].startswith("cancelled by the scheduler: ")
-    assert "TASK_STARTED" not in [e["kind"] for e in trace(robot, hopeless)]
+    assert "TASK_STARTED" not in [e.kind for e in trace(robot, hopeless)]
 
 
 def test_tasks_pause_resume_and_stop_by_hand(dura_robot: Start) -> None:
@@ -171,7 +172,7 @@ def test_tasks_pause_resume_and_stop_by_hand(dura_robot: Start) -> None:
     assert dura("task", "stop", move).returncode == 0
     assert wait_for(lambda: task(dura, move)["state"] == "cancelled", 30)
     assert task(dura, move)["reason"] == "stopped by the user"
-    kinds = [e["kind"] for e in trace(robot, move)]
+    kinds = [e.kind for e in trace(robot, move)]
     assert kinds[-3:] == ["TASK_PAUSED", "TASK_RESUMED", "TASK_CANCELLED"]
 
 

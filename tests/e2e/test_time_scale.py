@@ -11,11 +11,11 @@ from __future__ import annotations
 
 from collections import defaultdict
 from collections.abc import Callable
-from typing import Any
 
 import pytest
 
 from executive.testing.harness import RobotProcess
+from knowledge.records import Event
 from tests.conftest import ROOT
 
 pytestmark = pytest.mark.slow
@@ -27,16 +27,14 @@ STEP_EVENTS = ("DISPATCH", "START", "END", "FAIL", "CANCEL")
 Start = Callable[..., RobotProcess]
 
 
-def trace(events: list[dict[str, Any]]) -> list[tuple[str, str]]:
+def trace(events: list[Event]) -> list[tuple[str, str]]:
     """The planning, plan and goal events as (kind, subject), oldest first."""
     return [
-        (e["kind"], e["subject"])
-        for e in events
-        if e["kind"] in PLAN_EVENTS or e["kind"].startswith("GOAL_")
+        (e.kind, e.subject) for e in events if e.kind in PLAN_EVENTS or e.kind.startswith("GOAL_")
     ]
 
 
-def orders(events: list[dict[str, Any]]) -> dict[str, list[str]]:
+def orders(events: list[Event]) -> dict[str, list[str]]:
     """What the plan orders: the dispatches, the life of each step, the goals' states,
     and the plans (planning rounds, replans)."""
     out: defaultdict[str, list[str]] = defaultdict(list)
@@ -52,7 +50,7 @@ def orders(events: list[dict[str, Any]]) -> dict[str, list[str]]:
     return dict(out)
 
 
-def deliver(robot: RobotProcess) -> list[dict[str, Any]]:
+def deliver(robot: RobotProcess) -> list[Event]:
     goal = robot.submit_goal("(crate_at parcel lab)")
     robot.wait_for(goal, "achieved", timeout=240)
     events = robot.events()
@@ -67,4 +65,4 @@ def test_time_scale_ten_delivers_the_crate_with_the_same_events_in_the_same_orde
     fast = deliver(dura_robot(TRANSPORT, name="ten_times", time_scale=10.0))
     assert sorted(trace(fast)) == sorted(trace(real))  # the same events
     assert orders(fast) == orders(real)  # in the same order, wherever the plan orders them
-    assert [e["data"]["time_scale"] for e in fast if e["kind"] == "EXECUTIVE_STARTED"] == [10.0]
+    assert [e.data["time_scale"] for e in fast if e.kind == "EXECUTIVE_STARTED"] == [10.0]

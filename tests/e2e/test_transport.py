@@ -21,12 +21,12 @@ FAST = 10.0  # robot time ten times faster: the same steps, in a tenth of their 
 
 def steps(robot: RobotProcess) -> list[str]:
     """The actions that ended, in order: ``drive(dock, store)``, ..."""
-    return [e["subject"] for e in robot.events("END")]
+    return [e.subject for e in robot.events("END")]
 
 
 def started(robot: RobotProcess) -> list[str]:
     """The actions that started, in order."""
-    return [e["subject"] for e in robot.events("START")]
+    return [e.subject for e in robot.events("START")]
 
 
 def test_a_crate_goes_upstairs_by_lift(dura_robot: Start) -> None:
@@ -52,9 +52,9 @@ def test_a_low_battery_sends_the_robot_to_charge_and_the_delivery_still_happens(
     robot = dura_robot(TRANSPORT, changes=changes, time_scale=FAST)
     delivery = robot.submit_goal("(crate_at parcel lab)")
     robot.wait_for(delivery, "achieved", timeout=240)
-    recharge = [g for g in robot.goals() if g["source"] == "integrity"]
-    assert [g["expression"] for g in recharge] == ["(and (not (battery_low)) (robot_at dock))"]
-    robot.wait_for(recharge[0]["id"], "achieved", timeout=120)
+    recharge = [g for g in robot.goals() if g.source == "integrity"]
+    assert [g.expression for g in recharge] == ["(and (not (battery_low)) (robot_at dock))"]
+    robot.wait_for(recharge[0].id, "achieved", timeout=120)
     # the robot charged: the step started; it ends, or is cancelled once the sensing rule
     # clears (battery_low) while it charges (its plan then serves no open goal)
     assert any(s.startswith("charge") for s in started(robot))
@@ -70,14 +70,14 @@ def test_a_lost_lift_makes_the_delivery_unreachable_and_sends_the_robot_to_its_d
     assert wait_for(lambda: any(s.startswith("pick") for s in started(robot)), timeout=60)
     robot.request("component/fault", {"name": "lift_link"})  # beyond repair
     goal = robot.wait_for(delivery, "unreachable", timeout=60)
-    assert goal["reason"].endswith(
+    assert goal.reason.endswith(
         "; cannot run now: call_lift, ride_lift"
         " (no provider for capability 'lift': lift_link is permanently faulty)"
-    ), goal["reason"]
-    replans = [e["data"]["reason"] for e in robot.events("PLANNING")]
+    ), goal.reason
+    replans = [e.data["reason"] for e in robot.events("PLANNING")]
     assert any("call_lift, ride_lift can no longer run" in r for r in replans), replans
-    maintenance = [g for g in robot.goals() if g["source"] == "integrity"]
-    assert [g["expression"] for g in maintenance] == ["(robot_at dock)"]
-    robot.wait_for(maintenance[0]["id"], "achieved", timeout=120)
+    maintenance = [g for g in robot.goals() if g.source == "integrity"]
+    assert [g.expression for g in maintenance] == ["(robot_at dock)"]
+    robot.wait_for(maintenance[0].id, "achieved", timeout=120)
     assert "(robot_at dock)" in robot.facts("robot_at")
     assert not any(s.startswith("ride_lift") for s in steps(robot))

@@ -20,6 +20,7 @@ import zenoh
 from executive.bus import security
 from executive.bus.api import components, monitoring, planning, tasks
 from executive.bus.keys import DIAGNOSES
+from executive.bus.reports import DiagnosisInfo
 from executive.bus.session import Bus, session_config
 from executive.bus.verb import Verb
 from executive.testing.harness import RobotProcess
@@ -84,8 +85,8 @@ def test_the_executive_survives_malformed_messages_and_requests(robot: RobotProc
         time.sleep(1.0)
     assert robot.running
     status = robot.status()  # the high level still reads (and serves) its state
-    assert status["robot"] == "usecase"
-    assert status["diagnoses"] in ({}, None) or isinstance(status["diagnoses"], dict)
+    assert status.robot == "usecase"
+    assert isinstance(status.diagnoses, DiagnosisInfo | planning.NoDiagnosis)
     assert len(answers) == len(VERBS) * 7  # every request answered, none left hanging
     assert answers.count("error") >= len(VERBS) * 5  # what is not an object is refused
     log = robot.log_tail(100_000)
@@ -113,5 +114,6 @@ def test_a_forged_diagnosis_never_reaches_the_state(tmp_path: Path) -> None:
             # nothing tells that a message was refused: give the forged ones the time
             # they would take to reach the state
             time.sleep(1.0)
-        assert not robot.status()["diagnoses"].get("diagnoses")
-        assert robot.status()["faults"] == []
+        diagnosis = robot.status().diagnosis
+        assert diagnosis is None or not diagnosis.diagnoses
+        assert robot.status().faults == []

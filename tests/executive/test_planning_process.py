@@ -8,13 +8,13 @@ import contextlib
 import json
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 import pytest
 
 from executive.bus.api.planning import STATUS
 from executive.bus.keys import service_alive
 from executive.testing.harness import RobotProcess, ServiceGroupProcess, robot_variant
+from knowledge.records import Event, GoalState
 from tests.conftest import USECASE, nobody_answers, run_dura, wait_for
 
 pytestmark = pytest.mark.slow
@@ -33,9 +33,9 @@ def split(description: Path, folder: Path) -> Iterator[RobotProcess]:
         yield robot
 
 
-def first(events: list[dict[str, Any]], kind: str, subject: str = "") -> int:
+def first(events: list[Event], kind: str, subject: str = "") -> int:
     """The index of the first event of ``kind`` whose subject contains ``subject``."""
-    return next(i for i, e in enumerate(events) if e["kind"] == kind and subject in e["subject"])
+    return next(i for i, e in enumerate(events) if e.kind == kind and subject in e.subject)
 
 
 def test_a_goal_is_planned_in_the_planning_process_and_executed_by_the_executive(
@@ -57,7 +57,7 @@ def test_a_goal_is_planned_in_the_planning_process_and_executed_by_the_executive
             assert {c["component"] for c in answer["components"]} >= {"cam", "take_picture"}
             # the executive's task executor ran the step, for the plan of the other process
             tasks = robot.events("TASK_SUCCEEDED")
-            assert any("take_picture(lab)" in e["subject"] for e in tasks)
+            assert any("take_picture(lab)" in e.subject for e in tasks)
             assert robot.facts("picture_taken") == ["(picture_taken lab)"]
         assert nobody_answers(robot.bus, STATUS)  # the planning process answered it
     assert "planning of robot 'usecase': runs" in (tmp_path / "planning.log").read_text()
@@ -91,11 +91,11 @@ def test_a_step_the_plan_cancels_ends_in_the_executive_and_reports_nothing_more(
         assert wait_for(lambda: robot.events("TASK_STARTED") != [], 60)
         robot.cancel_goal(far)  # its plan cancels the move it runs
         cancelled = robot.wait_for_event("TASK_CANCELLED", "move_to", timeout=30)
-        assert cancelled["data"]["reason"] == "the plan no longer needs it"
+        assert cancelled.data["reason"] == "the plan no longer needs it"
         # a later round of the planner: by then a report of the move would have come
         later = robot.submit_goal("(picture_taken dock)")
-        ended = ("achieved", "unreachable", "failed")
-        assert wait_for(lambda: robot.goal(later)["state"] in ended, 90)
-        assert robot.goal(far)["state"] == "cancelled"
-        kinds = [e["kind"] for e in robot.events() if "move_to(dock, lab)" in e["subject"]]
+        ended = (GoalState.ACHIEVED, GoalState.UNREACHABLE, GoalState.FAILED)
+        assert wait_for(lambda: robot.goal(later).state in ended, 90)
+        assert robot.goal(far).state is GoalState.CANCELLED
+        kinds = [e.kind for e in robot.events() if "move_to(dock, lab)" in e.subject]
         assert "CANCEL" in kinds and "FAIL" not in kinds

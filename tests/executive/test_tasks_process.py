@@ -69,11 +69,9 @@ def test_the_tasks_process_starts_the_components_and_runs_the_steps(tmp_path: Pa
             robot.wait_for(goal, "achieved", timeout=90)
             assert robot.facts("picture_taken") == ["(picture_taken lab)"]
             succeeded = robot.events("TASK_SUCCEEDED")  # logged by the tasks process
-            assert any("take_picture(lab)" in e["subject"] for e in succeeded)
+            assert any("take_picture(lab)" in e.subject for e in succeeded)
             robot.wait_for_event("TASK_STARTED", "take_picture", timeout=10)
-            pids = [c["pid"] for c in robot.components() if c.get("pid")] + [
-                c["pid"] for c in running
-            ]
+            pids = [c.pid for c in robot.components() if c.pid] + [c["pid"] for c in running]
         assert wait_for(lambda: living(pids) == [], 10), living(pids)
         # status still answers: what the task executor answered is an error now
         gone = run_dura("status", "--json", cwd=tmp_path, env=env)
@@ -104,13 +102,13 @@ def test_a_killed_tasks_process_leaves_nothing_running_and_its_successor_carries
     with split(description, tmp_path) as (robot, tasks):
         goal = robot.submit_goal("(robot_at lab)")
         robot.wait_for_event("TASK_STARTED", "move_to", timeout=60)
-        pids = [c["pid"] for c in robot.components() if c.get("pid")]
+        pids = [c.pid for c in robot.components() if c.pid]
         trees = pids + [c.pid for p in pids for c in psutil.Process(p).children(recursive=True)]
         os.kill(tasks.pid, signal.SIGKILL)
         assert wait_for(lambda: living(trees) == [], 10), living(trees)
         # the executive's plan learns that the step's task executor is gone
         failed = robot.wait_for_event("FAIL", "move_to", timeout=30)
-        assert "the task executor is gone" in json.dumps(failed["data"])
+        assert "the task executor is gone" in json.dumps(failed.data)
         tasks.stop()
         tasks.start()  # a new tasks process: the planner's next plan runs there
         robot.wait_for(goal, "achieved", timeout=120)
@@ -126,7 +124,7 @@ def test_a_fault_marked_in_the_tasks_process_blocks_the_executives_plans_until_r
         assert marked.returncode == 0, marked.stderr
         goal = robot.submit_goal("(picture_taken lab)")
         robot.wait_for(goal, "unreachable", timeout=60)
-        assert "take_picture" in robot.goal(goal)["reason"]
+        assert "take_picture" in robot.goal(goal).reason
         reset = run_dura("component", "reset", "take_picture", cwd=tmp_path, env=env)
         assert reset.returncode == 0, reset.stderr
         # the reset is logged in the tasks process: the executive's goal planner follows it

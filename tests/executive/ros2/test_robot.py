@@ -73,7 +73,7 @@ def test_a_ros2_robot_takes_goals_from_ros2_diagnoses_its_nodes_from_the_graph_a
         accepted = user.submit(json.dumps({"expression": PATROL, "priority": 3}))
         assert accepted["accepted"] is True, accepted
         goal = int(accepted["goal"]["id"])
-        assert patrol.goal(goal)["priority"] == 3
+        assert patrol.goal(goal).priority == 3
 
     def model() -> dict[str, tuple[list[str], list[str]]]:
         reply = DIAGNOSIS_MODEL_CHANGE.call(patrol.bus, ModelChange("GET"))
@@ -84,13 +84,15 @@ def test_a_ros2_robot_takes_goals_from_ros2_diagnoses_its_nodes_from_the_graph_a
                 "navigator": (["odom", "scan"], ["cmd_vel", "navigator/transition_event"])}  # fmt: skip
     assert wait_for(lambda: all(model().get(n) == t for n, t in expected.items()), timeout=40)
 
-    lidar = next(c for c in patrol.status()["components"] if c["component"] == "lidar")
-    [program] = psutil.Process(lidar["pid"]).children()
+    components = patrol.status().components
+    assert isinstance(components, list), components  # the launcher answered
+    lidar = next(c for c in components if c.component == "lidar")
+    [program] = psutil.Process(lidar.pid).children()
     program.send_signal(signal.SIGKILL)  # the ROS 2 node crashes while the robot drives
     patrol.wait_for(goal, "achieved", timeout=90)
-    faults = [e for e in patrol.events("FAULT") if e["subject"] == "lidar"]
+    faults = [e for e in patrol.events("FAULT") if e.subject == "lidar"]
     assert faults, patrol.events()
-    assert len([e for e in patrol.events("COMPONENT_READY") if e["subject"] == "lidar"]) >= 2
+    assert len([e for e in patrol.events("COMPONENT_READY") if e.subject == "lidar"]) >= 2
 
 
 def test_dura_demo_ros2_runs_end_to_end(tmp_path: Path) -> None:
@@ -127,5 +129,5 @@ def test_a_ros2_robots_monitoring_and_high_level_apart_read_ros2_topics_themselv
         # the monitoring process's observers saw /scan and /odom: no silence taken for a fault
         assert robot.events("FAULT") == []
         # the planning process's sensing rule read /odom
-        sensed = [e for e in robot.events("STATE_SET") if e["subject"] == "(visited dock)"]
-        assert sensed and sensed[0]["data"]["topic"] == "odom", robot.events("STATE_SET")
+        sensed = [e for e in robot.events("STATE_SET") if e.subject == "(visited dock)"]
+        assert sensed and sensed[0].data["topic"] == "odom", robot.events("STATE_SET")

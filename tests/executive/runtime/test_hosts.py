@@ -167,13 +167,13 @@ def test_a_killed_host_agent_is_a_fault_and_its_task_moves_to_the_other_host(rig
     assert wait_for(lambda: task(robot, task_id)["state"] == "succeeded", 60), task(robot, task_id)
     assert set(task(robot, task_id)["providers"].values()) >= {"cam", "cam_to_lidar"}
     lost = robot.events("HOST_LOST")
-    assert [e["subject"] for e in lost] == ["front"]
-    assert set(lost[0]["data"]["components"]) == {"lidar", "lidar_filter"}
-    faults = {e["subject"] for e in robot.events("FAULT")}
+    assert [e.subject for e in lost] == ["front"]
+    assert set(lost[0].data["components"]) == {"lidar", "lidar_filter"}
+    faults = {e.subject for e in robot.events("FAULT")}
     assert {"lidar", "lidar_filter"} <= faults
     states = {c["component"]: c for c in robot.request("component/list")["components"]}
     assert states["lidar_filter"]["reason"] == "its host 'front' was lost"
-    permanent = {c["name"] for c in robot.status()["faults"] if c["permanent_fault"]}
+    permanent = {c.name for c in robot.status().faults if c.permanent_fault}
     assert not permanent & {"lidar", "lidar_filter"}  # unavailable, not broken
 
 
@@ -192,13 +192,13 @@ def test_a_partitioned_host_ends_its_components_and_rejoins_without_duplicates(
     assert not running(program)
     assert wait_for(lambda: robot.component_state("lidar") == "exited", 30)
     (lost,) = robot.events("HOST_LOST")
-    assert lost["subject"] == "front"
+    assert lost.subject == "front"
     refused = robot.request("component/start", {"name": "lidar"})
     assert refused["state"] == "failed" and "not connected" in refused["reason"]
     network.heal()
     front.wait_for_line("joined", 60, after=seen)
-    assert wait_for(lambda: [e["subject"] for e in robot.events("HOST_JOINED")
-                             if e["id"] > lost["id"]] == ["front"], 30)  # fmt: skip
+    assert wait_for(lambda: [e.subject for e in robot.events("HOST_JOINED")
+                             if e.id > lost.id] == ["front"], 30)  # fmt: skip
     state = robot.request("component/start", {"name": "lidar"})
     assert state["state"] == "ready", state
     folder = robot.description.parent

@@ -46,7 +46,7 @@ def test_a_hand_started_component_is_modelled_and_its_crash_is_a_fault_and_resta
     assert wait_for(lambda: "lidar" in modelled(robot), 10)
     os.kill(int(started["pid"]), signal.SIGKILL)
     assert wait_for(lambda: robot.events("FAULT") != [], 10)
-    assert robot.events("FAULT")[0]["subject"] == "lidar"
+    assert robot.events("FAULT")[0].subject == "lidar"
     assert wait_for(lambda: state_of(robot, "lidar")["state"] == "ready", 20)
     assert state_of(robot, "lidar")["pid"] != started["pid"]
     assert "lidar" in modelled(robot)
@@ -58,7 +58,7 @@ def test_a_task_that_used_a_hand_started_component_leaves_it_running(
     started = robot.request("component/start", {"name": "lidar"})
     task = robot.request("task/start", {"task": "move_to", "goal": {"target": "lab"}})["id"]
     assert wait_for(lambda: robot.events("TASK_SUCCEEDED") != [], 60)
-    assert robot.events("TASK_SUCCEEDED")[0]["subject"].startswith(f"task {task} ")
+    assert robot.events("TASK_SUCCEEDED")[0].subject.startswith(f"task {task} ")
     assert wait_for(lambda: state_of(robot, "lidar_filter")["state"] == "stopped", 10)
     assert state_of(robot, "lidar")["state"] == "ready"
     assert state_of(robot, "lidar")["pid"] == started["pid"]
