@@ -7,7 +7,7 @@ diagnosis names the faulty components, repair rules act. It may import
 - :mod:`.observer` — the extension point: an observer's configuration, lifecycle,
   results and the registry of types; :mod:`.observers` — the built-in types;
 - :mod:`.observer_config` — observer configurations from robot descriptions, observers
-  files and bus requests (:mod:`.config_entry`: one mapping read with its lines);
+  files and bus requests, read by :mod:`knowledge.typed_reader` with their lines;
 - :mod:`.caller_groups` — topics watched per caller-id group;
 - :mod:`.filter`, :mod:`.check`, :mod:`.state` — measurements smoothed, checked
   against a hypothesis, classified into named states (:mod:`.t_distribution` for the

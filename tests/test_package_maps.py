@@ -35,6 +35,27 @@ def unmapped(root: Path = ROOT) -> dict[str, list[str]]:
     return found
 
 
+def stale(root: Path = ROOT) -> dict[str, list[str]]:
+    """The modules and subpackages each package's map names (``:mod:`.name```) that the
+    package does not have."""
+    found: dict[str, list[str]] = {}
+    for package in PACKAGES:
+        for init in sorted((root / package).rglob("__init__.py")):
+            folder = init.parent
+            doc = ast.get_docstring(ast.parse(init.read_text())) or ""
+            gone = sorted(
+                {
+                    name
+                    for name in re.findall(r":mod:`~?\.(\w+)`", doc)
+                    if not (folder / f"{name}.py").is_file()
+                    and not (folder / name / "__init__.py").is_file()
+                }
+            )
+            if gone:
+                found[folder.relative_to(root).as_posix()] = gone
+    return found
+
+
 def _commands(tree: ast.Module) -> list[str]:
     """The names of a module's ``COMMANDS`` tuple of strings, if it has one."""
     for node in tree.body:
@@ -49,6 +70,10 @@ def test_every_package_names_its_modules_in_its_map() -> None:
     assert unmapped() == {}
 
 
+def test_every_module_a_map_names_is_there() -> None:
+    assert stale() == {}
+
+
 def test_a_module_the_map_does_not_name_is_found(tmp_path: Path) -> None:
     package = tmp_path / "monitoring" / "repair"
     (package / "actions").mkdir(parents=True)
@@ -61,3 +86,5 @@ def test_a_module_the_map_does_not_name_is_found(tmp_path: Path) -> None:
         '"""Monitoring: :mod:`monitoring.repair`."""\n'
     )
     assert unmapped(tmp_path) == {"monitoring/repair": ["actions", "engine"]}
+    (package / "__init__.py").write_text('"""Repair: :mod:`.rule`, :mod:`.gone`."""\n')
+    assert stale(tmp_path) == {"monitoring/repair": ["gone"]}

@@ -6,10 +6,11 @@
 - :mod:`.arguments` — argument types: a bad value is a usage error saying what is
   allowed;
 - :mod:`.output` — tables for people, JSON for scripts; :mod:`.progress` — one live line
-  of what a long command does; :mod:`.stopping` — waiting for Ctrl-C or SIGTERM;
-- :mod:`.deferred`, :mod:`.reader_environment` — for a quick start: standard modules
-  imported at first use, a unified-planning environment that reads PDDL and never
-  plans.
+  of what a long command does; :mod:`.stopping` — waiting for Ctrl-C or SIGTERM.
+
+Its start-up tricks (standard modules imported at first use, garbage collection paused
+while the command loads, a quick exit, a unified-planning environment that reads PDDL and
+never plans) are in :mod:`executive.fast_start`.
 
 It may import every other part of dura; it talks to a running robot over the bus.
 """

@@ -30,7 +30,5 @@ it never imports the task executor (steps run through the
 - :mod:`.sensing` — facts and values kept in step with topics (the ``sensing:`` rules);
 - :mod:`.dry_run` — what the planner would do now; :mod:`.domain_check` — diagnostics
   for domain authors; :mod:`.domain_description` — the domain as ``dura domain show``
-  gives it;
-- :mod:`.config_space` — a stand-in for ConfigSpace in the planner worker (see its
-  docstring).
+  gives it.
 """
