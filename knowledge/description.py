@@ -10,6 +10,7 @@ schema of the YAML (:mod:`knowledge.typed_reader` reads by them); see
 from __future__ import annotations
 
 import enum
+import importlib
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -50,8 +51,6 @@ _LATER = {  # imported when first asked for (a robot without ROS 2 never imports
 def __getattr__(name: str) -> Any:
     """The types of the ROS 2 and sensing parts, for the reader of the annotations."""
     if name in _LATER:
-        import importlib
-
         return getattr(importlib.import_module(_LATER[name]), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
@@ -99,7 +98,7 @@ class ObserverSpec:
 
 
 def _ros2(value: Any, place: Place) -> Any:
-    from knowledge.ros2_components import read_component_ros2
+    from knowledge.ros2_components import read_component_ros2  # only for a ROS 2 component
 
     return read_component_ros2(value, place)
 
@@ -233,7 +232,7 @@ class TaskSpec:
 
 def _engine(engine: str, place: Place) -> str:
     """Report an engine that is neither built in nor a plugin (``dura.planners``)."""
-    from importlib.metadata import entry_points
+    from importlib.metadata import entry_points  # slow to load: only for another engine
 
     plugins = sorted(ep.name for ep in entry_points(group="dura.planners"))
     if engine not in ENGINES and engine not in plugins:

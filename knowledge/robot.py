@@ -133,7 +133,7 @@ def load_robot(path: Path, *, domain: bool = True) -> RobotDescription:
     Raises:
         ConfigError: with the first problem; ``dura validate`` lists them all.
     """
-    from knowledge.validation import validate
+    from knowledge.validation import validate  # it reads descriptions with read_robot
 
     result = validate(Path(path), domain=domain)
     errors = [f for f in result.findings if f.is_error]

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 from collections.abc import Callable
+from pathlib import Path
 
 LIMIT = 10**9  # no count, priority or number of seconds a person means is larger
 
@@ -94,7 +95,7 @@ def megabytes(text: str) -> int:
 
 def event_kind(text: str) -> str:
     """A kind of event dura logs (any case): ``FAIL``, ``task_failed``."""
-    from executive.bus.event_kinds import KINDS
+    from executive.bus.event_kinds import KINDS  # only for --kind: not on a quick path
 
     kind = text.upper()
     if kind not in KINDS:
@@ -108,8 +109,6 @@ def add_launcher_options(parser: argparse.ArgumentParser, *, resources: str) -> 
     """The options of a process that launches components (``dura run``, ``dura host``):
     where their logs go, how often their resources are published (``resources``: the
     help), and how long each gets to stop."""
-    from pathlib import Path
-
     parser.add_argument(
         "--log-dir",
         type=Path,

@@ -75,7 +75,7 @@ def register(sub: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.ros2:  # Cyclone DDS loads only for this one
-        from executive.cli import demo_ros2
+        from executive.cli import demo_ros2  # Cyclone DDS
 
         return demo_ros2.run(args)
     if not EXAMPLE.is_file():

@@ -279,7 +279,7 @@ class Timeline:
         """The plan as the knowledge base holds it (``None`` if it cannot be read)."""
         if self._kb_path is None:
             return None
-        from knowledge.knowledge_base import KnowledgeBase
+        from knowledge.knowledge_base import KnowledgeBase  # only when the reply lacks it
 
         try:
             with KnowledgeBase(self._kb_path, readonly=True) as kb:

@@ -81,6 +81,8 @@ def offline(description: Path) -> api.DomainReply:
     Raises:
         ConfigError: the description or its domain is invalid (the first problem).
     """
+    # unified-planning and the domain reader: only offline (every command module is
+    # imported for `dura --help`)
     from executive.fast_start import use_reader_environment
     from executive.planning.domain_description import describe
     from knowledge.validation import validate
@@ -133,7 +135,7 @@ def print_domain(reply: api.DomainReply, *, running: bool) -> None:
 
 def run_check(args: argparse.Namespace) -> int:
     from executive.planning.domain_check import check_domain  # unified-planning is slow to load
-    from knowledge.finding import Finding
+    from knowledge.finding import Finding  # beside the domain check
 
     findings = check_domain(args.domain, args.problem)
     if args.json:

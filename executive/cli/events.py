@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import queue
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -21,8 +22,6 @@ from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json
 
 if TYPE_CHECKING:
-    import queue
-
     from knowledge.records import Event
 
 PAGE = 1000  # events read at a time when catching up
@@ -60,8 +59,6 @@ def run_events(args: argparse.Namespace) -> int:
         if args.robot is not None or args.endpoint is not None:
             args.parser.error("--db reads a file; --robot and --endpoint ask an executive")
         return _events_from_file(args)
-    import queue  # only to follow: not for 'dura status'
-
     arrived: queue.Queue[Event] = queue.Queue()
     newest: list[Event] = []
     with connect(args) as bus:
@@ -86,7 +83,7 @@ POLL = 0.25  # seconds between two reads of a followed knowledge base file
 def _events_from_file(args: argparse.Namespace) -> int:
     """``dura events --db FILE``: the log as the knowledge base file holds it; with
     ``--follow``, read it again every ``POLL`` seconds (readers never block a writer)."""
-    from knowledge.knowledge_base import KnowledgeBase
+    from knowledge.knowledge_base import KnowledgeBase  # sqlite3: only with --db
 
     with KnowledgeBase(args.db, readonly=True) as kb:
         past = kb.events(limit=args.lines, kind=args.kind)
@@ -110,8 +107,6 @@ def _follow(bus: Bus, arrived: queue.Queue[Event], last: int, args: argparse.Nam
     """Print events as they come, in order and without a gap: an event that arrives
     after a gap (the bus dropped some, or they came before the subscription) is
     preceded by the missing ones, read from the knowledge base by sequence number."""
-    import queue
-
     while True:
         try:
             event = arrived.get(timeout=0.5)

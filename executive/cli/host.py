@@ -55,6 +55,7 @@ def run(args: argparse.Namespace) -> int:
     """The agent's process: its bus login, its launcher and the resource monitor of its
     own processes, composed here (as :mod:`executive.executive` composes the
     executive's)."""
+    # the agent's parts load only for `dura host` (`dura --help` imports every command)
     from executive.bus import security
     from executive.bus.session import Bus
     from executive.runtime.host_agent import HostAgent

@@ -126,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
             running.enter_context(executive)
         url = None
         if args.dashboard is not None:
-            from executive.dashboard.server import Dashboard
+            from executive.dashboard.server import Dashboard  # the web stack, if asked
 
             page = Dashboard.connect(robot, endpoint, host=args.dashboard_host,
                                      port=args.dashboard)  # fmt: skip

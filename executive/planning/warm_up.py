@@ -143,7 +143,7 @@ class WarmUp:
     def _load(self) -> Warm:
         """Load the domain in the planner worker, check the robot against it, seed the
         world, read the integrity rules."""
-        from knowledge.validation import check_domain
+        from knowledge.validation import check_domain  # on the warm-up thread, not at start
 
         robot, kb = self.robot, self.kb
         self.planner.start()
