@@ -3,11 +3,13 @@
 
 The services are built by group (:mod:`executive.service_groups`) and driven together
 by a :class:`~executive.bus.lifecycle_manager.LifecycleManager`: all configured in order,
-then all activated in order; deactivated, then shut down, in reverse. So the bus API
-answers before any service starts: the high level, configured, recovers from a crash,
-serves its verbs (``status`` among them) and warms its planner up in the background;
-then the services start (monitoring first, so that it watches every component the task
-executor starts), and the high level, last, begins planning. The launcher stops every
+then all activated in order; deactivated, then shut down, in reverse. The bus API
+answers first: the high level is built and configured before the other services are
+even loaded (configured, it recovers from a crash, serves its verbs, ``status`` among
+them, and warms its planner up in the background); then the launcher opens and the other
+services are loaded and configured; then they start (monitoring first, so that it
+watches every component the task executor starts), and the high level, last, begins
+planning. The launcher stops every
 component when the executive closes. While it runs, the executive holds the liveliness
 token ``alive/executive``: components end themselves when it vanishes.
 
@@ -25,6 +27,7 @@ level asks for over the bus). Both kinds of process build a group with the same 
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import threading
 from collections.abc import Callable, Collection
@@ -42,6 +45,7 @@ from executive.runtime.run_lock import RunLock, end_leftovers
 from executive.service_groups import (
     StatusSections,
     TaskSettings,
+    TasksGroup,
     bus_tasks,
     launcher,
     monitoring_group,
@@ -53,7 +57,7 @@ from executive.service_groups import (
     tasks_group,
 )
 from knowledge.description import RobotDescription
-from knowledge.errors import ConfigError
+from knowledge.errors import ConfigError, DuraError
 from knowledge.knowledge_base import KnowledgeBase
 
 if TYPE_CHECKING:
@@ -153,6 +157,7 @@ class Executive:
         self.launcher: Launcher | None = None
         self.high_level: HighLevel | None = None
         self.ros2: Ros2Link | None = None
+        self._tasks_group: TasksGroup | None = None
         self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> Executive:
@@ -189,6 +194,16 @@ class Executive:
             )
             stack.callback(self.kb.log_event, "EXECUTIVE_STOPPED", self.robot.name)
             context = Context(self.robot, self.bus, self.kb)
+            relay = EventRelay(context)
+            manager = LifecycleManager(
+                [relay, *self._planning(context, relay, stack)],
+                progress=self.progress,
+                on_failure=self.on_failure,
+            )
+            stack.callback(manager.close)
+            manager.configure()  # the bus API answers from here on
+            if self.on_open is not None:
+                self.on_open()
             if TASKS not in self.without:
                 self.progress("loading the launcher")
                 self.launcher = stack.enter_context(
@@ -198,48 +213,74 @@ class Executive:
                 self.progress("joining the ROS 2 domain")
                 self.ros2 = stack.enter_context(ros2_link(self.robot))
             self.progress("loading the services")
-            manager = LifecycleManager(
-                self.services(context, stack), progress=self.progress, on_failure=self.on_failure
-            )
-            stack.callback(manager.close)
-            manager.configure()  # the bus API answers from here on
-            if self.on_open is not None:
-                self.on_open()
+            manager.add(self.services(context), before=self.high_level)
+            manager.configure()
             manager.activate()
             self.bus.declare_alive(EXECUTIVE_ALIVE)
             self._stack = stack.pop_all()
         return self
 
-    def services(self, context: Context, stack: contextlib.ExitStack[Any]) -> list[Service]:
-        """The services of the executive, in the order they configure and activate:
-        the event relay and the recording first, so that they see all; monitoring
-        before the task executor, so that it watches every component it starts; the
-        high level last, so that it plans once everything else runs. Resources they
-        need (the plan steps' connection to a tasks process) go on ``stack``."""
-        relay = EventRelay(context)
-        sources = [self.ros2.topics] if self.ros2 is not None else []
+    def _planning(
+        self, context: Context, relay: EventRelay, stack: contextlib.ExitStack[Any]
+    ) -> list[Service]:
+        """The high level (unless another process runs it): built and configured before
+        the other services are loaded, so that its API answers and its planner warms up
+        at once; it runs its steps on the task executor of this process (built after it)
+        or of the tasks process (over the bus)."""
+        if PLANNING in self.without:
+            return []
+        sources = self._topic_sources
+        if TASKS in self.without:
+            steps = bus_tasks(self.robot, self.bus, service_alive(TASKS))
+            stack.callback(steps.close)
+            status = remote_status(self.bus)
+            self.high_level = planning_group(context, relay, lambda: steps, status, sources)
+        else:
+            status = self._local_status()
+            self.high_level = planning_group(context, relay, self._local_steps, status, sources)
+        return [self.high_level]
+
+    def services(self, context: Context) -> list[Service]:
+        """The services of the executive after its high level, in the order they configure
+        and activate: the recording first, so that it sees all; monitoring before the
+        task executor, so that it watches every component it starts. The high level
+        activates after them all, so that it plans once everything else runs."""
         services: list[Service] = [
-            relay,
             *recording_group(context, self.record, self.record_max_size),
-            *(monitoring_group(context, sources) if MONITORING not in self.without else []),
+            *(
+                monitoring_group(context, self._topic_sources())
+                if MONITORING not in self.without
+                else []
+            ),
             *ros2_group(context, self.ros2),
         ]
-        runner: TaskRunner | None = None
-        status: StatusSections = {}
         if self.launcher is not None:
             steps = PLANNING in self.without  # for the high level of the planning process
-            tasks = tasks_group(context, self.launcher, self.settings, steps=steps)
-            self.tasks = tasks.executor
-            services += tasks.services
-            runner, status = tasks.runner(), tasks.status()
-        if PLANNING not in self.without:
-            if runner is None:  # the task executor of the tasks process
-                runner = bus_tasks(self.robot, self.bus, service_alive(TASKS))
-                stack.callback(runner.close)
-                status = remote_status(self.bus)
-            self.high_level = planning_group(context, relay, runner, status, sources)
-            services.append(self.high_level)
+            self._tasks_group = tasks_group(context, self.launcher, self.settings, steps=steps)
+            self.tasks = self._tasks_group.executor
+            services += self._tasks_group.services
         return services
+
+    def _topic_sources(self) -> list[TopicSource]:
+        """The topics not on the bus: ROS 2's, for a ROS 2 robot."""
+        return [self.ros2.topics] if self.ros2 is not None else []
+
+    def _local_steps(self) -> TaskRunner:
+        """This process's task executor, as the runner of the high level's steps."""
+        if self._tasks_group is None:
+            raise DuraError("the task executor has not started")
+        return self._tasks_group.runner()
+
+    def _local_status(self) -> StatusSections:
+        """The sections of ``status`` this process's task executor and launcher answer
+        (they say so while they are loading)."""
+
+        def section(name: str) -> Any:
+            if self._tasks_group is None:
+                raise DuraError("the task executor is starting")
+            return self._tasks_group.status()[name]()
+
+        return {name: functools.partial(section, name) for name in ("tasks", "components")}
 
     def __exit__(self, *exc: object) -> None:
         self._stack.close()
@@ -352,9 +393,12 @@ class ServiceProcess:
         if self.group == MONITORING:
             return [relay, *monitoring_group(context, sources)]
         if self.group == PLANNING:
-            runner = bus_tasks(robot, bus, EXECUTIVE_ALIVE)
-            stack.callback(runner.close)
-            return [relay, planning_group(context, relay, runner, remote_status(bus), sources)]
+            steps = bus_tasks(robot, bus, EXECUTIVE_ALIVE)
+            stack.callback(steps.close)
+            high_level = planning_group(
+                context, relay, lambda: steps, remote_status(bus), lambda: sources
+            )
+            return [relay, high_level]
         # each component's login: the tasks process runs in the executive's folder
         credentials = security.read_credentials(security.credentials_file(self.folder, robot.name))
         running = stack.enter_context(launcher(context, self.settings, credentials, run_id))

@@ -28,13 +28,13 @@ from typing import TYPE_CHECKING, Any
 from executive.bus import security
 from executive.bus.event_relay import EventRelay
 from executive.bus.service import Context, Service, ServiceState
-from executive.bus.session import Bus
+from executive.bus.session import Bus, Handler
 from knowledge.description import RobotDescription
 from knowledge.errors import ConfigError, DuraError
 
 if TYPE_CHECKING:
     from executive.bus.reports import ComponentEntry, ExecutorTask
-    from executive.bus.topic_source import TopicSource
+    from executive.bus.topic_source import Subscription, TopicSource
     from executive.planning.bus_tasks import BusTasks
     from executive.planning.high_level import HighLevel
     from executive.planning.task_runner import TaskRunner
@@ -216,12 +216,23 @@ def tasks_group(
 def planning_group(
     context: Context,
     events: EventRelay,
-    runner: TaskRunner,
+    runner: Callable[[], TaskRunner],
     status: StatusSections,
-    sources: Sequence[TopicSource] = (),
+    sources: Callable[[], Sequence[TopicSource]] = tuple,
 ) -> HighLevel:
     """The high level: goals, planner, plan executor and their verbs (``status`` among
-    them), running its steps with ``runner``."""
+    them). ``runner`` gives what runs its steps, and ``sources`` the topics not on the bus
+    (ROS 2) that its sensing rules may read, once it plans."""
     from executive.planning.high_level import HighLevel
 
-    return HighLevel(context, runner, events=events, status=status, sources=sources)
+    bus = context.bus
+
+    def subscribe(key: str, handler: Handler) -> Subscription:
+        """A sensing rule's topic: on the source that serves it, else on the bus."""
+        source = next((s for s in sources() if s.serves(key)), None)
+        found: Subscription = (
+            bus.subscribe(key, handler) if source is None else source.subscribe(key, handler)
+        )
+        return found
+
+    return HighLevel(context, runner, events=events, status=status, subscribe=subscribe)

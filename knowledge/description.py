@@ -232,10 +232,12 @@ class TaskSpec:
 
 def _engine(engine: str, place: Place) -> str:
     """Report an engine that is neither built in nor a plugin (``dura.planners``)."""
+    if engine in ENGINES:
+        return engine
     from importlib.metadata import entry_points  # slow to load: only for another engine
 
     plugins = sorted(ep.name for ep in entry_points(group="dura.planners"))
-    if engine not in ENGINES and engine not in plugins:
+    if engine not in plugins:
         place.entry.error(
             place.key,
             f"unknown planner engine '{engine}' (choose from {', '.join((*ENGINES, *plugins))})",

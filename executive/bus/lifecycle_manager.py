@@ -5,7 +5,9 @@ in reverse, then shuts them down in reverse. So what a service serves while inac
 answers before any service of the process works (the high level's API answers, and its
 planner warms up, before the task executor starts; it plans only once every service
 before it is active), and nothing works any more when the first one lets go of what it
-holds.
+holds. Services may be added in stages (:meth:`LifecycleManager.add`), each configured
+at the next :meth:`~LifecycleManager.configure`: what answers first need not wait for
+the others to be loaded.
 """
 
 from __future__ import annotations
@@ -37,17 +39,27 @@ class LifecycleManager:
         progress: Callable[[str], None] | None = None,
         on_failure: Callable[[str], None] | None = None,
     ) -> None:
-        self.services = tuple(services)
+        self.services: tuple[Service, ...] = ()
         self._progress = progress or (lambda _: None)
         self._on_failure = on_failure
-        for service in self.services:
+        self.add(services)
+
+    def add(self, services: Sequence[Service], *, before: Service | None = None) -> None:
+        """Drive these services too: in this order, before ``before`` (one of the services
+        already added) or after every other. They are configured at the next
+        :meth:`configure`."""
+        at = len(self.services) if before is None else self.services.index(before)
+        self.services = (*self.services[:at], *services, *self.services[at:])
+        for service in services:
             service.add_failure_listener(self._failed)
 
     def configure(self) -> None:
-        """Configure every service, in order (what they serve while inactive answers)."""
+        """Configure every service not configured yet, in order (what they serve while
+        inactive answers)."""
         for service in self.services:
-            self._progress(f"configuring the {service.name} service")
-            service.configure()
+            if service.state is ServiceState.UNCONFIGURED:
+                self._progress(f"configuring the {service.name} service")
+                service.configure()
 
     def activate(self) -> None:
         """Activate every configured service, in order. One that failed meanwhile (its

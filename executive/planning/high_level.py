@@ -19,8 +19,10 @@ executive restarted after a crash carries on with them. A domain that does not f
 robot puts it in ERROR with the one-line reason (the process's
 :class:`~executive.bus.lifecycle_manager.LifecycleManager` reports it).
 
-The robot's sensing rules (:mod:`executive.planning.sensing`) read their topics through
-the topic sources it is given (ROS 2) or the bus.
+What carries out the plan steps (the task executor of this process, or another's over
+the bus) and where the robot's sensing rules (:mod:`executive.planning.sensing`) read
+their topics (the bus, or ROS 2) are ports it is given, used once it plans: so the high
+level is built, and answers, before the rest of its process is loaded.
 """
 
 from __future__ import annotations
@@ -28,21 +30,21 @@ from __future__ import annotations
 import contextlib
 import logging
 import threading
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from executive.bus.clock import Clock, system_clock
 from executive.bus.event_relay import EventRelay
 from executive.bus.keys import DIAGNOSES
-from executive.bus.payloads import DiagnosisInfo
+from executive.bus.reports import DiagnosisInfo
 from executive.bus.service import Context, Service, ServiceState
-from executive.bus.session import Handler, Message
-from executive.bus.topic_source import Subscription, TopicSource
+from executive.bus.session import Message
 from executive.planning.deliberation import Deliberation
 from executive.planning.goal_api import GoalApi
 from executive.planning.plan_executor import ExecutionLimits, TaskRunner
 from executive.planning.planner import Planner
 from executive.planning.recovery import recover
+from executive.planning.sensing import Subscribe
 from executive.planning.warm_up import Warm, WarmUp, WarmUpState
 from executive.planning.world_api import WorldApi
 from knowledge.errors import DuraError
@@ -56,13 +58,15 @@ class HighLevel(Service):
 
     Args:
         context: the robot, bus and knowledge base.
-        runner: carries out plan steps (the task executor's adapter).
+        runner: what carries out plan steps (the task executor's adapter), asked for once
+            when the high level begins planning (raises
+            :class:`~knowledge.errors.DuraError` if there is none).
         events: the process's event relay (the high level follows every event).
         status: the sections other services add to ``status`` (``tasks`` from the task
             executor, ``components`` from the launcher), by name.
         limits: when a running step times out.
         clock: robot time (default: this process's, from ``DURA_TIME_SCALE``).
-        sources: topics not on the bus (ROS 2) that sensing rules may read.
+        subscribe: how sensing rules subscribe to a topic key (default: on the bus).
     """
 
     name = "high-level"
@@ -71,20 +75,20 @@ class HighLevel(Service):
     def __init__(
         self,
         context: Context,
-        runner: TaskRunner,
+        runner: Callable[[], TaskRunner],
         *,
         events: EventRelay,
         status: Mapping[str, Callable[[], Any]] | None = None,
         limits: ExecutionLimits | None = None,
         clock: Clock | None = None,
-        sources: Sequence[TopicSource] = (),
+        subscribe: Subscribe | None = None,
     ) -> None:
         super().__init__(context)
         robot = context.robot
         self.runner = runner
         self.limits = limits
         self.clock = clock or system_clock()
-        self.sources = tuple(sources)
+        self.subscribe: Subscribe = subscribe or context.bus.subscribe
         self.planner = Planner(robot.planner.engine, robot.planner.timeout)
         self.warm_up = WarmUp(robot, context.kb, self.planner, on_failure=self.fail)
         self.goal_api = GoalApi(
@@ -156,15 +160,16 @@ class HighLevel(Service):
             if self.state is not ServiceState.ACTIVATING:
                 return  # deactivated meanwhile
             try:
+                runner = self.runner()
                 with self._diagnoses_lock:  # the diagnoses that came meanwhile, then each
                     deliberation = self._deliberation = Deliberation(
                         self.context,
                         warm,
                         self.planner,
-                        self.runner,
+                        runner,
                         limits=self.limits,
                         clock=self.clock,
-                        subscribe=self._subscribe,
+                        subscribe=self.subscribe,
                         diagnoses=self._diagnoses,
                     )
                 # started outside the diagnoses' lock: starting subscribes on the bus,
@@ -195,11 +200,3 @@ class HighLevel(Service):
             self._diagnoses = payload
             if self._deliberation is not None:
                 self._deliberation.diagnosed(payload)
-
-    def _subscribe(self, key: str, handler: Handler) -> Subscription:
-        """Subscribe to a topic key where its messages are: a topic source, or the bus."""
-        source = next((s for s in self.sources if s.serves(key)), None)
-        if source is not None:
-            return source.subscribe(key, handler)
-        subscription: Subscription = self.context.bus.subscribe(key, handler)
-        return subscription

@@ -183,6 +183,23 @@ def test_the_manager_configures_all_then_activates_all_and_stops_in_reverse(
     ]  # fmt: skip
 
 
+def test_services_added_later_are_configured_then_and_activate_in_their_place(
+    context: Context,
+) -> None:
+    log: list[str] = []
+    first, last = Recorded(context, "first", log), Recorded(context, "last", log)
+    manager = LifecycleManager([first, last])
+    manager.configure()  # what answers first, before the others are even built
+    middle = [Recorded(context, name, log) for name in ("m1", "m2")]
+    manager.add(middle, before=last)
+    manager.configure()
+    manager.activate()
+    assert log == ["first.configure", "last.configure", "m1.configure", "m2.configure",
+                   "first.activate", "m1.activate", "m2.activate", "last.activate"]  # fmt: skip
+    manager.close()
+    assert log[8:12] == ["last.deactivate", "m2.deactivate", "m1.deactivate", "first.deactivate"]
+
+
 def test_a_service_that_cannot_configure_stops_the_start_and_everything_is_released(
     context: Context,
 ) -> None:

@@ -57,7 +57,7 @@ def robot(tmp_path: Path, endpoint: str) -> Iterator[Robot]:
     ):
         context = Context(description, bus, kb)
         relay = EventRelay(context)
-        high = HighLevel(context, runner, events=relay)
+        high = HighLevel(context, lambda: runner, events=relay)
         with LifecycleManager([relay, high]):
             assert high.wait_for(ServiceState.ACTIVE, 60)
 
@@ -235,6 +235,29 @@ def test_events_follow_prints_new_events_as_they_happen(robot: Robot, endpoint: 
         follower.wait(10)
 
 
+def test_a_high_level_with_nothing_to_run_its_steps_fails_with_the_reason(
+    tmp_path: Path, endpoint: str
+) -> None:
+    def no_runner() -> ScriptedRunner:
+        raise DuraError("the task executor has not started")
+
+    description = load_robot(USECASE)
+    with (
+        Bus(description.name, name="executive", endpoint=endpoint, listen=True) as bus,
+        KnowledgeBase(tmp_path / "kb.db") as kb,
+    ):
+        context = Context(description, bus, kb)
+        relay = EventRelay(context)
+        high = HighLevel(context, no_runner, events=relay)
+        failures: list[str] = []
+        with LifecycleManager([relay, high], on_failure=failures.append):
+            assert not high.wait_for(ServiceState.ACTIVE, 60)  # it ends in error instead
+            assert high.state is ServiceState.ERROR
+            assert failures == ["the task executor has not started"]
+            with pytest.raises(DuraError, match="cannot plan: the task executor has not"):
+                high.deliberation  # noqa: B018 (the property raises)
+
+
 def test_without_an_executive_goal_commands_say_so(endpoint: str) -> None:
     done = run_dura("goal", "list", "--robot", str(USECASE), "--endpoint", endpoint)
     assert done.returncode == 1
@@ -261,7 +284,7 @@ def slow_robot(tmp_path: Path, endpoint: str, monkeypatch: pytest.MonkeyPatch) -
     ):
         context = Context(description, bus, kb)
         relay = EventRelay(context)
-        high = HighLevel(context, runner, events=relay)
+        high = HighLevel(context, lambda: runner, events=relay)
         with LifecycleManager([relay, high]):
             assert high.wait_for(ServiceState.ACTIVE, 60)
 
