@@ -62,6 +62,13 @@ class DomainInfo:
     supertypes: Mapping[str, str | None] = field(default_factory=dict)  # type -> parent
 
 
+def type_name(kind: Any) -> str:
+    """A PDDL type's name. unified-planning prints a subtype as ``child - parent``; that
+    text is not a name (``problem.user_type`` does not know it)."""
+    name = getattr(kind, "name", None)
+    return name if isinstance(name, str) else str(kind)
+
+
 def _read(path: Path) -> str:
     try:
         return path.read_text(encoding="utf-8")
@@ -190,7 +197,7 @@ def describe(problem: Problem, path: Path) -> DomainInfo:
     durations = _durations(text)
     actions: dict[str, ActionInfo] = {}
     for action in problem.actions:
-        params = tuple((p.name, str(p.type)) for p in action.parameters)
+        params = tuple((p.name, type_name(p.type)) for p in action.parameters)
         durative = type(action).__name__ == "DurativeAction"
         key = action.name.lower()
         actions[action.name] = ActionInfo(
@@ -199,9 +206,9 @@ def describe(problem: Problem, path: Path) -> DomainInfo:
     predicates: dict[str, tuple[str, ...]] = {}
     functions: dict[str, tuple[str, ...]] = {}
     for fluent in problem.fluents:
-        signature = tuple(str(p.type) for p in fluent.signature)
+        signature = tuple(type_name(p.type) for p in fluent.signature)
         (predicates if fluent.type.is_bool_type() else functions)[fluent.name] = signature
-    constants = {o.name: str(o.type) for o in problem.all_objects}
-    types = tuple(str(t) for t in problem.user_types)
-    parents = {str(t): str(t.father) if t.father else None for t in problem.user_types}
+    constants = {o.name: type_name(o.type) for o in problem.all_objects}
+    types = tuple(type_name(t) for t in problem.user_types)
+    parents = {type_name(t): type_name(t.father) if t.father else None for t in problem.user_types}
     return DomainInfo(problem.name, path, actions, predicates, functions, types, constants, parents)

@@ -22,7 +22,7 @@ from knowledge.description import (
     SAFE_TOPIC_RULE,
     RobotDescription,
 )
-from knowledge.domain import DomainInfo, parse_problem, read_domain
+from knowledge.domain import DomainInfo, parse_problem, read_domain, type_name
 from knowledge.errors import DomainError, did_you_mean
 from knowledge.finding import Finding, Report, Severity, finding_of
 from knowledge.robot import read_robot
@@ -272,7 +272,7 @@ def validate(path: Path, text: str | None = None, *, domain: bool = True) -> Val
                 try:
                     text_of_problem = robot.problem.read_text(encoding="utf-8")
                     problem = parse_problem(robot.domain, text_of_problem, str(robot.problem))
-                    objects = {o.name: str(o.type) for o in problem.all_objects}
+                    objects = {o.name: type_name(o.type) for o in problem.all_objects}
                 except (OSError, UnicodeDecodeError) as e:
                     report.error(None, f"cannot read problem {robot.problem}: {e}")
                 except DomainError as e:

@@ -37,7 +37,7 @@ from executive.planning.expression import (
     conjunction,
 )
 from executive.planning.goals import GoalSpec
-from knowledge.domain import parse, parse_problem
+from knowledge.domain import parse, parse_problem, type_name
 from knowledge.errors import DomainError, located
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Fact
@@ -197,12 +197,12 @@ def build(
         problem.clear_actions()
         problem.add_actions(kept)
     em = problem.environment.expression_manager
-    for name, type_name in world.objects.items():
+    for name, kind in world.objects.items():
         if problem.has_object(name):
             continue
-        if not problem.has_type(type_name):
-            raise DomainError(f"object '{name}' has unknown type '{type_name}'")
-        problem.add_object(Object(name, problem.user_type(type_name)))
+        if not problem.has_type(kind):
+            raise DomainError(f"object '{name}' has unknown type '{kind}'")
+        problem.add_object(Object(name, problem.user_type(kind)))
     for fact in world.facts:
         if not problem.has_fluent(fact.name):
             raise DomainError(f"fact {fact}: unknown predicate or function '{fact.name}'")
@@ -276,7 +276,7 @@ def _keep_kinds() -> None:
 def world_of(problem: Problem, domain: Problem | None = None) -> World:
     """The objects and explicit initial facts of a parsed problem (domain constants left out)."""
     constants = {o.name for o in domain.all_objects} if domain is not None else set()
-    objects = {o.name: str(o.type) for o in problem.all_objects if o.name not in constants}
+    objects = {o.name: type_name(o.type) for o in problem.all_objects if o.name not in constants}
     facts: list[Fact] = []
     for atom, value in problem.explicit_initial_values.items():
         args = tuple(str(a.object().name) for a in atom.args)
@@ -323,8 +323,8 @@ def seed(kb: KnowledgeBase, world: World, source: Path) -> bool:
     with kb.transaction():
         if kb.objects() or kb.facts():
             return False
-        for name, type_name in world.objects.items():
-            kb.add_object(name, type_name)
+        for name, kind in world.objects.items():
+            kb.add_object(name, kind)
         kb.update_facts(add=world.facts)
         kb.log_event("WORLD_SEEDED", str(source), {"objects": len(world.objects)})
     return True

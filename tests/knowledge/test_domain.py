@@ -107,3 +107,36 @@ def test_a_predicate_declared_twice_is_refused_at_its_second_line(tmp_path: Path
     )
     with pytest.raises(DomainError, match=r"twice\.pddl:5: PDDL: name 'ready' is declared twice"):
         read_domain(domain)
+
+
+HIERARCHY = """(define (domain hier)
+  (:requirements :strips :typing :durative-actions)
+  (:types driver truck - locatable place)
+  (:predicates (at ?x - locatable ?p - place))
+  (:durative-action drive
+    :parameters (?t - truck ?d - driver ?a ?b - place)
+    :duration (= ?duration 3)
+    :condition (and (at start (at ?t ?a)) (over all (at ?d ?a)))
+    :effect (and (at start (not (at ?t ?a))) (at end (at ?t ?b)))))
+"""
+
+
+def test_subtypes_are_named_by_their_names_not_by_how_unified_planning_prints_them(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "d.pddl"
+    path.write_text(HIERARCHY)
+    info = read_domain(path)
+    assert set(info.types) == {"locatable", "driver", "truck", "place"}
+    assert info.supertypes["driver"] == "locatable"
+    assert info.supertypes["locatable"] is None
+    assert info.actions["drive"].parameters[:2] == (("t", "truck"), ("d", "driver"))
+    assert info.predicates["at"] == ("locatable", "place")
+    problem = parse_problem(
+        path,
+        "(define (problem p) (:domain hier) (:objects d1 - driver a - place)"
+        " (:init (at d1 a)) (:goal (at d1 a)))",
+    )
+    from executive.planning.problem import world_of
+
+    assert world_of(problem).objects == {"d1": "driver", "a": "place"}
