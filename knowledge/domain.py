@@ -60,6 +60,36 @@ class DomainInfo:
     types: tuple[str, ...] = ()
     constants: Mapping[str, str] = field(default_factory=dict)
     supertypes: Mapping[str, str | None] = field(default_factory=dict)  # type -> parent
+    # each predicate's and function's parameter names as the domain writes them (?from ?to)
+    parameter_names: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+
+    def is_a(self, kind: str, wanted: str) -> bool:
+        """Whether type ``kind`` is ``wanted`` or one of its subtypes (at any depth)."""
+        return is_a(kind, wanted, self.supertypes)
+
+    def objects_of(self, wanted: str, objects: Mapping[str, str]) -> list[str]:
+        """The constants and ``objects`` (name → type) of type ``wanted`` or a subtype."""
+        return sorted(n for n, t in {**self.constants, **objects}.items() if self.is_a(t, wanted))
+
+    def signature(self, name: str) -> str:
+        """A predicate's or function's parameters as the domain writes them:
+        ``?obj - locatable ?loc - place`` (``none`` without parameters)."""
+        kinds = self.predicates.get(name, self.functions.get(name, ()))
+        names = self.parameter_names.get(name) or tuple(f"?{i + 1}" for i in range(len(kinds)))
+        return " ".join(f"{n} - {k}" for n, k in zip(names, kinds, strict=False)) or "none"
+
+
+def is_a(kind: str, wanted: str, parents: Mapping[str, str | None]) -> bool:
+    """Whether type ``kind`` is ``wanted`` or one of its subtypes, given each type's
+    parent; every type is an ``object``."""
+    seen: set[str] = set()
+    current: str | None = kind
+    while current is not None and current not in seen:
+        if current == wanted:
+            return True
+        seen.add(current)
+        current = parents.get(current)
+    return wanted == "object"
 
 
 def type_name(kind: Any) -> str:
@@ -205,10 +235,14 @@ def describe(problem: Problem, path: Path) -> DomainInfo:
         )
     predicates: dict[str, tuple[str, ...]] = {}
     functions: dict[str, tuple[str, ...]] = {}
+    names: dict[str, tuple[str, ...]] = {}
     for fluent in problem.fluents:
         signature = tuple(type_name(p.type) for p in fluent.signature)
         (predicates if fluent.type.is_bool_type() else functions)[fluent.name] = signature
+        names[fluent.name] = tuple(f"?{p.name}" for p in fluent.signature)
     constants = {o.name: type_name(o.type) for o in problem.all_objects}
     types = tuple(type_name(t) for t in problem.user_types)
     parents = {type_name(t): type_name(t.father) if t.father else None for t in problem.user_types}
-    return DomainInfo(problem.name, path, actions, predicates, functions, types, constants, parents)
+    return DomainInfo(
+        problem.name, path, actions, predicates, functions, types, constants, parents, names
+    )

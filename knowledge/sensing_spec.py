@@ -210,23 +210,15 @@ def atom_problem(
         return f"unknown {what} '{name}'{did_you_mean(name, sorted(signatures))}"
     types = signatures[name]
     if len(args) != len(types):
-        return f"'{name}' takes {len(types)} argument{'s' * (len(types) != 1)}, not {len(args)}"
+        return (
+            f"'{name}' takes {len(types)} argument{'s' * (len(types) != 1)} "
+            f"({domain.signature(name)}), not {len(args)}"
+        )
     for i, (arg, wanted) in enumerate(zip(args, types, strict=True)):
         if arg not in objects:
             return f"unknown object '{arg}'{did_you_mean(arg, sorted(objects))}"
-        if not _is_a(objects[arg], wanted, domain.supertypes):
+        if not domain.is_a(objects[arg], wanted):
             return (
                 f"argument {i + 1} of '{name}' must be a {wanted}, but '{arg}' is a {objects[arg]}"
             )
     return ""
-
-
-def _is_a(type_name: str, wanted: str, parents: Mapping[str, str | None]) -> bool:
-    current: str | None = type_name
-    seen: set[str] = set()
-    while current is not None and current not in seen:
-        if current == wanted:
-            return True
-        seen.add(current)
-        current = parents.get(current)
-    return wanted == "object"

@@ -91,8 +91,9 @@ class WorldApi:
         name, type_name = request.name, request.type
         kb = self.context.kb
         if type_name not in domain.types and type_name != "object":
-            known = ", ".join(sorted(domain.types)) or "none"
-            raise DuraError(f"unknown type '{type_name}' (the domain's types: {known})")
+            known = ["object", *sorted(domain.types)]
+            hint = did_you_mean(type_name, known) or f" (the domain's types: {', '.join(known)})"
+            raise DuraError(f"unknown type '{type_name}'{hint}")
         if not is_name(name):
             raise DuraError(f"'{name}' is not a PDDL name (a letter, then letters, digits, - or _)")
         existing = kb.objects().get(name)

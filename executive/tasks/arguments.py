@@ -37,23 +37,11 @@ def check_objects(
             continue
         wanted, value = types[arg.parameter], goal[field]
         found = known.get(value) if isinstance(value, str) else None
-        if found is not None and _is_a(found, wanted, domain.supertypes):
+        if found is not None and domain.is_a(found, wanted):
             continue
-        fitting = sorted(n for n, t in known.items() if _is_a(t, wanted, domain.supertypes))
+        fitting = domain.objects_of(wanted, objects)
         what = f"no object {value!r}" if found is None else f"{value!r} is a {found}, not"
         raise KnowledgeError(
             f"task '{task.action}': {field}={value}: {what} of type '{wanted}' (objects of "
             f"that type: {', '.join(fitting) or 'none'})"
         )
-
-
-def _is_a(kind: str, wanted: str, supertypes: Mapping[str, str | None]) -> bool:
-    """Whether type ``kind`` is ``wanted`` or one of its subtypes."""
-    seen: set[str] = set()
-    current: str | None = kind
-    while current is not None and current not in seen:
-        if wanted in (current, "object"):
-            return True
-        seen.add(current)
-        current = supertypes.get(current)
-    return False

@@ -65,7 +65,7 @@ def test_the_transport_robot_senses_its_low_battery() -> None:
         (
             {"topic": "battery", "field": "level", "fact": "(robot_at dock lab)", "below": 2},
             "fact",
-            "sensing rule '(robot_at dock lab)': 'robot_at' takes 1 argument, not 2",
+            "sensing rule '(robot_at dock lab)': 'robot_at' takes 1 argument (?p - place), not 2",
         ),
         (
             {"topic": "battery", "field": "level", "fact": "(robot_at moon)", "below": 2},

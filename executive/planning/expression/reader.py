@@ -28,7 +28,7 @@ from executive.planning.expression.nodes import (
     Value,
     conjunction,
 )
-from knowledge.domain import DomainInfo
+from knowledge.domain import DomainInfo, is_a
 from knowledge.errors import DomainError, did_you_mean
 from knowledge.records import Fact
 
@@ -36,12 +36,14 @@ from knowledge.records import Fact
 @dataclass(frozen=True)
 class Signature:
     """What expressions may name: predicates and functions (their parameter types),
-    objects (name → type) and the type hierarchy (type → parent)."""
+    objects (name → type), the type hierarchy (type → parent) and the parameters' names
+    as the domain writes them (for messages)."""
 
     predicates: Mapping[str, tuple[str, ...]]
     functions: Mapping[str, tuple[str, ...]]
     objects: Mapping[str, str] = field(default_factory=dict)
     parents: Mapping[str, str | None] = field(default_factory=dict)
+    parameter_names: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
 
     @classmethod
     def of(cls, domain: DomainInfo, objects: Mapping[str, str] | None = None) -> Signature:
@@ -51,18 +53,12 @@ class Signature:
             dict(domain.functions),
             {**domain.constants, **(objects or {})},
             dict(domain.supertypes),
+            dict(domain.parameter_names),
         )
 
     def is_a(self, type_name: str, wanted: str) -> bool:
         """Whether a type is ``wanted`` or one of its subtypes (``object`` is every type)."""
-        seen: set[str] = set()
-        current: str | None = type_name
-        while current is not None and current not in seen:
-            if current == wanted:
-                return True
-            seen.add(current)
-            current = self.parents.get(current)
-        return wanted == "object"
+        return is_a(type_name, wanted, self.parents)
 
     def objects_of(self, type_name: str) -> list[str]:
         return sorted(o for o, t in self.objects.items() if self.is_a(t, type_name))
@@ -193,7 +189,8 @@ class _Reader:
         self, name: str, types: tuple[str, ...], rest: list[Sexp], env: Mapping[str, str]
     ) -> tuple[str, ...]:
         if len(rest) != len(types):
-            wanted = " ".join(f"?{i + 1} - {t}" for i, t in enumerate(types)) or "none"
+            names = self.sig.parameter_names.get(name) or [f"?{i + 1}" for i in range(len(types))]
+            wanted = " ".join(f"{n} - {t}" for n, t in zip(names, types, strict=False)) or "none"
             raise ValueError(
                 f"'{name}' takes {len(types)} argument{'' if len(types) == 1 else 's'} "
                 f"({wanted}), not {len(rest)}"

@@ -26,7 +26,7 @@ from tests.executive.planning.planning_cases import expr, signature
 REFUSED = [
     ("(picture_taken lob)", "unknown object 'lob' (did you mean 'lab'?)"),
     ("(pictur_taken lab)", "unknown predicate 'pictur_taken' (did you mean 'picture_taken'?)"),
-    ("(picture_taken lab office)", "'picture_taken' takes 1 argument (?1 - place), not 2"),
+    ("(picture_taken lab office)", "'picture_taken' takes 1 argument (?p - place), not 2"),
     ("(and (picture_taken lab)", "missing ')'"),
     ("(travel_time dock lab)", "'travel_time' is a function (a number)"),
     ("(exists (?p - plac) (robot_at ?p))", "unknown type 'plac' (did you mean 'place'?)"),
