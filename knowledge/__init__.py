@@ -19,7 +19,8 @@ it.
   (:mod:`.finding`: a problem found at a file and line);
 - :mod:`.availability` — which functionalities can still run, given the permanent
   faults;
-- :mod:`.domain` — temporal PDDL read with unified-planning, the domain's signatures;
+- :mod:`.domain` — temporal PDDL read with unified-planning, the domain's signatures
+  (:mod:`.pddl_errors`: the reader's errors worded as ``file:line:col: reason``);
 - :mod:`.knowledge_base` — the knowledge base, one SQLite file per robot: its tables
   (:mod:`.tables`), its migrations (:mod:`.schema`), whether it is sound and its repair
   (:mod:`.health`);

@@ -21,13 +21,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from knowledge.errors import DomainError, located
+from knowledge.pddl_errors import Declared, Explained, declared, excerpt, explain, position
 
 if TYPE_CHECKING:
     from unified_planning.model import Problem
 
 _EMPTY_FUNCTIONS = re.compile(r"\(\s*:functions\s*\)", re.IGNORECASE)
 _USED_NAME = re.compile(r"Name (?:of \w+ )?(\S+) already defined")
-_UP_LINE = re.compile(r"line:? (\d+)")
 _ACTION_HEAD = re.compile(r"\(\s*:(durative-action|action)\s+([^\s()]+)", re.IGNORECASE)
 _COMMENT = re.compile(r";[^\n]*")
 _DURATION = re.compile(r":duration\s*\(", re.IGNORECASE)
@@ -113,15 +113,18 @@ def _prepare(text: str) -> str:
     return _EMPTY_FUNCTIONS.sub(lambda m: " " * len(m.group(0)), text)
 
 
-def _error_line(error: BaseException, text: str = "") -> int | None:
-    lineno = getattr(error, "lineno", None)
-    if isinstance(lineno, int) and lineno > 0:
-        return lineno
-    found = _UP_LINE.search(str(error))
-    if found:
-        return int(found.group(1))
+def _error(source: object, error: BaseException, text: str, names: Declared) -> DomainError:
+    """The reader's error on ``text`` (the file ``source``) as ``file:line:col: reason``,
+    with the line and a caret under the place as its excerpt."""
     used = _USED_NAME.search(str(error))
-    return _second_declaration(text, used.group(1)) if used else None
+    if used:
+        where = Explained(
+            f"name '{used.group(1)}' is declared twice", _second_declaration(text, used.group(1))
+        )
+    else:
+        where = explain(error, text, names)
+    message = located(source, where.line, where.message, where.column)
+    return DomainError(message, excerpt=excerpt(text, where.line, where.column))
 
 
 def _second_declaration(text: str, name: str) -> int | None:
@@ -133,15 +136,6 @@ def _second_declaration(text: str, name: str) -> int | None:
         if seen >= 2:
             return number
     return None
-
-
-def _error_text(error: BaseException) -> str:
-    text = str(getattr(error, "msg", "") or error) or type(error).__name__
-    used = _USED_NAME.search(text)
-    if used:
-        return f"name '{used.group(1)}' is declared twice"
-    text = re.sub(r"\s*\(at char \d+\),?\s*\(line:\d+, col:\d+\)", "", text)
-    return " ".join(text.split())
 
 
 def _reader() -> Any:
@@ -168,7 +162,7 @@ def parse(domain: Path) -> Problem:
     try:
         return _reader().parse_problem_string(_prepare(text), None)
     except Exception as e:  # the reader raises pyparsing, SyntaxError and UP exceptions
-        raise DomainError(located(domain, _error_line(e, text), f"PDDL: {_error_text(e)}")) from e
+        raise _error(domain, e, text, declared(text)) from e
 
 
 def parse_problem(
@@ -179,11 +173,27 @@ def parse_problem(
     name the domain file)."""
     if not domain_checked:
         parse(domain)
+    domain_text = _read(domain)
     try:
-        return _reader().parse_problem_string(_prepare(_read(domain)), problem_text)
+        problem = _reader().parse_problem_string(_prepare(domain_text), problem_text)
     except Exception as e:
-        line = _error_line(e, problem_text)
-        raise DomainError(located(source, line, f"PDDL: {_error_text(e)}")) from e
+        names = declared(domain_text) + declared(problem_text)
+        raise _error(source, e, problem_text, names) from e
+    _check_domain_name(
+        declared(domain_text).domain, declared(problem_text).domain, problem_text, source
+    )
+    return problem
+
+
+def _check_domain_name(
+    defined: tuple[str, int] | None, named: tuple[str, int] | None, text: str, source: object
+) -> None:
+    """Refuse a problem written for another domain (the reader does not look)."""
+    if defined is None or named is None or defined[0] == named[0]:
+        return
+    line, column = position(text, named[1])
+    message = f"the problem is for domain '{named[0]}', not '{defined[0]}'"
+    raise DomainError(located(source, line, message, column), excerpt=excerpt(text, line, column))
 
 
 def _balanced(text: str, start: int) -> str:

@@ -10,7 +10,15 @@ from __future__ import annotations
 
 
 class DuraError(Exception):
-    """Root of every error dura reports to a user."""
+    """Root of every error dura reports to a user.
+
+    Its message is the one line that events, logs and ``--json`` carry; ``excerpt``
+    (the source line with a caret under the place, for a terminal) may follow it.
+    """
+
+    def __init__(self, *args: object, excerpt: str = "") -> None:
+        super().__init__(*args)
+        self.excerpt = excerpt
 
 
 class ConfigError(DuraError):
@@ -53,9 +61,12 @@ class ServiceError(DuraError):
     """A service of the executive was asked for a change its lifecycle does not allow."""
 
 
-def located(path: object, line: int | None, message: str) -> str:
-    """Format ``file:line: message`` (or ``file: message`` without a line)."""
-    return f"{path}:{line}: {message}" if line else f"{path}: {message}"
+def located(path: object, line: int | None, message: str, column: int | None = None) -> str:
+    """Format ``file:line:col: message`` (``file:line: message`` without a column,
+    ``file: message`` without a line)."""
+    if not line:
+        return f"{path}: {message}"
+    return f"{path}:{line}:{column}: {message}" if column else f"{path}:{line}: {message}"
 
 
 def did_you_mean(word: str, choices: object) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import enum
+import re
 from dataclasses import dataclass
 
 from knowledge.errors import located
@@ -15,12 +16,15 @@ class Severity(enum.Enum):
 
 @dataclass(frozen=True)
 class Finding:
-    """One problem in one file: ``path:line: message``."""
+    """One problem in one file: ``path:line: message`` (``path:line:col: message`` with
+    a column; ``excerpt``: the source line with a caret under the place, for a terminal)."""
 
     path: str
     line: int | None
     message: str
     severity: Severity = Severity.ERROR
+    column: int | None = None
+    excerpt: str = ""
 
     @property
     def is_error(self) -> bool:
@@ -28,12 +32,13 @@ class Finding:
 
     def __str__(self) -> str:
         prefix = "warning: " if self.severity is Severity.WARNING else ""
-        return located(self.path, self.line, prefix + self.message)
+        return located(self.path, self.line, prefix + self.message, self.column)
 
     def as_json(self) -> dict[str, object]:
         return {
             "file": self.path,
             "line": self.line,
+            "column": self.column,
             "severity": self.severity.value,
             "message": self.message,
         }
@@ -57,12 +62,19 @@ class Report:
         return [f for f in self.findings if f.is_error]
 
 
+_LOCATED = re.compile(r"^(.+?):(\d+)(?::(\d+))?: (.+)$", re.S)
+
+
 def finding_of(error: Exception, fallback: str) -> Finding:
-    """A finding from an error whose message reads ``file:line: message`` (PDDL, ASP), or
-    one about ``fallback`` with the whole message."""
+    """A finding from an error whose message reads ``file:line: message`` or
+    ``file:line:col: message`` (PDDL, ASP), or one about ``fallback`` with the whole
+    message."""
     text = str(error)
-    head, _, rest = text.partition(": ")
-    path, _, line = head.rpartition(":")
-    if path and line.isdigit() and rest:
-        return Finding(path, int(line), rest)
-    return Finding(fallback, None, text)
+    excerpt = getattr(error, "excerpt", "")
+    found = _LOCATED.match(text)
+    if found:
+        path, line, column, rest = found.groups()
+        return Finding(
+            path, int(line), rest, column=int(column) if column else None, excerpt=excerpt
+        )
+    return Finding(fallback, None, text, excerpt=excerpt)

@@ -153,6 +153,8 @@ def execute(args: argparse.Namespace) -> int:
         return int(args.run(args))
     except DuraError as e:
         print(f"dura: {e}", file=sys.stderr)
+        if e.excerpt and not getattr(args, "json", False):  # the one line first, then where
+            print(e.excerpt, file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         return 130

@@ -92,7 +92,10 @@ def offline(description: Path) -> api.DomainReply:
     errors = [f for f in result.findings if f.is_error]
     if errors or result.robot is None or result.domain is None:
         more = f" (and {len(errors) - 1} more: run 'dura validate')" if len(errors) > 1 else ""
-        raise ConfigError(f"{errors[0]}{more}" if errors else f"{description}: unusable")
+        excerpt = errors[0].excerpt if errors else ""
+        raise ConfigError(
+            f"{errors[0]}{more}" if errors else f"{description}: unusable", excerpt=excerpt
+        )
     return describe(result.domain, result.robot)
 
 

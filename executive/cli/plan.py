@@ -21,13 +21,14 @@ from executive.cli.progress import LiveLine
 from executive.dashboard import gantt
 from executive.fast_start import use_reader_environment
 from executive.planning.dry_run import planned_steps
-from executive.planning.expression import TRUE
+from executive.planning.expression import TRUE, Expression
 from executive.planning.goals import GoalSpec
 from executive.planning.partial_order import PartialOrderPlan, Step
 from executive.planning.planner import Planner, PlanningTask, PlanResult, engine_names
-from executive.planning.problem import read_world
+from executive.planning.problem import World, build, read_world
 from knowledge.description import DEFAULT_ENGINE
-from knowledge.errors import DuraError
+from knowledge.domain import parse
+from knowledge.errors import DomainError, DuraError
 
 
 def register(sub: Any) -> None:
@@ -101,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
     use_reader_environment()  # this process reads the PDDL; its planner worker plans
     with LiveLine(shown=not args.json) as line:
         line.doing(f"reading {shown(domain)} and {shown(problem)}")
-        world, goal = read_world(domain, problem)
+        world, goal = fitting_world(domain, problem)
         line.clear()
         if goal == TRUE and not args.json:
             print(f"dura: warning: {shown(problem)} has an empty goal, so any plan is empty: "
@@ -129,6 +130,22 @@ def run(args: argparse.Namespace) -> int:
     )
     print_timeline(result.plan)
     return 0
+
+
+def fitting_world(domain: Path, problem: Path) -> tuple[World, Expression]:
+    """The world and goal of a problem file, checked to fit the domain before any engine
+    runs: a problem that does not fit is the user's error, not an engine's failure.
+
+    Raises:
+        DomainError: the domain or the problem is invalid, or they do not fit.
+    """
+    lifted = parse(domain)
+    world, goal = read_world(domain, problem, lifted)
+    try:
+        build(lifted, world, (GoalSpec(0, goal),))
+    except DomainError as e:
+        raise DomainError(f"{shown(problem)}: does not fit {shown(domain)}: {e}") from e
+    return world, goal
 
 
 def run_show(args: argparse.Namespace) -> int:

@@ -42,7 +42,9 @@ def _order(f: Finding) -> tuple[str, int, int]:
 
 
 def _line(f: Finding) -> str:
-    return str(Finding(shown(f.path), f.line, f.message, f.severity))
+    """The finding's one line, and below it the source line with a caret (if it has one)."""
+    line = str(Finding(shown(f.path), f.line, f.message, f.severity, f.column))
+    return f"{line}\n{f.excerpt}" if f.excerpt else line
 
 
 def check_rule_files(robot: RobotDescription, domain: DomainInfo) -> list[Finding]:

@@ -90,7 +90,7 @@ BROKEN_ROBOTS = [
         "(picture_taken ?p - place)",
         "(picture_taken ?p - place",
         "(picture_taken ?p - place",
-        "PDDL: Expected ')'",
+        "'(picture_taken' is not closed before '(photographable' at line 12 (a ')' is missing)",
         in_domain=True,
     ),
     BrokenRobot(
@@ -154,7 +154,7 @@ BROKEN_ROBOTS = [
         "(at start (photographable ?p))",
         "(at start (photogenic ?p))",
         "(photogenic ?p)",
-        "PDDL: Not able to handle: (photogenic ?p)",
+        "unknown predicate 'photogenic'",
         in_domain=True,
     ),
     BrokenRobot(

@@ -66,8 +66,12 @@ def test_a_problem_with_an_error_is_one_line_with_file_and_line(dura: Dura, tmp_
     )
     done = dura("plan", "--offline", str(USECASE_DOMAIN), str(problem))
     assert done.returncode == 1
-    (line,) = done.stderr.splitlines()
-    assert line.startswith(f"dura: {problem}:3: PDDL: ")
+    line, *excerpt = done.stderr.splitlines()
+    assert line == f"dura: {problem}:3:19: unknown object 'b'"
+    assert excerpt == ["    3 |  (:init (robot_at b)))", "      |                   ^"]
+    json = dura("plan", "--offline", str(USECASE_DOMAIN), str(problem), "--json")
+    assert json.returncode == 1
+    assert json.stderr.splitlines() == [line]  # one line, for programs
     missing = dura("plan", "--offline", str(USECASE_DOMAIN), str(tmp_path / "nope.pddl"))
     assert missing.returncode == 1
     assert missing.stderr.splitlines() == [

@@ -119,7 +119,7 @@ def test_a_problem_file_that_does_not_fit_the_domain_names_file_and_line(tmp_pat
     problem.write_text(
         "(define (problem p) (:domain usecase)\n (:objects a - place)\n (:init (robot_at b)))"
     )
-    with pytest.raises(DomainError, match=rf"^{problem}:3: PDDL: "):
+    with pytest.raises(DomainError, match=rf"^{problem}:3:19: unknown object 'b'$"):
         read_world(USECASE_DOMAIN, problem)
 
 

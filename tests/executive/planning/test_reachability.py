@@ -116,4 +116,9 @@ def test_invalid_pddl_is_an_error_with_its_line(tmp_path: Path) -> None:
     (tmp_path / "broken.pddl").write_text("(define (domain broken)\n  (:predicates (a)\n")
     done = run_dura("domain", "check", "broken.pddl", cwd=tmp_path)
     assert done.returncode == 1
-    assert done.stderr.startswith("dura: broken.pddl:3: PDDL: "), done.stderr
+    assert done.stderr.splitlines() == [
+        "dura: broken.pddl:2:3: '(:predicates' is not closed before the end of the file "
+        "(a ')' is missing)",
+        "    2 |   (:predicates (a)",
+        "      |   ^",
+    ], done.stderr
