@@ -196,7 +196,8 @@ def _walk(
 
 
 def _used_types(domain: Problem, problem: Problem | None) -> set[str]:
-    """Return every type a parameter, signature, constant or object names, with ancestors."""
+    """Return every type a parameter, signature, constant or object names, with their
+    ancestors and the subtypes of them all."""
     named: list[Any] = []
     for action in domain.actions:
         named.extend(p.type for p in action.parameters)
@@ -210,6 +211,14 @@ def _used_types(domain: Problem, problem: Problem | None) -> set[str]:
         while current is not None and current.is_user_type():
             used.add(str(current.name))
             current = current.father
+    # a subtype of a type in use is there for objects of it: `truck - vehicle` when
+    # actions take a vehicle
+    for kind in domain.user_types:
+        ancestor = kind.father
+        while ancestor is not None and str(kind.name) not in used:
+            if str(ancestor.name) in used:
+                used.add(str(kind.name))
+            ancestor = ancestor.father
     return used
 
 

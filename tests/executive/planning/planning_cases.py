@@ -8,6 +8,7 @@ by fixture name (``kairos`` ...).
 from __future__ import annotations
 
 import functools
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -150,3 +151,108 @@ DRIVERLOG_PROBLEM = """(define (problem drive1) (:domain driverlog)
 DRIVERLOG_TWICE = DRIVERLOG_PROBLEM.replace(
     "depot market - location)", "depot market - location\n    depot - location)"
 )
+
+# A type hierarchy three levels deep (robot -> vehicle -> locatable, fragile -> crate ->
+# locatable) with objects named like their types (`robot - robot`, `dock - dock`).
+WAREHOUSE_DOMAIN = """; A warehouse robot: actions want supertypes, objects are of subtypes.
+(define (domain warehouse)
+  (:requirements :strips :typing :durative-actions)
+  (:types
+    vehicle crate - locatable
+    robot truck - vehicle
+    fragile - crate
+    dock - place)
+  (:predicates
+    (at ?x - locatable ?p - place)
+    (road ?from ?to - place)
+    (holding ?v - robot ?c - crate)
+    (free ?v - robot)
+    (battery_low))
+  (:durative-action drive
+    :parameters (?v - vehicle ?from ?to - place)
+    :duration (= ?duration 5)
+    :condition (and (at start (at ?v ?from)) (over all (road ?from ?to)))
+    :effect (and (at start (not (at ?v ?from))) (at end (at ?v ?to))))
+  (:durative-action pick
+    :parameters (?v - robot ?c - crate ?p - place)
+    :duration (= ?duration 3)
+    :condition (and (over all (at ?v ?p)) (at start (at ?c ?p)) (at start (free ?v)))
+    :effect (and (at start (not (at ?c ?p))) (at start (not (free ?v)))
+                 (at end (holding ?v ?c))))
+  (:durative-action drop
+    :parameters (?v - robot ?c - crate ?p - place)
+    :duration (= ?duration 2)
+    :condition (and (over all (at ?v ?p)) (at start (holding ?v ?c)))
+    :effect (and (at start (not (holding ?v ?c))) (at end (at ?c ?p)) (at end (free ?v))))
+  (:durative-action charge
+    :parameters (?v - robot ?p - dock)
+    :duration (= ?duration 10)
+    :condition (over all (at ?v ?p))
+    :effect (at end (not (battery_low)))))
+"""
+WAREHOUSE_PROBLEM = """(define (problem hall) (:domain warehouse)
+  (:objects
+    robot - robot
+    dock - dock
+    store lab - place
+    parcel - crate)
+  (:init
+    (at robot dock) (free robot) (at parcel store)
+    (road dock store) (road store dock) (road store lab) (road lab store))
+  (:goal (at parcel lab)))
+"""
+WAREHOUSE_ROBOT = """# The warehouse robot: the transport example's components on a domain with subtypes.
+robot: warehouse
+domain: domain.pddl
+problem: problem.pddl
+integrity: [integrity.yaml]
+planner: {engine: kairos, timeout: 30}
+sensing:
+  - {name: battery_low, topic: battery, field: level, fact: (battery_low), below: 20,
+     clear_above: 30}
+functionalities:
+  lidar: {command: [python, -m, components.lidar], provides: [laser_scan],
+          publishes: [scan]}
+  localization: {command: [python, -m, components.localization], requires: [laser_scan],
+                 provides: [pose], subscribes: [scan, odom], publishes: [pose]}
+  base: {command: [python, -m, components.base], provides: [motion],
+         subscribes: [cmd_vel, charge], publishes: [odom, battery], shareable: false}
+  gripper: {command: [python, -m, components.gripper], provides: [grip],
+            subscribes: [grip_cmd], publishes: [grip_state], shareable: false}
+behaviors:
+  drive_to: {command: [python, -m, components.drive_to], requires: [pose, motion],
+             subscribes: [pose], publishes: [cmd_vel]}
+  pick: {command: [python, -m, components.pick], requires: [grip, pose],
+         subscribes: [grip_state, pose], publishes: [grip_cmd]}
+  drop: {command: [python, -m, components.drop], requires: [grip, pose],
+         subscribes: [grip_state, pose], publishes: [grip_cmd]}
+  dock_and_charge: {command: [python, -m, components.dock_and_charge],
+                    requires: [motion, pose], subscribes: [battery, pose],
+                    publishes: [cmd_vel, charge]}
+tasks:
+  drive: {behavior: drive_to, goal: {start: "?from", target: "?to"}}
+  pick: {behavior: pick, goal: {crate: "?c", place: "?p"}}
+  drop: {behavior: drop, goal: {crate: "?c", place: "?p"}}
+  charge: {behavior: dock_and_charge, goal: {dock: "?p"}}
+"""
+WAREHOUSE_INTEGRITY = """goals:
+  - name: recharge
+    when: {condition: "(battery_low)"}
+    goal: "(and (not (battery_low)) (at robot dock))"
+    priority: 100
+"""
+
+
+def warehouse_robot(folder: Path) -> Path:
+    """Write the warehouse robot (its description, domain, problem, integrity goals and
+    the transport example's components) into ``folder``; the description's path."""
+    folder.mkdir(parents=True, exist_ok=True)
+    shutil.copytree(TRANSPORT.parent / "components", folder / "components", dirs_exist_ok=True)
+    for name, text in (
+        ("domain.pddl", WAREHOUSE_DOMAIN),
+        ("problem.pddl", WAREHOUSE_PROBLEM),
+        ("integrity.yaml", WAREHOUSE_INTEGRITY),
+        ("robot.yaml", WAREHOUSE_ROBOT),
+    ):
+        (folder / name).write_text(text)
+    return folder / "robot.yaml"
