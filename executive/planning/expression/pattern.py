@@ -98,9 +98,12 @@ class FactPattern:
                 f"'{self.name}'{did_you_mean(self.name, known)}"
             )
         if parameters is not None and len(self.args) > len(parameters):
+            names = signature.parameter_names.get(self.name, ())
+            typed = " ".join(f"{n} - {k}" for n, k in zip(names, parameters, strict=False))
             raise DomainError(
                 f"fact pattern '{self}': '{self.name}' takes {len(parameters)} "
-                f"argument{'' if len(parameters) == 1 else 's'}, not {len(self.args)}"
+                f"argument{'' if len(parameters) == 1 else 's'}"
+                f"{f' ({typed})' if typed else ''}, not {len(self.args)}"
             )
         for arg in self.args:
             if arg != ANY and arg not in signature.objects:

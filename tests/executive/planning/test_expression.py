@@ -132,7 +132,7 @@ def test_a_fact_pattern_matches_a_name_and_leading_arguments() -> None:
         ("(robot_at", "missing ')'"),
         ("(robot_a *)", "unknown predicate or function 'robot_a' (did you mean 'robot_at'?)"),
         ("(robot_at lob)", "unknown object 'lob' (did you mean 'lab'?)"),
-        ("(robot_at dock lab)", "'robot_at' takes 1 argument, not 2"),
+        ("(robot_at dock lab)", "'robot_at' takes 1 argument (?p - place), not 2"),
     ],
 )
 def test_a_fact_pattern_that_does_not_fit_the_domain_is_refused(text: str, reason: str) -> None:
