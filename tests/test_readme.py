@@ -271,8 +271,21 @@ def flawed_domain(folder: Path) -> None:
     (folder / "problem.pddl").write_text(FLAWED_PROBLEM, encoding="utf-8")
 
 
+def broken_warehouse(folder: Path) -> None:
+    """The warehouse domain with a misspelt predicate (warehouse.pddl) and with a ')'
+    missing (unclosed.pddl), and its problem (hall.pddl)."""
+    from tests.executive.planning.planning_cases import WAREHOUSE_DOMAIN, WAREHOUSE_PROBLEM
+
+    misspelt = WAREHOUSE_DOMAIN.replace("(at start (free ?v))", "(at start (fre ?v))")
+    unclosed = WAREHOUSE_DOMAIN.replace("(road ?from ?to)))", "(road ?from ?to))")
+    (folder / "warehouse.pddl").write_text(misspelt, encoding="utf-8")
+    (folder / "unclosed.pddl").write_text(unclosed, encoding="utf-8")
+    (folder / "hall.pddl").write_text(WAREHOUSE_PROBLEM, encoding="utf-8")
+
+
 SETUP: dict[str, Callable[[Path], None]] = {
     "dura domain check domain.pddl problem.pddl": flawed_domain,
+    "dura plan --offline warehouse.pddl hall.pddl": broken_warehouse,
     "dura validate robot.yaml": broken_robot,
     "dura diagnose model.yaml --observations obs.yaml": diagnosis_files,
     "ros2 bag record /scan -o lidar_run": lidar_bag,
