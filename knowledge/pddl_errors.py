@@ -32,54 +32,28 @@ _UNDEFINED_TYPE = re.compile(
 _UNDEFINED_NAME = re.compile(r"Undefined name found: (\S+?)\.?\s.*?line: (\d+), col:? (\d+)", re.S)
 _INVALID = re.compile(r"Found invalid expression: (\S+?)\.? From line: (\d+), col:? (\d+)")
 _EXPECTED = re.compile(r"^(Expected .*?)(?:,\s*found .*)?\s*\(at char \d+\)", re.S)
+
+
+def _words(text: str) -> frozenset[str]:
+    return frozenset(text.split())
+
+
+_PDDL3 = _words(
+    "preference always sometime within at-most-once sometime-after sometime-before "
+    "always-within hold-during hold-after"
+)
 # the heads of lists that are not atoms (their elements may be lists)
-_LOGIC = frozenset(
-    [
-        "define",
-        "domain",
-        "problem",
-        "and",
-        "or",
-        "not",
-        "imply",
-        "forall",
-        "exists",
-        "when",
-        "over",
-        "either",
-        "=",
-        "<",
-        ">",
-        "<=",
-        ">=",
-        "+",
-        "-",
-        "*",
-        "/",
-        "increase",
-        "decrease",
-        "assign",
-        "scale-up",
-        "scale-down",
-        "preference",
-        "always",
-        "sometime",
-        "within",
-        "at-most-once",
-        "sometime-after",
-        "sometime-before",
-        "always-within",
-        "hold-during",
-        "hold-after",
-        "minimize",
-        "maximize",
-    ]
+_LOGIC = _PDDL3 | _words(
+    "define domain problem and or not imply forall exists when over either = < > <= >= "
+    "+ - * / increase decrease assign scale-up scale-down minimize maximize"
 )
-_ACTION_KEYWORDS = frozenset([":parameters", ":duration", ":condition", ":precondition", ":effect"])
-_KEYWORDS = sorted(
-    {*_ACTION_KEYWORDS, *[":requirements", ":types", ":constants", ":predicates", ":functions"]}
-    | {*[":action", ":durative-action", ":domain", ":objects", ":init", ":goal", ":metric"]}
+_ACTION_KEYWORDS = _words(":parameters :duration :condition :precondition :effect")
+_SECTIONS = _words(
+    ":requirements :types :constants :predicates :functions :action :durative-action "
+    ":domain :objects :init :goal :metric"
 )
+_KEYWORDS = sorted(_ACTION_KEYWORDS | _SECTIONS)
+_UNREAD = "unified-planning's reader does not read"
 
 
 @dataclass
@@ -318,28 +292,25 @@ def explain(error: BaseException, text: str, names: Declared) -> Explained:
     found = _NOT_HANDLED.search(message)
     if found:
         name, line, column = found.group(1).lower(), int(found.group(2)), int(found.group(3))
-        if name not in names.signatures and name not in _LOGIC:
-            known = sorted(names.signatures)
-            return Explained(
-                f"unknown predicate '{name}'{did_you_mean(name, known)}", line, column + 1
-            )
-        return Explained(f"cannot read '({name} ...)' here", line, column)
+        if name in _PDDL3:
+            return Explained(f"{_UNREAD} PDDL3 constraints: '({name} ...)'", line, column)
+        if name in names.signatures or name in _LOGIC:
+            return Explained(f"cannot read '({name} ...)' here", line, column)
+        known = sorted(names.signatures)
+        return Explained(f"unknown predicate '{name}'{did_you_mean(name, known)}", line, column + 1)
     found = _ARITY.search(message)
     if found:
         name, wanted, given = found.group(1), int(found.group(2)), int(found.group(3))
         params = names.signatures.get(name.lower(), "")
-        shown = f" ({params})" if params else ""
-        message = (
-            f"'{name}' takes {wanted} argument{'' if wanted == 1 else 's'}{shown}, not {given}"
-        )
+        takes = f"'{name}' takes {wanted} argument{'' if wanted == 1 else 's'}"
+        message = f"{takes}{f' ({params})' if params else ''}, not {given}"
         return Explained(message, int(found.group(4)), int(found.group(5)))
     found = _UNDEFINED_TYPE.search(message)
     if found:
         kind, line = found.group(1), int(found.group(2))
         column = _word_column(text, line, int(found.group(3)), kind)
-        return Explained(
-            f"unknown type '{kind}'{did_you_mean(kind, ['object', *names.types])}", line, column
-        )
+        hint = did_you_mean(kind, ["object", *names.types])
+        return Explained(f"unknown type '{kind}'{hint}", line, column)
     found = _UNDEFINED_NAME.search(message)
     if found:
         name, line, column = found.group(1), int(found.group(2)), int(found.group(3))
@@ -347,12 +318,19 @@ def explain(error: BaseException, text: str, names: Declared) -> Explained:
     found = _INVALID.search(message)
     if found:
         name, line, column = found.group(1), int(found.group(2)), int(found.group(3))
-        return Explained(
-            f"unknown object '{name}'{did_you_mean(name, names.objects)}", line, column
-        )
+        if name.lower() == "total-time":
+            message = f"{_UNREAD} '(total-time)' inside an expression"
+            return Explained(f"{message} (only ':metric minimize (total-time)')", line, column)
+        hint = did_you_mean(name, names.objects)
+        return Explained(f"unknown object '{name}'{hint}", line, column)
     if isinstance(error, KeyError) and error.args:  # the reader's lookup of an unknown type
         return _unknown_key(text, str(error.args[0]), names)
     return _syntax(error, text, message)
+
+
+def _uncommented(text: str) -> str:
+    """The text with its comments blanked out (offsets stay)."""
+    return re.sub(r";[^\n]*", lambda m: " " * len(m.group(0)), text)
 
 
 def _word_column(text: str, line: int, column: int, word: str) -> int:
@@ -364,7 +342,10 @@ def _word_column(text: str, line: int, column: int, word: str) -> int:
 
 def _undefined(text: str, name: str, line: int, column: int, names: Declared) -> Explained:
     offset = _offset(text, line, column)
-    if text[offset : offset + 1] == "?":
+    variable = text[offset : offset + 1] == "?"
+    if variable and name.lower() == "duration":
+        return Explained(f"{_UNREAD} '?duration' outside the :duration constraint", line, column)
+    if variable:
         top, _ = _tree(text)
         action = next(
             (
@@ -387,7 +368,7 @@ def _undefined(text: str, name: str, line: int, column: int, names: Declared) ->
 
 def _unknown_key(text: str, name: str, names: Declared) -> Explained:
     typed = re.compile(rf"(?<=-)\s*({re.escape(name)})(?![\w-])", re.IGNORECASE)
-    found = typed.search(re.sub(r";[^\n]*", lambda m: " " * len(m.group(0)), text))
+    found = typed.search(_uncommented(text))
     line, column = position(text, found.start(1)) if found else (None, None)
     return Explained(
         f"unknown type '{name}'{did_you_mean(name, ['object', *names.types])}", line, column
@@ -403,23 +384,20 @@ def _syntax(error: BaseException, text: str, message: str) -> Explained:
             " ".join(message.split()) or type(error).__name__,
             line if isinstance(line, int) else None,
         )
+    either = re.search(r"\(\s*either\b", _uncommented(text), re.IGNORECASE)
+    if either is not None:  # the reader reads no `either` at all
+        line, column = position(text, either.start())
+        message = f"{_UNREAD} 'either' types: declare a common supertype and use it instead"
+        return Explained(message, line, column)
     rest = list(_tokens(text[at:]))
-    either = next(
-        (
-            o
-            for i, (w, o) in enumerate(rest[:3])
-            if w == "(" and i + 1 < len(rest) and rest[i + 1][0].lower() == "either"
-        ),
-        None,
-    )
-    if either is not None:
-        line, column = position(text, at + either)
-        return Explained(
-            "'either' types are not supported by unified-planning's reader: declare a "
-            "common supertype and use it instead",
-            line,
-            column,
-        )
+    if len(rest) > 1 and rest[0][0] == "(" and rest[1][0].startswith(":"):
+        section = rest[1][0].lower()
+        line, column = position(text, at)
+        if section == ":constraints":
+            return Explained(f"{_UNREAD} PDDL3 constraints: '(:constraints ...)'", line, column)
+        if section not in _SECTIONS:
+            hint = did_you_mean(section, sorted(_SECTIONS))
+            return Explained(f"unknown section '({section}'{hint}", line, column)
     unclosed = _unclosed(text, at)
     if unclosed is not None:
         return unclosed

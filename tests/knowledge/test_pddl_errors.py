@@ -78,8 +78,21 @@ DOMAIN_CASES = [
         "an either type",
         "(at ?x - locatable ?p - place)",
         "(at ?x - (either vehicle crate) ?p - place)",
-        "10:14: 'either' types are not supported by unified-planning's reader: declare a "
-        "common supertype and use it instead",
+        "10:14: unified-planning's reader does not read 'either' types: declare a common "
+        "supertype and use it instead",
+    ),
+    (
+        "a misspelt section",
+        "(:predicates",
+        "(:predicats",
+        "9:3: unknown section '(:predicats' (did you mean ':predicates'?)",
+    ),
+    (
+        "?duration in a condition",
+        "(over all (road ?from ?to))",
+        "(over all (road ?from ?duration))",
+        "18:68: unified-planning's reader does not read '?duration' outside the :duration "
+        "constraint",
     ),
 ]
 
