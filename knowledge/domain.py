@@ -21,7 +21,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from knowledge.errors import DomainError, located
-from knowledge.pddl_errors import Declared, Explained, declared, excerpt, explain, position
+from knowledge.pddl_errors import (
+    Declared,
+    Explained,
+    declared,
+    excerpt,
+    explain,
+    position,
+    uncommented,
+)
 
 if TYPE_CHECKING:
     from unified_planning.model import Problem
@@ -118,24 +126,19 @@ def _error(source: object, error: BaseException, text: str, names: Declared) -> 
     with the line and a caret under the place as its excerpt."""
     used = _USED_NAME.search(str(error))
     if used:
-        where = Explained(
-            f"name '{used.group(1)}' is declared twice", _second_declaration(text, used.group(1))
-        )
+        line, column = _second_declaration(text, used.group(1))
+        where = Explained(f"name '{used.group(1)}' is declared twice", line, column)
     else:
         where = explain(error, text, names)
     message = located(source, where.line, where.message, where.column)
     return DomainError(message, excerpt=excerpt(text, where.line, where.column))
 
 
-def _second_declaration(text: str, name: str) -> int | None:
-    """The line where a name declared twice is written the second time."""
+def _second_declaration(text: str, name: str) -> tuple[int | None, int | None]:
+    """The line and column where a name declared twice is written the second time."""
     word = re.compile(rf"(?<![\w?-]){re.escape(name)}(?![\w-])", re.IGNORECASE)
-    seen = 0
-    for number, line in enumerate(text.splitlines(), start=1):
-        seen += len(word.findall(line.split(";", 1)[0]))
-        if seen >= 2:
-            return number
-    return None
+    found = list(word.finditer(uncommented(text)))
+    return position(text, found[1].start()) if len(found) > 1 else (None, None)
 
 
 def _reader() -> Any:

@@ -328,7 +328,7 @@ def explain(error: BaseException, text: str, names: Declared) -> Explained:
     return _syntax(error, text, message)
 
 
-def _uncommented(text: str) -> str:
+def uncommented(text: str) -> str:
     """The text with its comments blanked out (offsets stay)."""
     return re.sub(r";[^\n]*", lambda m: " " * len(m.group(0)), text)
 
@@ -368,7 +368,7 @@ def _undefined(text: str, name: str, line: int, column: int, names: Declared) ->
 
 def _unknown_key(text: str, name: str, names: Declared) -> Explained:
     typed = re.compile(rf"(?<=-)\s*({re.escape(name)})(?![\w-])", re.IGNORECASE)
-    found = typed.search(_uncommented(text))
+    found = typed.search(uncommented(text))
     line, column = position(text, found.start(1)) if found else (None, None)
     return Explained(
         f"unknown type '{name}'{did_you_mean(name, ['object', *names.types])}", line, column
@@ -384,7 +384,7 @@ def _syntax(error: BaseException, text: str, message: str) -> Explained:
             " ".join(message.split()) or type(error).__name__,
             line if isinstance(line, int) else None,
         )
-    either = re.search(r"\(\s*either\b", _uncommented(text), re.IGNORECASE)
+    either = re.search(r"\(\s*either\b", uncommented(text), re.IGNORECASE)
     if either is not None:  # the reader reads no `either` at all
         line, column = position(text, either.start())
         message = f"{_UNREAD} 'either' types: declare a common supertype and use it instead"

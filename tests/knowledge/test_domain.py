@@ -99,7 +99,7 @@ def test_a_name_declared_twice_is_still_refused_at_its_second_line(tmp_path: Pat
 
     domain = tmp_path / "driverlog.pddl"
     domain.write_text(DRIVERLOG_DOMAIN)
-    with pytest.raises(DomainError, match=r"^twice\.pddl:6: name 'depot' is declared twice$"):
+    with pytest.raises(DomainError, match=r"^twice\.pddl:6:5: name 'depot' is declared twice$"):
         parse_problem(domain, DRIVERLOG_TWICE, "twice.pddl")
 
 
@@ -109,7 +109,7 @@ def test_a_predicate_declared_twice_is_refused_at_its_second_line(tmp_path: Path
         "(define (domain twice)\n  (:requirements :strips)\n  (:predicates\n"
         "    (ready)\n    (ready)))\n"
     )
-    with pytest.raises(DomainError, match=r"twice\.pddl:5: name 'ready' is declared twice"):
+    with pytest.raises(DomainError, match=r"twice\.pddl:5:6: name 'ready' is declared twice"):
         read_domain(domain)
 
 
