@@ -16,8 +16,10 @@ declare, only to word an error the reader has already found.
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from functools import partial
+from itertools import islice
 
 from knowledge.errors import did_you_mean
 
@@ -83,10 +85,15 @@ class Explained:
     column: int | None = None
 
 
-def _tokens(text: str) -> Iterator[tuple[str, int]]:
-    for m in _WORD.finditer(text):
+def _tokens(text: str, start: int = 0) -> Iterator[tuple[str, int]]:
+    """The parentheses and words of ``text`` from offset ``start``, with their offsets."""
+    for m in _WORD.finditer(text, start):
         if not m.group(0).startswith(";"):
             yield m.group(0), m.start()
+
+
+def _first(text: str, start: int, count: int) -> list[tuple[str, int]]:
+    return list(islice(_tokens(text, start), count))
 
 
 def position(text: str, offset: int) -> tuple[int, int]:
@@ -200,31 +207,37 @@ def _unclosed(text: str, limit: int) -> Explained | None:
     ``limit`` (where the reader gave up): the first place where an atom holds a list, a
     section or an action's keyword stands inside another list, or the text ends open."""
     top, problems = _tree(text)
-    found: list[tuple[int, Explained]] = []
+    found: list[tuple[int, Callable[[], Explained]]] = []  # where it shows, and the words
     for item in _walk(top):
         if item.start > limit:
             break
         nested = [i for i in item.items[1:] if isinstance(i, _List)]
         if nested and _is_atom(item):
-            found.append((nested[0].start, _open(text, item, nested[0].start)))
+            found.append((nested[0].start, partial(_open, text, item, nested[0].start)))
         for child in item.items:
             if isinstance(child, _List) and child.head.startswith(":"):
                 if item.head != "define" and child.head not in _ACTION_KEYWORDS:
-                    found.append((child.start, _open(text, _outermost(item), child.start)))
+                    found.append((child.start, partial(_open, text, _outermost(item), child.start)))
             elif isinstance(child, tuple) and child[0].lower() in _ACTION_KEYWORDS:
                 if item.head == "define":
-                    line, column = position(text, child[1])
-                    message = f"'{child[0]}' is outside any action: a ')' before it closes the action too early"
-                    found.append((child[1], Explained(message, line, column)))
+                    found.append((child[1], partial(_outside, text, *child)))
                 elif item.head not in (":action", ":durative-action"):
-                    found.append((child[1], _open(text, _below_action(item), child[1])))
+                    found.append((child[1], partial(_open, text, _below_action(item), child[1])))
     for kind, still_open, at in problems:
         if kind == "unexpected":
             line, column = position(text, at)
-            found.append((at, Explained("unexpected ')': nothing is open here", line, column)))
+            found.append(
+                (at, partial(Explained, "unexpected ')': nothing is open here", line, column))
+            )
         elif still_open is not None:
-            found.append((at, _open(text, _outermost(still_open), at)))
-    return min(found, key=lambda f: f[0])[1] if found else None
+            found.append((at, partial(_open, text, _outermost(still_open), at)))
+    return min(found, key=lambda f: f[0])[1]() if found else None
+
+
+def _outside(text: str, keyword: str, at: int) -> Explained:
+    line, column = position(text, at)
+    message = f"'{keyword}' is outside any action: a ')' before it closes the action too early"
+    return Explained(message, line, column)
 
 
 def _is_atom(item: _List) -> bool:
@@ -256,10 +269,10 @@ def _below_action(item: _List) -> _List:
 def _open(text: str, item: _List, before: int) -> Explained:
     """``item`` is still open at offset ``before``: point at its last element that spans
     lines, if it has one (an atom whose ')' is on a later line lost its own), else at it."""
-    where = "the end of the file" if before >= len(text) else None
-    if where is None:
-        what = next(_tokens(text[before:]))[0]
-        what = f"({_head_at(text, before)}" if what == "(" else what
+    where = "the end of the file"
+    if before < len(text):
+        words = [w for w, _ in _first(text, before, 2)]
+        what = f"({words[1]}" if words[0] == "(" and len(words) > 1 else words[0]
         where = f"'{what}' at line {position(text, before)[0]}"
     spans = [
         c
@@ -279,11 +292,6 @@ def _open(text: str, item: _List, before: int) -> Explained:
     return Explained(
         f"'({item.head}' is not closed before {where} (a ')' is missing)", line, column
     )
-
-
-def _head_at(text: str, offset: int) -> str:
-    words = list(_tokens(text[offset : offset + 200]))
-    return words[1][0] if len(words) > 1 else ""
 
 
 def explain(error: BaseException, text: str, names: Declared) -> Explained:
@@ -389,7 +397,7 @@ def _syntax(error: BaseException, text: str, message: str) -> Explained:
         line, column = position(text, either.start())
         message = f"{_UNREAD} 'either' types: declare a common supertype and use it instead"
         return Explained(message, line, column)
-    rest = list(_tokens(text[at:]))
+    rest = _first(text, at, 2)
     if len(rest) > 1 and rest[0][0] == "(" and rest[1][0].startswith(":"):
         section = rest[1][0].lower()
         line, column = position(text, at)
