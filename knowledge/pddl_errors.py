@@ -417,5 +417,8 @@ def _syntax(error: BaseException, text: str, message: str) -> Explained:
         )
     expected = _EXPECTED.search(message)
     what = expected.group(1) if expected else " ".join(message.split())
+    for kind, other in (("domain", "problem"), ("problem", "domain")):
+        if what == f"Expected '{kind}'" and word.lower() == other:
+            return Explained(f"this file is a PDDL {other}, not a {kind}", line, column)
     found = f", not '{word}'" if word else ", not the end of the file"
     return Explained(f"{what[0].lower()}{what[1:]}{found}", line, column)

@@ -35,6 +35,12 @@ def test_a_robot_with_subtypes_replans_for_an_object_of_a_subtype_added_at_run_t
     added = run_dura("object", "add", "vase", "fragile", cwd=robot.folder)
     assert added.returncode == 0, added.stderr
     assert added.stdout.strip() == "object vase - fragile added"
+    arity = run_dura("goal", "add", "(at vase)", cwd=robot.folder)
+    assert arity.returncode == 1
+    assert arity.stderr.splitlines() == [
+        "dura: goal '(at vase)': 'at' takes 2 arguments (?x - locatable ?p - place), not 1"
+    ]
+    assert [g.id for g in robot.goals()] == [parcel]  # nothing stored
     robot.set_fact("(at vase lab)")  # a fragile crate where a locatable is wanted
     vase = robot.submit_goal("(at vase dock)")  # and a dock where a place is wanted
     robot.wait_for(vase, "achieved", timeout=120)

@@ -167,6 +167,20 @@ def test_a_broken_problem_is_one_line_at_the_place_to_fix(
     assert str(error.value) == f"problem.pddl:{expected}"
 
 
+def test_a_problem_given_for_the_domain_and_a_domain_for_the_problem_are_named(
+    tmp_path: Path,
+) -> None:
+    domain, problem = tmp_path / "domain.pddl", tmp_path / "problem.pddl"
+    domain.write_text(WAREHOUSE_DOMAIN)
+    problem.write_text(WAREHOUSE_PROBLEM)
+    with pytest.raises(DomainError) as swapped:
+        read_domain(problem)
+    assert str(swapped.value) == f"{problem}:1:10: this file is a PDDL problem, not a domain"
+    with pytest.raises(DomainError) as twice:
+        parse_problem(domain, WAREHOUSE_DOMAIN, "domain.pddl")
+    assert str(twice.value) == "domain.pddl:2:10: this file is a PDDL domain, not a problem"
+
+
 def test_the_caret_stands_under_the_place_also_after_tabs(tmp_path: Path) -> None:
     path = tmp_path / "domain.pddl"
     path.write_text(broken(WAREHOUSE_DOMAIN, "    (free ?v - robot)", "\t(free ?v - robbot)"))
