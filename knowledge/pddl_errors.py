@@ -378,6 +378,9 @@ def _unknown_key(text: str, name: str, names: Declared) -> Explained:
     typed = re.compile(rf"(?<=-)\s*({re.escape(name)})(?![\w-])", re.IGNORECASE)
     found = typed.search(uncommented(text))
     line, column = position(text, found.start(1)) if found else (None, None)
+    if name.lower() == "object":
+        message = f"{_UNREAD} objects declared '- object': give them a type of the domain"
+        return Explained(message, line, column)
     return Explained(
         f"unknown type '{name}'{did_you_mean(name, ['object', *names.types])}", line, column
     )

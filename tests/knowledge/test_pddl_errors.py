@@ -128,6 +128,13 @@ PROBLEM_CASES = [
         "8:21: '(free' is not closed before '(at' at line 8 (a ')' is missing)",
     ),
     (
+        "an object of type object",
+        "parcel - crate)",
+        "parcel - crate thing - object)",
+        "6:28: unified-planning's reader does not read objects declared '- object': give them "
+        "a type of the domain",
+    ),
+    (
         "another domain",
         "(:domain warehouse)",
         "(:domain warehose)",
