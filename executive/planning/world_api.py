@@ -90,9 +90,12 @@ class WorldApi:
         domain = self.planning().domain
         name, type_name = request.name, request.type
         kb = self.context.kb
-        if type_name not in domain.types and type_name != "object":
-            known = ["object", *sorted(domain.types)]
-            hint = did_you_mean(type_name, known) or f" (the domain's types: {', '.join(known)})"
+        if type_name not in domain.types:  # `object` too, unless the domain is untyped
+            known = sorted(domain.types)
+            listed = f"the domain's types: {', '.join(known) or 'none'}"
+            if type_name == "object":  # a planning problem has no objects of the root type
+                raise DuraError(f"an object needs a type of the domain, not 'object' ({listed})")
+            hint = did_you_mean(type_name, known) or f" ({listed})"
             raise DuraError(f"unknown type '{type_name}'{hint}")
         if not is_name(name):
             raise DuraError(f"'{name}' is not a PDDL name (a letter, then letters, digits, - or _)")

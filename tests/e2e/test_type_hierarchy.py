@@ -30,6 +30,12 @@ def test_a_robot_with_subtypes_replans_for_an_object_of_a_subtype_added_at_run_t
     misspelt = run_dura("object", "add", "vase", "fragil", cwd=robot.folder)
     assert misspelt.returncode == 1
     assert misspelt.stderr.splitlines() == ["dura: unknown type 'fragil' (did you mean 'fragile'?)"]
+    root = run_dura("object", "add", "vase", "object", cwd=robot.folder)
+    assert root.returncode == 1  # the planner could take no object of the root type
+    assert root.stderr.splitlines() == [
+        "dura: an object needs a type of the domain, not 'object' (the domain's types: crate, "
+        "dock, fragile, locatable, place, robot, truck, vehicle)"
+    ]
     assert robot.events("OBJECT_ADDED") == []  # nothing stored
 
     added = run_dura("object", "add", "vase", "fragile", cwd=robot.folder)
