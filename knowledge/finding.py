@@ -62,7 +62,7 @@ class Report:
         return [f for f in self.findings if f.is_error]
 
 
-_LOCATED = re.compile(r"^(.+?):(\d+)(?::(\d+))?: (.+)$", re.S)
+_LOCATED = re.compile(r"^((?:(?!: ).)+?):(\d+)(?::(\d+))?: (.+)$", re.S)  # no ': ' in the path
 
 
 def finding_of(error: Exception, fallback: str) -> Finding:
