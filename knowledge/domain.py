@@ -25,6 +25,7 @@ from knowledge.pddl_errors import (
     Declared,
     Explained,
     declared,
+    domain_named,
     excerpt,
     explain,
     position,
@@ -182,9 +183,7 @@ def parse_problem(
     except Exception as e:
         names = declared(domain_text) + declared(problem_text)
         raise _error(source, e, problem_text, names) from e
-    _check_domain_name(
-        declared(domain_text).domain, declared(problem_text).domain, problem_text, source
-    )
+    _check_domain_name(domain_named(domain_text), domain_named(problem_text), problem_text, source)
     return problem
 
 

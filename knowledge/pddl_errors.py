@@ -127,14 +127,12 @@ class Declared:
     types: tuple[str, ...] = ()
     objects: tuple[str, ...] = ()  # constants and objects
     signatures: dict[str, str] = field(default_factory=dict)  # predicate/function -> params
-    domain: tuple[str, int] | None = None  # the domain a text defines or names, and where
 
     def __add__(self, other: Declared) -> Declared:
         return Declared(
             self.types + other.types,
             self.objects + other.objects,
             {**self.signatures, **other.signatures},
-            other.domain or self.domain,
         )
 
 
@@ -182,11 +180,8 @@ def declared(text: str) -> Declared:
     types: list[str] = []
     objects: list[str] = []
     signatures: dict[str, str] = {}
-    domain: tuple[str, int] | None = None
     for section in _sections(top):
         words = section.words()[1:]
-        if section.head in ("domain", ":domain") and words:
-            domain = (words[0].lower(), section.start)
         if section.head == ":types":
             types += [w.lower() for w in words if w != "-"]
         elif section.head in (":constants", ":objects"):
@@ -199,7 +194,17 @@ def declared(text: str) -> Declared:
             for atom in (i for i in section.items if isinstance(i, _List)):
                 name, *params = atom.words()
                 signatures[name.lower()] = " ".join(params)
-    return Declared(tuple(types), tuple(objects), signatures, domain)
+    return Declared(tuple(types), tuple(objects), signatures)
+
+
+_DOMAIN_NAME = re.compile(r"\(\s*:?domain\s+([^\s()]+)", re.IGNORECASE)
+
+
+def domain_named(text: str) -> tuple[str, int] | None:
+    """The domain a domain text defines, or a problem text is written for (lower case),
+    and its offset; cheap enough for every problem read."""
+    found = _DOMAIN_NAME.search(uncommented(text))
+    return (found.group(1).lower(), found.start()) if found else None
 
 
 def _unclosed(text: str, limit: int) -> Explained | None:
