@@ -58,6 +58,11 @@ def register(sub: Any) -> None:
         "--map", action="append", default=[], metavar="BAG_TOPIC=TOPIC",
         help="replay a recorded topic as one of the robot's (repeatable)",
     )  # fmt: skip
+    p.add_argument(
+        "--types", action="append", default=[], type=Path, metavar="DIR",
+        help="read message types the bag does not define from the .msg, .srv and .action "
+        "files under DIR, laid out as in ROS packages (repeatable)",
+    )  # fmt: skip
     add_json_flag(p)
     p.set_defaults(run=run)
 
@@ -72,6 +77,7 @@ def run(args: argparse.Namespace) -> int:
         begin=args.begin,
         end=args.end,
         on_entry=printer.entry if printer is not None else None,
+        types=args.types,
     ) as session:
         bag = session.bag
         if printer is not None:
@@ -82,8 +88,9 @@ def run(args: argparse.Namespace) -> int:
         if printer is not None and sys.stderr.isatty():
             messages = Progress(sys.stderr, session.start, session.end).wrap(messages)
         timeline = session.run(messages)
+        counts = session.counts(timeline)
     if printer is not None:
-        printer.summary(timeline)
+        printer.summary(timeline, counts, bag.notes)
     else:
         print_json(
             {
@@ -92,6 +99,8 @@ def run(args: argparse.Namespace) -> int:
                 "robot": robot.name,
                 "routes": {name: vars(route) for name, route in session.routes.items()},
                 **timeline.to_payload(),
+                "counts": counts,
+                "notes": bag.notes,
             }
         )
     return 0
@@ -176,10 +185,22 @@ class Printer:
         self.out.write(f"{entry.time:9.3f}  {entry.kind.value:<11}  {entry.describe()}\n")
         self.out.flush()
 
-    def summary(self, timeline: Timeline) -> None:
+    def summary(self, timeline: Timeline, counts: dict[str, Any], notes: list[str]) -> None:
         out = self.out
         length = timeline.end - timeline.begin
-        out.write(f"\nsummary: {length:.3f} s replayed, {plural(timeline.messages, 'message')}\n")
+        used = plural(timeline.messages, "message")
+        if counts["in_bag"] != timeline.messages:
+            used = f"{timeline.messages} of the bag's {plural(counts['in_bag'], 'message')}"
+            left = []
+            if counts["not_routed"]:
+                topics = ", ".join(counts["not_routed_topics"])
+                left.append(f"{counts['not_routed']} on topics the robot does not watch: {topics}")
+            if counts["outside_window"]:
+                left.append(f"{counts['outside_window']} outside the window")
+            used += f" ({'; '.join(left)})" if left else ""
+        out.write(f"\nsummary: {length:.3f} s replayed, {used}\n")
+        for note in notes:
+            out.write(f"  note: {note}\n")
         holds = timeline.holds()
         if not holds:
             out.write("  nothing was diagnosed\n")

@@ -18,9 +18,10 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
+from typing import Any
 
 from executive.bags.bag import Bag, Route, routes
-from executive.bags.reader import open_bag
+from executive.bags.reader import open_bag, read_types
 from executive.bus.session import Message
 from knowledge.description import RobotDescription
 from knowledge.errors import BagError
@@ -38,6 +39,7 @@ class BagReplay:
         maps: ``BAG_TOPIC=TOPIC`` routes besides the same names.
         begin, end: the window, in seconds since the recording's start.
         on_entry: called with each timeline entry as it happens.
+        types: folders or files of ``.msg`` definitions for types the bag does not define.
 
     Raises:
         BagError: the recording is unreadable, a map is wrong, or nothing maps.
@@ -53,11 +55,12 @@ class BagReplay:
         begin: float | None = None,
         end: float | None = None,
         on_entry: Callable[[Entry], None] | None = None,
+        types: Sequence[Path] = (),
     ) -> None:
         self.robot = robot if isinstance(robot, RobotDescription) else load_robot(robot)
-        self.bag: Bag = open_bag(Path(path))
+        self.bag: Bag = open_bag(Path(path), read_types(types) if types else None)
         try:
-            self.start, self.end = self._window(begin, end)
+            self.start_ns, self.end_ns = self._window(begin, end)
             found = routes(self.bag, self.robot, maps, watched=watched_topics(self.robot))
             self.replay = Replay(
                 self.robot,
@@ -72,28 +75,55 @@ class BagReplay:
                 for name, route in found.items()
                 if route.key in listened or state_component(route.key) is not None
             }
-            self.bag.check(self.routes)
         except BaseException:
             self.bag.close()
             raise
 
-    def _window(self, begin: float | None, end: float | None) -> tuple[float, float]:
+    @property
+    def start(self) -> float:
+        """The window's start, in seconds (the recording's time)."""
+        return self.start_ns / 1e9
+
+    @property
+    def end(self) -> float:
+        """The window's end, in seconds (the recording's time)."""
+        return self.end_ns / 1e9
+
+    def _window(self, begin: float | None, end: float | None) -> tuple[int, int]:
+        """Return the window in integer nanoseconds: the first and last message's
+        times, or ``begin`` and ``end`` seconds after the first."""
         bag = self.bag
-        length = bag.end - bag.start
-        if begin is not None and begin > length:
-            raise BagError(f"{bag.path}: --from {begin:g} is after its end ({length:.3f} s)")
+        length = bag.end_ns - bag.start_ns
+        if begin is not None and round(begin * 1e9) > length:
+            raise BagError(f"{bag.path}: --from {begin:g} is after its end ({length / 1e9:.3f} s)")
         if begin is not None and end is not None and end <= begin:
             raise BagError(f"--to {end:g} must come after --from {begin:g}")
-        start = bag.start + (begin or 0.0)
-        return start, min(bag.end, bag.start + end) if end is not None else bag.end
+        start = bag.start_ns + round((begin or 0.0) * 1e9)
+        stop = bag.end_ns if end is None else min(bag.end_ns, bag.start_ns + round(end * 1e9))
+        return start, stop
 
     def messages(self) -> Iterator[Message]:
         """Yield the routed messages of the window, in order."""
-        return self.bag.messages(self.routes, self.start, self.end)
+        return self.bag.messages(self.routes, self.start_ns, self.end_ns)
 
     def run(self, messages: Iterable[Message] | None = None) -> Timeline:
         """Replay ``messages`` (default: :meth:`messages`) and return the timeline."""
         return self.replay.run(self.messages() if messages is None else messages, self.end)
+
+    def counts(self, timeline: Timeline) -> dict[str, Any]:
+        """How the bag's messages were used: in the bag, routed to the robot, replayed
+        (in the window), and which topics were not routed."""
+        routed = sum(t.count for t in self.bag.topics if t.name in self.routes)
+        return {
+            "in_bag": self.bag.count,
+            "routed": routed,
+            "replayed": timeline.messages,
+            "outside_window": routed - timeline.messages,
+            "not_routed": self.bag.count - routed,
+            "not_routed_topics": [
+                t.name for t in self.bag.topics if t.name not in self.routes and t.count
+            ],
+        }
 
     def close(self) -> None:
         self.bag.close()
@@ -112,9 +142,13 @@ def replay_bag(
     maps: Sequence[str] = (),
     begin: float | None = None,
     end: float | None = None,
+    types: Sequence[str | Path] = (),
 ) -> Timeline:
     """Replay a recording through a robot's observers, diagnosis and repair rules and
     return the timeline (see the module docstring)."""
     description = robot if isinstance(robot, RobotDescription) else Path(robot)
-    with BagReplay(Path(path), description, maps=maps, begin=begin, end=end) as replay:
+    folders = [Path(p) for p in types]
+    with BagReplay(
+        Path(path), description, maps=maps, begin=begin, end=end, types=folders
+    ) as replay:
         return replay.run()
