@@ -9,6 +9,12 @@ robot). Each bus key is a channel per publisher: its topic is the key (``topic/s
 ``caller_id`` metadata the publisher, each message's ``log_time`` the time it arrived
 and its ``publish_time`` the time it was sent.
 
+It survives a crash: every ``flush_every`` seconds (one by default) the chunk in
+progress is completed and written out, so that a recorder killed at any moment (or a
+machine that loses power, once the system wrote its buffers) leaves a file that
+``dura replay`` reads up to its last whole chunk: at most the last second is lost.
+``dura record --repair FILE`` rewrites such a file whole (:func:`repair`).
+
 It is bounded: when the file reaches ``max_size`` bytes it is closed and renamed
 ``OUT.1.mcap`` (older ones move up to ``OUT.<keep>.mcap``; the oldest goes) and a new
 ``OUT.mcap`` begins, with the latest state of every component first, so that each
@@ -22,6 +28,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
@@ -29,6 +36,7 @@ from mcap.writer import CompressionType
 from mcap.writer import Writer as McapWriter
 
 from executive.bags.bag import DURA_PROFILE
+from executive.bags.mcap_bag import read_contents
 from executive.bags.schemas import schema_bytes, schema_name
 from executive.bus.keys import DIAGNOSES, EVENTS, OBSERVATIONS, RESOURCES, component
 from executive.bus.service import Context, Service
@@ -40,6 +48,7 @@ log = logging.getLogger("dura.record")
 MB = 1 << 20
 DEFAULT_MAX_SIZE = 100 * MB
 DEFAULT_KEEP = 3
+DEFAULT_FLUSH_EVERY = 1.0  # seconds between two complete chunks on disk
 RECORDED = ("topic/**", OBSERVATIONS, DIAGNOSES, RESOURCES, EVENTS, component("*", "state"))
 SNAPSHOT_CALLER = "executive"  # who publishes component states
 
@@ -57,6 +66,7 @@ class Recorder:
         robot: the robot's name (in the file's metadata).
         max_size: bytes after which the file is rotated.
         keep: how many older files to keep.
+        flush_every: seconds after which what was recorded is on disk as a whole chunk.
 
     Raises:
         BagError: the file cannot be written.
@@ -70,6 +80,7 @@ class Recorder:
         max_size: int = DEFAULT_MAX_SIZE,
         keep: int = DEFAULT_KEEP,
         library: str = "dura",
+        flush_every: float = DEFAULT_FLUSH_EVERY,
     ) -> None:
         self.path = Path(path)
         self.robot = robot
@@ -77,6 +88,8 @@ class Recorder:
         self.keep = keep
         self.library = library
         self.messages = 0  # written, in all files
+        self.flushed = 0  # of them, on disk in whole chunks (handed to the system)
+        self.failure: BagError | None = None  # why the flusher stopped the recording
         self.files = 0  # begun
         self._lock = threading.Lock()
         self._states: dict[str, Message] = {}  # the newest state of each component
@@ -86,10 +99,16 @@ class Recorder:
         self._channels: dict[tuple[str, str], int] = {}
         self._sequence: dict[int, int] = {}
         self._last = 0.0  # the newest message's arrival: when the next file begins
+        self.flush_every = flush_every
+        self._unflushed = False  # written since the last flush
+        self._closed = threading.Event()
         with self._lock:
             if self.path.exists():
                 self._shift()
             self._begin()
+        self._flusher = threading.Thread(target=self._flush_loop, name="dura-record-flush")
+        self._flusher.daemon = True
+        self._flusher.start()
 
     # --- writing --------------------------------------------------------------------
 
@@ -108,6 +127,7 @@ class Recorder:
                 return False
             try:
                 self._add(writer, message, schema)
+                self._unflushed = True
                 if message.key.startswith("component/"):
                     self._states[message.key] = message
                 if self._file is not None and self._file.tell() >= self.max_size:
@@ -126,8 +146,40 @@ class Recorder:
 
     def close(self) -> None:
         """Finish the file (idempotent)."""
+        self._closed.set()
         with self._lock:
             self._finish()
+        if self._flusher is not threading.current_thread():
+            self._flusher.join()
+
+    def flush(self) -> None:
+        """Write what was recorded as a whole chunk and hand it to the system.
+
+        Raises:
+            BagError: the file cannot be written (the recorder is closed then).
+        """
+        with self._lock:
+            writer, file = self._writer, self._file
+            if writer is None or file is None or not self._unflushed:
+                return
+            try:
+                writer.flush()  # type: ignore[no-untyped-call]
+                self._unflushed = False
+                self.flushed = self.messages
+            except OSError as e:
+                self._abandon()
+                raise BagError(
+                    f"{self.path}: cannot write the recording ({e.strerror or e})"
+                ) from e
+
+    def _flush_loop(self) -> None:
+        while not self._closed.wait(self.flush_every):
+            try:
+                self.flush()
+            except BagError as e:
+                self.failure = e
+                log.error("recording stopped: %s", e)
+                return
 
     def __enter__(self) -> Recorder:
         return self
@@ -168,6 +220,7 @@ class Recorder:
         writer.start(profile=DURA_PROFILE, library=self.library)
         writer.add_metadata(DURA_PROFILE, {"robot": self.robot, "format": "1"})
         self._writer = writer
+        self._unflushed = True  # the header and metadata, on disk within a second
         self._schemas, self._channels, self._sequence = {}, {}, {}
         self.files += 1
         for state in self._states.values():  # each file replays on its own
@@ -181,6 +234,7 @@ class Recorder:
             writer.finish()  # type: ignore[no-untyped-call]
         if file is not None:
             file.close()
+        self.flushed = self.messages
 
     def _abandon(self) -> None:
         """Close after a failure without finishing (the file is cut off)."""
@@ -206,6 +260,63 @@ class Recorder:
             if older.exists():
                 older.rename(rotated(self.path, number + 1))
         self.path.rename(rotated(self.path, 1))
+
+
+@dataclass(frozen=True)
+class Repaired:
+    """What :func:`repair` kept of a file: its messages up to its last whole chunk."""
+
+    messages: int
+    kept: int  # bytes of the cut file that were read
+    lost: int  # bytes after its last whole chunk
+    end: float | None  # seconds: the last message kept
+
+
+def repair(path: Path) -> Repaired:
+    """Rewrite an MCAP file cut off (a recorder killed) as a whole one, with its
+    messages up to its last whole chunk; a whole file is left as it is.
+
+    Raises:
+        BagError: it is not MCAP, or not even its header is whole, or it cannot be
+            written.
+    """
+    path = Path(path)
+    try:
+        with path.open("rb") as stream:
+            contents = read_contents(path, stream)
+    except OSError as e:
+        raise BagError(f"{path}: cannot read it ({e.strerror or e})") from e
+    found = contents.salvaged
+    end = None if contents.end is None else contents.end / 1e9
+    if found is None:
+        return Repaired(sum(contents.counts.values()), contents.size, 0, end)
+    part = path.with_name(path.name + ".repairing")
+    try:
+        with part.open("wb") as out:
+            writer = McapWriter(out, compression=CompressionType.ZSTD)
+            writer.start(profile=contents.profile, library=contents.library)
+            for record in contents.metadata:
+                writer.add_metadata(record.name, record.metadata)
+            schemas = {
+                s.id: writer.register_schema(s.name, s.encoding, s.data)
+                for s in contents.schemas.values()
+            }
+            channels = {
+                c.id: writer.register_channel(
+                    c.topic, c.message_encoding, schemas.get(c.schema_id, 0), c.metadata
+                )
+                for c in contents.channels.values()
+            }
+            for m in found:
+                if m.channel_id in channels:
+                    writer.add_message(channels[m.channel_id], m.log_time, m.data, m.publish_time,
+                                       m.sequence)  # fmt: skip
+            writer.finish()  # type: ignore[no-untyped-call]
+        part.replace(path)
+    except OSError as e:
+        part.unlink(missing_ok=True)
+        raise BagError(f"{path}: cannot write the repaired file ({e.strerror or e})") from e
+    return Repaired(len(found), contents.whole, contents.size - contents.whole, end)
 
 
 class BusRecording:
@@ -263,14 +374,27 @@ class Recording(Service):
 
     name = "recording"
 
-    def __init__(self, context: Context, path: Path, *, max_size: int = DEFAULT_MAX_SIZE) -> None:
+    def __init__(
+        self,
+        context: Context,
+        path: Path,
+        *,
+        max_size: int = DEFAULT_MAX_SIZE,
+        flush_every: float = DEFAULT_FLUSH_EVERY,
+    ) -> None:
         super().__init__(context)
         self.path = path
         self.max_size = max_size
+        self.flush_every = flush_every
         self._recording: BusRecording | None = None
 
     def on_configure(self) -> None:
-        recorder = Recorder(self.path, self.context.robot.name, max_size=self.max_size)
+        recorder = Recorder(
+            self.path,
+            self.context.robot.name,
+            max_size=self.max_size,
+            flush_every=self.flush_every,
+        )
         self._recording = BusRecording(self.context.bus, recorder)
         self._recording.start()
 

@@ -3,10 +3,19 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
+import random
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
+import pytest
 from mcap.reader import make_reader
+from mcap.records import Message as McapMessage
+from mcap.stream_reader import StreamReader
 
 from executive.bags.bag import Route
 from executive.bags.reader import open_bag
@@ -131,3 +140,73 @@ def test_a_diagnosis_payload_is_recorded_under_its_key(tmp_path: Path) -> None:
     with open_bag(path) as bag:
         (recorded,) = bag.messages({DIAGNOSES: Route(DIAGNOSES)})
     assert DiagnosisInfo.from_payload(recorded.payload).diagnoses == (("lidar",),)
+
+
+@pytest.mark.timeout(120)  # a recorder that never flushes never says so
+def test_a_recorder_killed_at_any_moment_leaves_a_file_that_replays_up_to_its_last_flush(
+    tmp_path: Path,
+) -> None:
+    rounds = random.Random(30)
+    for round_ in range(5):
+        path = tmp_path / f"killed{round_}.mcap"
+        child = subprocess.Popen(
+            [sys.executable, "-m", "tests.executive.bags.recorder_child", str(path), "0.3"],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        assert child.stdout is not None
+        lines = []
+        wanted = rounds.randint(1, 4)  # killed after that many flushes, at a random moment
+        try:
+            while len(lines) < wanted:
+                lines.append(child.stdout.readline())
+            time.sleep(rounds.uniform(0.0, 0.3))
+        finally:
+            child.send_signal(signal.SIGKILL)
+        rest, _ = child.communicate()
+        flushed = int((lines + rest.splitlines())[-1].split()[1])
+        assert flushed > 0
+        # read without dura: the mcap library, record by record, up to the cut
+        with path.open("rb") as f:
+            independent = []
+            with contextlib.suppress(Exception):
+                for record in StreamReader(f).records:
+                    if isinstance(record, McapMessage):
+                        independent.append(json.loads(record.data)["k"])
+        assert independent[:flushed] == list(range(flushed))
+        with open_bag(path) as bag:
+            routes = {"topic/scan": Route("topic/scan")}
+            replayed = [m.payload["k"] for m in bag.messages(routes)]
+            assert len(bag.notes) <= 1  # cut off, said in one line (unless it ended whole)
+        assert replayed == independent  # all the whole chunks hold, in order
+        result = subprocess.run(
+            [sys.executable, "-m", "executive.cli", "record", "--repair", str(path), "--json"],
+            capture_output=True, text=True, check=True,
+        )  # fmt: skip
+        assert json.loads(result.stdout)["messages"] == len(replayed)
+        with path.open("rb") as f:  # whole now: its summary says so
+            reader = make_reader(f)
+            summary = reader.get_summary()
+            assert summary is not None and summary.statistics is not None
+            assert summary.statistics.message_count == len(replayed)
+            assert [json.loads(m.data)["k"] for _, _, m in reader.iter_messages()] == replayed
+
+
+def test_repair_leaves_a_whole_file_as_it_is_and_refuses_what_is_not_mcap(tmp_path: Path) -> None:
+    path = tmp_path / "whole.mcap"
+    with Recorder(path, "usecase") as recorder:
+        recorder.write(message(topic("scan"), {"stamp": T0}, "lidar", T0))
+    before = path.read_bytes()
+    command = [sys.executable, "-m", "executive.cli", "record", "--repair"]
+    result = subprocess.run([*command, str(path)], capture_output=True, text=True, check=True)
+    assert result.stdout == f"dura: {path} is whole (1 message)\n"
+    assert path.read_bytes() == before
+    (tmp_path / "notes.mcap").write_text("hello")
+    result = subprocess.run(
+        [*command, str(tmp_path / "notes.mcap")], capture_output=True, text=True
+    )
+    assert result.returncode == 1 and "Traceback" not in result.stderr
+    assert result.stderr == (
+        f"dura: {tmp_path / 'notes.mcap'}: truncated or corrupt MCAP (it does not start as MCAP "
+        "does)\n"
+    )
