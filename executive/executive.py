@@ -246,7 +246,7 @@ class Executive:
         task executor, so that it watches every component it starts. The high level
         activates after them all, so that it plans once everything else runs."""
         services: list[Service] = [
-            *recording_group(context, self.record, self.record_max_size),
+            *recording_group(context, self.record, self.record_max_size, self.ros2),
             *(
                 monitoring_group(context, self._topic_sources())
                 if MONITORING not in self.without

@@ -41,7 +41,9 @@ from executive.bags.schemas import schema_bytes, schema_name
 from executive.bus.keys import DIAGNOSES, EVENTS, OBSERVATIONS, RESOURCES, component
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus, Message, encode
-from knowledge.errors import BagError
+from executive.bus.topic_source import TopicSource
+from executive.ros2.message import RosMessage
+from knowledge.errors import BagError, DuraError
 
 log = logging.getLogger("dura.record")
 
@@ -67,6 +69,8 @@ class Recorder:
         max_size: bytes after which the file is rotated.
         keep: how many older files to keep.
         flush_every: seconds after which what was recorded is on disk as a whole chunk.
+        ros2_definition: the ``ros2msg`` text of a ROS 2 type: ROS 2 messages (that
+            know their type) are then recorded as CDR with that schema, as rosbag2 does.
 
     Raises:
         BagError: the file cannot be written.
@@ -81,6 +85,7 @@ class Recorder:
         keep: int = DEFAULT_KEEP,
         library: str = "dura",
         flush_every: float = DEFAULT_FLUSH_EVERY,
+        ros2_definition: Callable[[str], str] | None = None,
     ) -> None:
         self.path = Path(path)
         self.robot = robot
@@ -96,10 +101,11 @@ class Recorder:
         self._file: IO[bytes] | None = None
         self._writer: McapWriter | None = None
         self._schemas: dict[str, int] = {}
-        self._channels: dict[tuple[str, str], int] = {}
+        self._channels: dict[tuple[str, str, str], int] = {}
         self._sequence: dict[int, int] = {}
         self._last = 0.0  # the newest message's arrival: when the next file begins
         self.flush_every = flush_every
+        self.ros2_definition = ros2_definition
         self._unflushed = False  # written since the last flush
         self._closed = threading.Event()
         with self._lock:
@@ -126,7 +132,7 @@ class Recorder:
             if writer is None:
                 return False
             try:
-                self._add(writer, message, schema)
+                self._add(writer, message, schema, self._ros_type(message))
                 self._unflushed = True
                 if message.key.startswith("component/"):
                     self._states[message.key] = message
@@ -189,8 +195,14 @@ class Recorder:
 
     # --- the file -------------------------------------------------------------------
 
-    def _add(self, writer: McapWriter, message: Message, schema: str) -> None:
-        channel = self._channel(writer, message.key, message.caller_id, schema)
+    def _ros_type(self, message: Message) -> str:
+        """The ROS 2 type a message is recorded as (CDR), or "" (its JSON)."""
+        if self.ros2_definition is None or not isinstance(message, RosMessage):
+            return ""
+        return message.type
+
+    def _add(self, writer: McapWriter, message: Message, schema: str, ros_type: str = "") -> None:
+        channel = self._channel(writer, message.key, message.caller_id, schema, ros_type)
         received = round(message.received * 1e9)
         sent = round(message.sent * 1e9) if message.sent is not None else received
         sequence = self._sequence[channel] = self._sequence.get(channel, 0) + 1
@@ -198,17 +210,31 @@ class Recorder:
         self.messages += 1
         self._last = max(self._last, message.received)
 
-    def _channel(self, writer: McapWriter, key: str, caller: str, schema: str) -> int:
-        found = self._channels.get((key, caller))
+    def _channel(
+        self, writer: McapWriter, key: str, caller: str, schema: str, ros_type: str
+    ) -> int:
+        found = self._channels.get((key, caller, ros_type))
         if found is None:
-            schema_id = self._schemas.get(schema)
+            schema_id = self._schemas.get(ros_type or schema)
             if schema_id is None:
-                schema_id = writer.register_schema(schema, "jsonschema", schema_bytes(schema))
-                self._schemas[schema] = schema_id
+                schema_id = self._schema(writer, schema, ros_type)
+                self._schemas[ros_type or schema] = schema_id
             metadata = {"caller_id": caller} if caller else {}
-            found = writer.register_channel(key, "json", schema_id, metadata)
-            self._channels[key, caller] = found
+            encoding = "cdr" if ros_type else "json"
+            found = writer.register_channel(key, encoding, schema_id, metadata)
+            self._channels[key, caller, ros_type] = found
         return found
+
+    def _schema(self, writer: McapWriter, schema: str, ros_type: str) -> int:
+        definition = self.ros2_definition
+        if not ros_type or definition is None:
+            return int(writer.register_schema(schema, "jsonschema", schema_bytes(schema)))
+        try:
+            text = definition(ros_type)
+        except Exception as e:  # a type the library cannot write out: CDR without schema
+            log.warning("recording %s without its definition: %s", ros_type, e)
+            return 0
+        return int(writer.register_schema(ros_type, "ros2msg", text.encode()))
 
     def _begin(self) -> None:
         try:
@@ -326,13 +352,19 @@ class BusRecording:
         bus: the robot's bus.
         recorder: where messages go.
         on_failure: called once if writing fails (e.g. the disk is full).
+        topics: topic keys whose messages are not on the bus (ROS 2's), with their source.
     """
 
     def __init__(
-        self, bus: Bus, recorder: Recorder, on_failure: Callable[[BagError], None] | None = None
+        self,
+        bus: Bus,
+        recorder: Recorder,
+        on_failure: Callable[[BagError], None] | None = None,
+        topics: Mapping[str, TopicSource] | None = None,
     ) -> None:
         self.bus = bus
         self.recorder = recorder
+        self.topics = dict(topics or {})
         self.failure: BagError | None = None
         self._on_failure = on_failure
         self._entities: list[Any] = []
@@ -342,6 +374,11 @@ class BusRecording:
         for the components no state was recorded of meanwhile."""
         for key in RECORDED:
             self._entities.append(self.bus.subscribe(key, self._on_message, decoded=False))
+        for key, source in self.topics.items():
+            try:
+                self._entities.append(source.subscribe(key, self._on_message))
+            except DuraError as e:  # e.g. DDS refused the reader: the rest is recorded
+                log.warning("%s is not recorded: %s", key, e)
         for state in states:
             key = component(str(state["component"]), "state")
             if not self.recorder.has_state(key):
@@ -370,7 +407,8 @@ class BusRecording:
 class Recording(Service):
     """The executive's own recording (``dura run --record``): it records from its
     configuration on, before the other services are configured, so it sees every
-    component state from the first."""
+    component state from the first; and the robot's ROS 2 topics (``ros2_topics``),
+    as CDR with their ``ros2msg`` schemas."""
 
     name = "recording"
 
@@ -381,12 +419,21 @@ class Recording(Service):
         *,
         max_size: int = DEFAULT_MAX_SIZE,
         flush_every: float = DEFAULT_FLUSH_EVERY,
+        ros2_topics: Mapping[str, TopicSource] | None = None,
+        ros2_definition: Callable[[str], str] | None = None,
     ) -> None:
         super().__init__(context)
         self.path = path
         self.max_size = max_size
         self.flush_every = flush_every
+        self.ros2_topics = dict(ros2_topics or {})
+        self.ros2_definition = ros2_definition
         self._recording: BusRecording | None = None
+
+    @property
+    def messages(self) -> int:
+        """How many messages it recorded so far."""
+        return self._recording.recorder.messages if self._recording is not None else 0
 
     def on_configure(self) -> None:
         recorder = Recorder(
@@ -394,8 +441,9 @@ class Recording(Service):
             self.context.robot.name,
             max_size=self.max_size,
             flush_every=self.flush_every,
+            ros2_definition=self.ros2_definition,
         )
-        self._recording = BusRecording(self.context.bus, recorder)
+        self._recording = BusRecording(self.context.bus, recorder, topics=self.ros2_topics)
         self._recording.start()
 
     def on_shutdown(self) -> None:

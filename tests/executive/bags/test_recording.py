@@ -16,6 +16,7 @@ import pytest
 from mcap.reader import make_reader
 from mcap.records import Message as McapMessage
 from mcap.stream_reader import StreamReader
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from executive.bags.bag import Route
 from executive.bags.reader import open_bag
@@ -31,6 +32,8 @@ from executive.bus.payloads import (
 )
 from executive.bus.session import Message, encode
 from executive.bus.states import Lifecycle
+from executive.ros2.message import RosMessage
+from tests.executive.bags.recorded import scan
 
 T0 = 1_700_000_000.0
 
@@ -203,10 +206,42 @@ def test_repair_leaves_a_whole_file_as_it_is_and_refuses_what_is_not_mcap(tmp_pa
     assert path.read_bytes() == before
     (tmp_path / "notes.mcap").write_text("hello")
     result = subprocess.run(
-        [*command, str(tmp_path / "notes.mcap")], capture_output=True, text=True
+        [*command, str(tmp_path / "notes.mcap")], capture_output=True, text=True, check=False
     )
     assert result.returncode == 1 and "Traceback" not in result.stderr
     assert result.stderr == (
         f"dura: {tmp_path / 'notes.mcap'}: truncated or corrupt MCAP (it does not start as MCAP "
         "does)\n"
     )
+
+
+def test_a_ros2_message_is_recorded_as_cdr_with_its_ros2msg_schema_that_rosbags_reads(
+    tmp_path: Path,
+) -> None:
+    store = get_typestore(Stores.ROS2_JAZZY)
+    scan_type = "sensor_msgs/msg/LaserScan"
+    raw = scan(round(T0 * 1e9))
+    path = tmp_path / "run.mcap"
+    with Recorder(
+        path, "usecase", ros2_definition=lambda t: store.generate_msgdef(t, ros_version=2)[0]
+    ) as recorder:
+        ros = RosMessage(topic("scan"), raw, "lidar", T0 - 0.01, T0, type=scan_type)
+        recorder.write(ros)
+        recorder.write(message(topic("odom"), {"stamp": T0}, "odometry", T0 + 0.1))
+    with path.open("rb") as f:
+        records = list(make_reader(f).iter_messages())
+    (schema, channel, record), (json_schema, json_channel, _) = records
+    assert (schema.name, schema.encoding, channel.message_encoding) == (
+        scan_type, "ros2msg", "cdr"
+    )  # fmt: skip
+    assert (json_schema.encoding, json_channel.message_encoding) == ("jsonschema", "json")
+    assert record.data == raw
+    # rosbags reads the message from the file's own definition alone
+    reader_store = get_typestore(Stores.EMPTY)
+    reader_store.register(get_types_from_msg(schema.data.decode(), schema.name))
+    decoded = reader_store.deserialize_cdr(record.data, scan_type)
+    assert decoded.header.frame_id == "laser" and list(decoded.ranges[:2]) == [2.0, 2.0]
+    with open_bag(path) as bag:
+        replayed = next(bag.messages({"topic/scan": Route("topic/scan")}))
+        assert replayed.payload["header"]["frame_id"] == "laser"
+        assert (replayed.caller_id, replayed.received, replayed.sent) == ("lidar", T0, T0 - 0.01)
