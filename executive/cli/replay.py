@@ -89,7 +89,9 @@ def run(args: argparse.Namespace) -> int:
             messages = Progress(sys.stderr, session.start, session.end).wrap(messages)
         timeline = session.run(messages)
         counts = session.counts(timeline)
+        tolerance = session.replay.loop
     if printer is not None:
+        printer.tolerance = tolerance
         printer.summary(timeline, counts, bag.notes)
     else:
         print_json(
@@ -101,6 +103,7 @@ def run(args: argparse.Namespace) -> int:
                 **timeline.to_payload(),
                 "counts": counts,
                 "notes": bag.notes,
+                "live": {"tolerance": tolerance, "differences": timeline.differences(tolerance)},
             }
         )
     return 0
@@ -159,6 +162,7 @@ class Printer:
 
     def __init__(self, out: TextIO) -> None:
         self.out = out
+        self.tolerance = 0.0  # seconds within which a replay is as live
 
     def header(self, session: BagReplay) -> None:
         bag, start, end = session.bag, session.start, session.end
@@ -227,3 +231,11 @@ class Printer:
                 out.write(
                     f"  recorded (live) rule {entry.rule} fired: {entry.action} ({entry.time:.3f})\n"
                 )
+        if timeline.recorded:
+            differences = timeline.differences(self.tolerance)
+            if not differences:
+                out.write(
+                    f"  as live: the same diagnoses and rule firings (within {self.tolerance:.3f} s)\n"
+                )
+            for difference in differences:
+                out.write(f"  not as live: {difference}\n")

@@ -22,9 +22,10 @@ from typing import Any
 
 from executive.bags.bag import Bag, Route, routes
 from executive.bags.reader import open_bag, read_types
+from executive.bus.keys import OBSERVATIONS
 from executive.bus.session import Message
 from knowledge.description import RobotDescription
-from knowledge.errors import BagError
+from knowledge.errors import BagError, BusError
 from knowledge.robot import load_robot
 from monitoring.replay import Replay, state_component, watched_topics
 from monitoring.timeline import Entry, Timeline
@@ -68,6 +69,7 @@ class BagReplay:
                 origin=self.bag.start,
                 start=self.start,
                 on_entry=on_entry,
+                loops=self._live_loops(),
             )
             listened = self.replay.listened
             self.routes: dict[str, Route] = {
@@ -78,6 +80,21 @@ class BagReplay:
         except BaseException:
             self.bag.close()
             raise
+
+    def _live_loops(self) -> dict[str, list[float]]:
+        """When each observer looped in the recorded run (a dura recording's
+        observations), so that the replay's loops are the live ones."""
+        bag = self.bag
+        if not bag.keys_are_bus_keys or OBSERVATIONS not in {t.name for t in bag.topics}:
+            return {}
+        loops: dict[str, set[float]] = {}
+        for message in bag.messages({OBSERVATIONS: Route(OBSERVATIONS)}):
+            try:
+                payload = message.payload
+                loops.setdefault(str(payload["observer"]), set()).add(float(payload["stamp"]))
+            except (BusError, KeyError, TypeError, ValueError):
+                continue  # a malformed observation: that loop is not known
+        return {observer: sorted(times) for observer, times in loops.items()}
 
     @property
     def start(self) -> float:
