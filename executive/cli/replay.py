@@ -68,7 +68,7 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    robot = load_robot(args.robot)
+    robot = load_robot(args.robot, domain=False)  # a replay plans nothing
     printer = None if args.json else Printer(sys.stdout)
     with BagReplay(
         args.bag,

@@ -58,7 +58,9 @@ class BagReplay:
         on_entry: Callable[[Entry], None] | None = None,
         types: Sequence[Path] = (),
     ) -> None:
-        self.robot = robot if isinstance(robot, RobotDescription) else load_robot(robot)
+        self.robot = (
+            robot if isinstance(robot, RobotDescription) else load_robot(robot, domain=False)
+        )
         self.bag: Bag = open_bag(Path(path), read_types(types) if types else None)
         try:
             self.start_ns, self.end_ns = self._window(begin, end)
