@@ -84,13 +84,14 @@ def _folder(path: Path, types: Mapping[str, Any] | None) -> Bag:
 
 
 def read_types(paths: Sequence[Path]) -> dict[str, Any]:
-    """Read the message definitions (``.msg``, ``.srv``, ``.action`` laid out as in a ROS
-    package, as the robot description's ``ros2: messages:``) under ``paths``.
+    """Read the message definitions under ``paths``: ``.msg``, ``.srv`` and ``.action``
+    files laid out as in a ROS package (as the robot description's ``ros2: messages:``),
+    and ``.idl`` files.
 
     Raises:
         BagError: a path is missing or a definition invalid (``file:line: reason``).
     """
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import Stores, get_types_from_idl, get_typestore
 
     from knowledge.ros2_messages import read_definitions, register  # with rosbags
 
@@ -100,4 +101,13 @@ def read_types(paths: Sequence[Path]) -> dict[str, Any]:
         raise BagError(f"--types: {findings[0]}")
     store = get_typestore(Stores.EMPTY)
     register(store, definitions)
-    return dict(store.fielddefs)
+    found = dict(store.fielddefs)
+    for file in sorted({f for p in paths for f in ([p] if p.is_file() else p.rglob("*.idl"))}):
+        if file.suffix != ".idl":
+            continue
+        try:
+            found.update(get_types_from_idl(file.read_text(encoding="utf-8")))
+        except Exception as e:  # rosbags' parser fails in many ways on a bad text
+            first = (str(e).strip().splitlines() or [""])[0]
+            raise BagError(f"--types: {file}: cannot read it ({type(e).__name__}: {first})") from e
+    return found

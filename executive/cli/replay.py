@@ -60,8 +60,8 @@ def register(sub: Any) -> None:
     )  # fmt: skip
     p.add_argument(
         "--types", action="append", default=[], type=Path, metavar="DIR",
-        help="read message types the bag does not define from the .msg, .srv and .action "
-        "files under DIR, laid out as in ROS packages (repeatable)",
+        help="read message types the bag does not define from the .msg, .srv, .action "
+        "(laid out as in ROS packages) and .idl files under DIR (repeatable)",
     )  # fmt: skip
     add_json_flag(p)
     p.set_defaults(run=run)

@@ -135,7 +135,7 @@ def test_a_type_that_neither_the_bag_nor_the_store_defines_gives_times_and_is_no
     ]
 
 
-def test_types_from_msg_files_decode_what_the_bag_does_not_define(
+def test_types_from_msg_and_idl_files_decode_what_the_bag_does_not_define(
     tmp_path: Path, robot: RobotDescription
 ) -> None:
     (tmp_path / "types" / "acme_msgs" / "msg").mkdir(parents=True)
@@ -144,6 +144,16 @@ def test_types_from_msg_files_decode_what_the_bag_does_not_define(
     with open_bag(path, read_types([tmp_path / "types"])) as bag:
         angles = [m.payload["angle"] for m in bag.messages(routes(bag, robot))]
     assert angles == [float(k) for k in range(10)]
+    idl = tmp_path / "idl" / "Sweep.idl"
+    idl.parent.mkdir()
+    idl.write_text(
+        "module acme_msgs { module msg { struct Sweep { float angle; }; }; };\n"
+    )  # as rosidl writes it for Sweep.msg
+    with open_bag(path, read_types([tmp_path / "idl"])) as bag:
+        assert [m.payload["angle"] for m in bag.messages(routes(bag, robot))] == angles
+    idl.write_text("module acme_msgs { struct")
+    with pytest.raises(BagError, match=r"^--types: .*Sweep\.idl: cannot read it"):
+        read_types([tmp_path / "idl"])
     (tmp_path / "types" / "acme_msgs" / "msg" / "Sweep.msg").write_text("floot32 angle\n")
     with pytest.raises(BagError, match=r"^--types: .*Sweep\.msg:1: "):
         read_types([tmp_path / "types"])

@@ -245,3 +245,28 @@ def test_a_ros2_message_is_recorded_as_cdr_with_its_ros2msg_schema_that_rosbags_
         replayed = next(bag.messages({"topic/scan": Route("topic/scan")}))
         assert replayed.payload["header"]["frame_id"] == "laser"
         assert (replayed.caller_id, replayed.received, replayed.sent) == ("lidar", T0, T0 - 0.01)
+
+
+def test_a_recording_cut_anywhere_replays_a_prefix_of_what_it_recorded(tmp_path: Path) -> None:
+    path = tmp_path / "whole.mcap"
+    written = []
+    with Recorder(path, "usecase", flush_every=3600.0) as recorder:
+        for k in range(300):
+            recorder.write(
+                message(topic("scan"), {"stamp": T0 + k / 10, "k": k}, "lidar", T0 + k / 10)
+            )
+            written.append(k)
+            if k % 50 == 49:
+                recorder.flush()  # six whole chunks, as six seconds of recording
+    data = path.read_bytes()
+    routes = {"topic/scan": Route("topic/scan")}
+    previous = 0
+    for cut in range(40, len(data), max(1, len(data) // 97)):  # after the header: anywhere
+        (tmp_path / "cut.mcap").write_bytes(data[:cut])
+        with open_bag(tmp_path / "cut.mcap") as bag:
+            read = [m.payload["k"] for m in bag.messages(routes)]
+            assert len(bag.notes) == 1 and "cut off" in bag.notes[0]
+        assert read == written[: len(read)] and len(read) % 50 == 0  # whole chunks only
+        assert len(read) >= previous
+        previous = len(read)
+    assert previous == 300  # cut in the summary: every chunk is whole

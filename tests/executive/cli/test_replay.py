@@ -14,6 +14,7 @@ import pytest
 
 from executive.bus.session import Message
 from executive.cli import replay as replay_command
+from executive.testing.harness import robot_variant
 from monitoring.timeline import Timeline
 from tests.conftest import USECASE
 from tests.executive.bags.recorded import T0, scan_times, write_scan_bag, write_unknown_type_bag
@@ -191,3 +192,23 @@ def test_the_dura_replay_fixture_pins_a_bags_diagnoses_in_a_test(
     assert [(r.time, r.action) for r in timeline.repairs()] == [(10.52, "restart lidar")]
     (hold,) = timeline.holds()
     assert hold.periods == ((10.52, 12.52),)
+
+
+def test_an_observer_that_must_decode_an_unknown_type_is_reported_once_in_one_line(
+    dura: Dura, tmp_path: Path
+) -> None:
+    timestamp = {"type": "timestamp", "topics": [{"name": "scan", "filter": {"type": "mean", "window_size": 5}, "states": [
+        {"state": "ok", "number": 1, "age": {"type": "less_than", "less_than": 0.5}}]}]}  # fmt: skip
+    robot = robot_variant(
+        USECASE, tmp_path / "robot", {"functionalities": {"lidar": {"observers": [timestamp]}}}
+    )
+    bag = write_unknown_type_bag(tmp_path / "bag", scan_times())
+    result = dura("replay", str(bag), "--robot", str(robot))
+    assert result.returncode == 0, result.stderr
+    notes = [line for line in result.stdout.splitlines() if "note:" in line]
+    assert notes == [
+        f"  note: {bag}: topic '/scan' not decoded: its type 'acme_msgs/msg/Sweep' is unknown "
+        "(the bag does not define it, rosbags' latest types do not know it; --types DIR reads "
+        ".msg files)"
+    ]
+    assert "summary: 19.900 s replayed, 180 messages" in result.stdout
