@@ -117,8 +117,7 @@ class McapBag(Bag):
         until: int | None,
     ) -> Iterator[Message]:
         streams = [
-            ((i, record) for record in _records(file, topics, at, until))
-            for i, file in enumerate(self.files)
+            _numbered(i, _records(file, topics, at, until)) for i, file in enumerate(self.files)
         ]
         merged: Iterator[tuple[int, McapMessage]] = (
             streams[0] if len(streams) == 1 else heapq.merge(*streams, key=_log_time)
@@ -198,6 +197,13 @@ def _records(
             and (until is None or record.log_time <= until)
         ):
             yield record
+
+
+def _numbered(index: int, records: Iterator[McapMessage]) -> Iterator[tuple[int, McapMessage]]:
+    """The records of the file ``index`` (bound now: a generator expression would read
+    the loop's last index)."""
+    for record in records:
+        yield index, record
 
 
 def _log_time(item: tuple[int, McapMessage]) -> int:

@@ -19,9 +19,11 @@ from knowledge.robot import load_robot
 from monitoring.replay import Replay
 from tests.conftest import USECASE
 from tests.executive.bags.recorded import (
+    SCAN,
     SWEEP,
     T0,
     TYPES,
+    scan,
     scan_times,
     write_mcap,
     write_scan_bag,
@@ -264,3 +266,32 @@ def test_a_bag_split_into_several_mcap_files_is_read_as_one_in_order(
     (folder / "split_1.mcap").unlink()
     with pytest.raises(BagError, match=r"files of the bag are missing: .*split_1\.mcap"):
         open_bag(folder)
+
+
+def test_split_mcap_files_that_number_their_channels_differently_are_read_as_one(
+    tmp_path: Path, robot: RobotDescription
+) -> None:
+    folder = tmp_path / "split"
+    folder.mkdir()
+    text, _ = TYPES.generate_msgdef(SCAN, ros_version=2)
+    times = scan_times(None, 2.0)
+    for index, (topics, part) in enumerate(
+        [(["/scan", "/other"], times[:10]), (["/other", "/scan"], times[10:])]
+    ):
+        with (folder / f"split_{index}.mcap").open("wb") as stream:  # as rosbag2 splits
+            writer = McapWriter(stream)
+            writer.start(profile="ros2", library="tests")
+            schema = writer.register_schema(SCAN, "ros2msg", text.encode())
+            ids = {name: writer.register_channel(name, "cdr", schema) for name in topics}
+            for t in part:
+                writer.add_message(ids["/scan"], t, scan(t), t)
+                writer.add_message(ids["/other"], t + 1, scan(t), t)
+            writer.finish()
+    (folder / "metadata.yaml").write_text(
+        "rosbag2_bagfile_information:\n  version: 9\n  storage_identifier: mcap\n"
+        "  relative_file_paths: [split_0.mcap, split_1.mcap]\n"
+    )
+    with open_bag(folder) as bag:
+        assert bag.count == 40
+        received = [m.received for m in bag.messages(routes(bag, robot))]
+    assert received == [t / 1e9 for t in times]  # /scan only, from both files
