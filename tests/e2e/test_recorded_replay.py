@@ -146,7 +146,8 @@ def test_a_run_whose_lidar_was_restarted_replays_to_the_same_diagnosis_and_firin
         USECASE, tmp_path / "description", {"behaviors": {"move_to": LONG_MOVE}}
     )
     out = tmp_path / "robot" / "run.mcap"
-    robot = RobotProcess(description, tmp_path / "robot", run_args=["--record", str(out)])
+    run_args = ["--record", str(out), "--record-flush", "0.5"]
+    robot = RobotProcess(description, tmp_path / "robot", run_args=run_args)
     robot.start()
     try:
         robot.request("task/start", MOVE)
