@@ -10,11 +10,11 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any, TextIO
 
+from executive.bag_replay import BagReplay
 from executive.bus.session import Message
 from executive.bus.wording import plural
 from executive.cli.arguments import factor, seconds
 from executive.cli.output import add_json_flag, print_json, shown
-from executive.testing.replay import BagReplay
 from knowledge.robot import load_robot
 from monitoring.replay import Replay
 from monitoring.timeline import Entry, RepairEntry, Timeline

@@ -11,147 +11,19 @@ so that a test can pin what a recorded incident must be diagnosed as::
         assert timeline.diagnosed() == [("lidar",)]
         assert [r.action for r in timeline.repairs()] == ["restart lidar"]
 
-``dura replay`` runs the same :class:`BagReplay`.
+``dura replay`` runs the same :class:`BagReplay` (of :mod:`executive.bag_replay`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
-from executive.bags.bag import Bag, Route, routes
-from executive.bags.reader import open_bag, read_types
-from executive.bus.keys import OBSERVATIONS
-from executive.bus.session import Message
+from executive.bag_replay import BagReplay
 from knowledge.description import RobotDescription
-from knowledge.errors import BagError, BusError
-from knowledge.robot import load_robot
-from monitoring.replay import Replay, state_component, watched_topics
-from monitoring.timeline import Entry, Timeline
+from monitoring.timeline import Timeline
 
-
-class BagReplay:
-    """An opened recording, routed to a robot and ready to replay (close it when done).
-
-    Args:
-        path: the recording.
-        robot: the robot description (or its file).
-        maps: ``BAG_TOPIC=TOPIC`` routes besides the same names.
-        begin, end: the window, in seconds since the recording's start.
-        on_entry: called with each timeline entry as it happens.
-        types: folders or files of ``.msg`` definitions for types the bag does not define.
-
-    Raises:
-        BagError: the recording is unreadable, a map is wrong, or nothing maps.
-        ConfigError: the robot description is invalid.
-    """
-
-    def __init__(
-        self,
-        path: Path,
-        robot: RobotDescription | Path,
-        *,
-        maps: Sequence[str] = (),
-        begin: float | None = None,
-        end: float | None = None,
-        on_entry: Callable[[Entry], None] | None = None,
-        types: Sequence[Path] = (),
-    ) -> None:
-        self.robot = (
-            robot if isinstance(robot, RobotDescription) else load_robot(robot, domain=False)
-        )
-        self.bag: Bag = open_bag(Path(path), read_types(types) if types else None)
-        try:
-            self.start_ns, self.end_ns = self._window(begin, end)
-            found = routes(self.bag, self.robot, maps, watched=watched_topics(self.robot))
-            self.replay = Replay(
-                self.robot,
-                provided={r.key for r in found.values()},
-                origin=self.bag.start,
-                start=self.start,
-                on_entry=on_entry,
-                loops=self._live_loops(),
-            )
-            listened = self.replay.listened
-            self.routes: dict[str, Route] = {
-                name: route
-                for name, route in found.items()
-                if route.key in listened or state_component(route.key) is not None
-            }
-        except BaseException:
-            self.bag.close()
-            raise
-
-    def _live_loops(self) -> dict[str, list[float]]:
-        """When each observer looped in the recorded run (a dura recording's
-        observations), so that the replay's loops are the live ones."""
-        bag = self.bag
-        if not bag.keys_are_bus_keys or OBSERVATIONS not in {t.name for t in bag.topics}:
-            return {}
-        loops: dict[str, set[float]] = {}
-        for message in bag.messages({OBSERVATIONS: Route(OBSERVATIONS)}):
-            try:
-                payload = message.payload
-                loops.setdefault(str(payload["observer"]), set()).add(float(payload["stamp"]))
-            except (BusError, KeyError, TypeError, ValueError):
-                continue  # a malformed observation: that loop is not known
-        return {observer: sorted(times) for observer, times in loops.items()}
-
-    @property
-    def start(self) -> float:
-        """The window's start, in seconds (the recording's time)."""
-        return self.start_ns / 1e9
-
-    @property
-    def end(self) -> float:
-        """The window's end, in seconds (the recording's time)."""
-        return self.end_ns / 1e9
-
-    def _window(self, begin: float | None, end: float | None) -> tuple[int, int]:
-        """Return the window in integer nanoseconds: the first and last message's
-        times, or ``begin`` and ``end`` seconds after the first."""
-        bag = self.bag
-        length = bag.end_ns - bag.start_ns
-        if begin is not None and round(begin * 1e9) > length:
-            raise BagError(f"{bag.path}: --from {begin:g} is after its end ({length / 1e9:.3f} s)")
-        if begin is not None and end is not None and end <= begin:
-            raise BagError(f"--to {end:g} must come after --from {begin:g}")
-        start = bag.start_ns + round((begin or 0.0) * 1e9)
-        stop = bag.end_ns if end is None else min(bag.end_ns, bag.start_ns + round(end * 1e9))
-        return start, stop
-
-    def messages(self) -> Iterator[Message]:
-        """Yield the routed messages of the window, in order."""
-        return self.bag.messages(self.routes, self.start_ns, self.end_ns)
-
-    def run(self, messages: Iterable[Message] | None = None) -> Timeline:
-        """Replay ``messages`` (default: :meth:`messages`) and return the timeline."""
-        return self.replay.run(self.messages() if messages is None else messages, self.end)
-
-    def counts(self, timeline: Timeline) -> dict[str, Any]:
-        """How the bag's messages were used: in the bag, routed to the robot, replayed
-        (in the window), and which topics were not routed."""
-        routed = sum(t.count for t in self.bag.topics if t.name in self.routes)
-        return {
-            "in_bag": self.bag.count,
-            "routed": routed,
-            "replayed": timeline.messages,
-            "outside_window": routed - timeline.messages,
-            "not_routed": self.bag.count - routed,
-            "not_routed_topics": [
-                t.name for t in self.bag.topics if t.name not in self.routes and t.count
-            ],
-        }
-
-    def close(self) -> None:
-        self.bag.close()
-
-    def __enter__(self) -> BagReplay:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+__all__ = ["BagReplay", "replay_bag"]
 
 
 def replay_bag(
