@@ -7,7 +7,10 @@ robot). Each bus key is a channel per publisher: its topic is the key (``topic/s
 ``observations``, ``component/lidar/state``), its messages are the payloads as sent
 (JSON, with a JSON schema of dura's payloads, :mod:`executive.bags.schemas`), its
 ``caller_id`` metadata the publisher, each message's ``log_time`` the time it arrived
-and its ``publish_time`` the time it was sent.
+and its ``publish_time`` the time it was sent. A ROS 2 message (from the robot's ROS 2
+topics, which do not travel on the bus) is recorded as rosbag2 records it: its CDR
+bytes, on a channel of encoding ``cdr`` whose schema is the type's ``ros2msg``
+definition.
 
 It survives a crash: every ``flush_every`` seconds (one by default) the chunk in
 progress is completed and written out, so that a recorder killed at any moment (or a
