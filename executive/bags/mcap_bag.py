@@ -378,7 +378,7 @@ def _cut(file: _File, contents: Contents) -> str:
     return (
         f"{file.path}: cut off (no summary: the recording did not end): read "
         f"{count} messages{until} up to its last whole chunk; "
-        f"{lost} of its {contents.size} bytes after it are lost"
+        + (f"{lost} of its {contents.size} bytes after it are lost" if lost else "nothing after it")
     )
 
 

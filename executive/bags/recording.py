@@ -299,6 +299,7 @@ class Repaired:
     kept: int  # bytes of the cut file that were read
     lost: int  # bytes after its last whole chunk
     end: float | None  # seconds: the last message kept
+    rewritten: bool  # it was cut off (else whole: left as it was)
 
 
 def repair(path: Path) -> Repaired:
@@ -318,7 +319,7 @@ def repair(path: Path) -> Repaired:
     found = contents.salvaged
     end = None if contents.end is None else contents.end / 1e9
     if found is None:
-        return Repaired(sum(contents.counts.values()), contents.size, 0, end)
+        return Repaired(sum(contents.counts.values()), contents.size, 0, end, rewritten=False)
     part = path.with_name(path.name + ".repairing")
     try:
         with part.open("wb") as out:
@@ -345,7 +346,7 @@ def repair(path: Path) -> Repaired:
     except OSError as e:
         part.unlink(missing_ok=True)
         raise BagError(f"{path}: cannot write the repaired file ({e.strerror or e})") from e
-    return Repaired(len(found), contents.whole, contents.size - contents.whole, end)
+    return Repaired(len(found), contents.whole, contents.size - contents.whole, end, rewritten=True)
 
 
 class BusRecording:

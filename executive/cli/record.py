@@ -73,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
     if args.repair is not None:
         return run_repair(args)
     if args.out is None:
-        raise BagError("dura record: give OUT.mcap to record to, or --repair FILE")
+        raise BagError("record: give OUT.mcap to record to, or --repair FILE")
     stop = stop_on_signals()
     with connect(args) as bus:
         seen = threading.Event()
@@ -119,7 +119,7 @@ def run_repair(args: argparse.Namespace) -> int:
         print_json({"path": str(args.repair), **vars(repaired)})
         return 0
     until = "" if repaired.end is None else f", the last at {repaired.end:.3f}"
-    if repaired.lost == 0:
+    if not repaired.rewritten:
         print(f"dura: {shown(args.repair)} is whole ({plural(repaired.messages, 'message')})")
     else:
         print(
