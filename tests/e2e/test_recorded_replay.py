@@ -165,3 +165,28 @@ def test_a_run_whose_lidar_was_restarted_replays_to_the_same_diagnosis_and_firin
     assert timeline.differences(tolerance) == []
     assert [h.diagnosis for h in timeline.holds()] == [h.diagnosis for h in live]
     assert [r.rule for r in timeline.repairs()][:1] == ["restart_lidar"]
+
+
+def test_a_run_whose_lidar_was_restarted_replays_as_live_from_dura_record(
+    dura_robot: Callable[..., RobotProcess], tmp_path: Path
+) -> None:
+    """The same, recorded by ``dura record`` in a process of its own: its receive times
+    come a little after the executive's."""
+    robot = dura_robot(USECASE, changes={"behaviors": {"move_to": LONG_MOVE}})
+    out = tmp_path / "run.mcap"
+    recorder = record(robot, out)
+    try:
+        robot.request("task/start", MOVE)
+        assert wait_for(lambda: lidar_observed_ok(robot), 30)
+        robot.inject_fault("lidar", "stop_publishing")
+        assert wait_for(lambda: robot.events("RULE_FIRED"), 20)
+        assert wait_for(lambda: lidar_observed_ok(robot), 30)  # restarted, publishing again
+    finally:
+        robot.stop()
+        recorder.wait(30)
+    with BagReplay(out, robot.description) as session:
+        timeline = session.run()
+        tolerance = session.replay.loop
+    assert [h.diagnosis for h in timeline.recorded_holds()][:1] == [("lidar",)]
+    assert timeline.differences(tolerance) == []
+    assert [r.rule for r in timeline.repairs()][:1] == ["restart_lidar"]
