@@ -33,6 +33,7 @@ from executive.bus.payloads import (
 from executive.bus.session import Message, encode
 from executive.bus.states import Lifecycle
 from executive.ros2.message import RosMessage
+from tests.conftest import wait_for
 from tests.executive.bags.recorded import scan
 
 T0 = 1_700_000_000.0
@@ -270,3 +271,18 @@ def test_a_recording_cut_anywhere_replays_a_prefix_of_what_it_recorded(tmp_path:
         assert len(read) >= previous
         previous = len(read)
     assert previous == 300  # cut in the summary: every chunk is whole
+
+
+def test_what_was_recorded_is_on_disk_within_a_flush_even_when_the_bus_goes_quiet(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "quiet.mcap"
+    with Recorder(path, "usecase", flush_every=0.2) as recorder:
+        for k in range(5):
+            recorder.write(message(topic("scan"), {"stamp": T0 + k}, "lidar", T0 + k))
+        assert wait_for(lambda: recorder.flushed == 5, 10)  # nothing written since
+        with open_bag(path) as bag:  # still recording: read as a file cut off
+            assert [
+                m.payload["stamp"] for m in bag.messages({"topic/scan": Route("topic/scan")})
+            ] == [T0 + k for k in range(5)]
+            assert "cut off" in bag.notes[0]
