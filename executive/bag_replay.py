@@ -10,6 +10,7 @@ monitoring (:mod:`monitoring.replay`); it lives beside them, not in
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -22,6 +23,35 @@ from knowledge.errors import BagError, BusError
 from knowledge.robot import load_robot
 from monitoring.replay import Replay, state_component, watched_topics
 from monitoring.timeline import Entry, Timeline
+
+
+@dataclass(frozen=True)
+class MessageCounts:
+    """How a replay used the bag's messages: those it holds, those on topics routed to
+    the robot, and of them those replayed (the others were outside the window)."""
+
+    in_bag: int
+    routed: int
+    replayed: int
+    not_routed_topics: tuple[str, ...] = ()  # topics with messages the robot does not watch
+
+    @property
+    def not_routed(self) -> int:
+        return self.in_bag - self.routed
+
+    @property
+    def outside_window(self) -> int:
+        return self.routed - self.replayed
+
+    def to_payload(self) -> dict[str, Any]:
+        return {
+            "in_bag": self.in_bag,
+            "routed": self.routed,
+            "replayed": self.replayed,
+            "outside_window": self.outside_window,
+            "not_routed": self.not_routed,
+            "not_routed_topics": list(self.not_routed_topics),
+        }
 
 
 class BagReplay:
@@ -122,20 +152,16 @@ class BagReplay:
         """Replay ``messages`` (default: :meth:`messages`) and return the timeline."""
         return self.replay.run(self.messages() if messages is None else messages, self.end)
 
-    def counts(self, timeline: Timeline) -> dict[str, Any]:
-        """How the bag's messages were used: in the bag, routed to the robot, replayed
-        (in the window), and which topics were not routed."""
-        routed = sum(t.count for t in self.bag.topics if t.name in self.routes)
-        return {
-            "in_bag": self.bag.count,
-            "routed": routed,
-            "replayed": timeline.messages,
-            "outside_window": routed - timeline.messages,
-            "not_routed": self.bag.count - routed,
-            "not_routed_topics": [
+    def counts(self, timeline: Timeline) -> MessageCounts:
+        """How the bag's messages were used by a replay of it."""
+        return MessageCounts(
+            in_bag=self.bag.count,
+            routed=sum(t.count for t in self.bag.topics if t.name in self.routes),
+            replayed=timeline.messages,
+            not_routed_topics=tuple(
                 t.name for t in self.bag.topics if t.name not in self.routes and t.count
-            ],
-        }
+            ),
+        )
 
     def close(self) -> None:
         self.bag.close()

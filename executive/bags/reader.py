@@ -1,5 +1,5 @@
-"""Open a recording, whatever it is: a rosbag2 folder (any metadata version from Foxy's
-4 to 9, sqlite3 or MCAP, split into several files, compressed per file or per
+"""Open a recording, whatever it is: a rosbag2 folder (any metadata version up to 9,
+Jazzy's; sqlite3 or MCAP, split into several files, compressed per file or per
 message), an MCAP file (rosbag2's or dura's, whole or cut off) or a rosbag2 sqlite3
 file.
 
@@ -21,7 +21,7 @@ from executive.bags.rosbag2_bag import open_sqlite3
 from knowledge.errors import BagError
 
 SQLITE_MAGIC = b"SQLite format 3\x00"
-MAX_VERSION = 9  # rosbag2 metadata versions read (Foxy wrote 4, Jazzy 9)
+MAX_VERSION = 9  # the newest rosbag2 metadata version read (Jazzy's; Foxy wrote 4)
 
 
 def open_bag(path: Path, types: Mapping[str, Any] | None = None) -> Bag:

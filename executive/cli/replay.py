@@ -10,7 +10,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any, TextIO
 
-from executive.bag_replay import BagReplay
+from executive.bag_replay import BagReplay, MessageCounts
 from executive.bus.session import Message
 from executive.bus.wording import plural
 from executive.cli.arguments import factor, seconds
@@ -101,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
                 "robot": robot.name,
                 "routes": {name: vars(route) for name, route in session.routes.items()},
                 **timeline.to_payload(),
-                "counts": counts,
+                "counts": counts.to_payload(),
                 "notes": bag.notes,
                 "live": {"tolerance": tolerance, "differences": timeline.differences(tolerance)},
             }
@@ -189,18 +189,18 @@ class Printer:
         self.out.write(f"{entry.time:9.3f}  {entry.kind.value:<11}  {entry.describe()}\n")
         self.out.flush()
 
-    def summary(self, timeline: Timeline, counts: dict[str, Any], notes: list[str]) -> None:
+    def summary(self, timeline: Timeline, counts: MessageCounts, notes: list[str]) -> None:
         out = self.out
         length = timeline.end - timeline.begin
         used = plural(timeline.messages, "message")
-        if counts["in_bag"] != timeline.messages:
-            used = f"{timeline.messages} of the bag's {plural(counts['in_bag'], 'message')}"
+        if counts.in_bag != timeline.messages:
+            used = f"{timeline.messages} of the bag's {plural(counts.in_bag, 'message')}"
             left = []
-            if counts["not_routed"]:
-                topics = ", ".join(counts["not_routed_topics"])
-                left.append(f"{counts['not_routed']} on topics the robot does not watch: {topics}")
-            if counts["outside_window"]:
-                left.append(f"{counts['outside_window']} outside the window")
+            if counts.not_routed:
+                topics = ", ".join(counts.not_routed_topics)
+                left.append(f"{counts.not_routed} on topics the robot does not watch: {topics}")
+            if counts.outside_window:
+                left.append(f"{counts.outside_window} outside the window")
             used += f" ({'; '.join(left)})" if left else ""
         out.write(f"\nsummary: {length:.3f} s replayed, {used}\n")
         for note in notes:
