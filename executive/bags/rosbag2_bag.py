@@ -24,7 +24,7 @@ from typing import Any
 
 import zstandard
 from rosbags.interfaces import Connection, MessageDefinitionFormat
-from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader as Reader
+from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
 
 from executive.bags.bag import Bag, BagTopic, Route
 from executive.bags.ros_messages import Definition, RosTypes
@@ -67,7 +67,7 @@ def unpack_files(files: Sequence[Path], into: Path) -> list[Path]:
 class Sqlite3Bag(Bag):
     """rosbag2 ``.db3`` files, read as one bag."""
 
-    readers: list[Reader] = field(default_factory=list)
+    readers: list[Sqlite3Reader] = field(default_factory=list)
     distro: str | None = None
     unpack: Callable[[bytes], bytes] | None = None  # messages compressed one by one
     temporary: tempfile.TemporaryDirectory[str] | None = None  # decompressed files
@@ -111,7 +111,7 @@ class Sqlite3Bag(Bag):
 
     def _read(
         self,
-        reader: Reader,
+        reader: Sqlite3Reader,
         chosen: list[Connection],
         makers: dict[int, Callable[[bytes, int], Message]],
         start: int | None,
@@ -180,9 +180,9 @@ def open_sqlite3(
     return bag
 
 
-def _open_file(path: Path) -> Reader:
+def _open_file(path: Path) -> Sqlite3Reader:
     try:
-        reader = Reader(path)
+        reader = Sqlite3Reader(path)
         reader.open()
     except Exception as e:  # rosbags and sqlite3 fail in many ways on a bad file
         raise BagError(f"{path}: truncated or corrupt ({reason(e)})") from e
