@@ -9,12 +9,14 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+import yaml
 from rosbags.rosbag2 import Reader
 
 from executive.bags.bag import routes
 from executive.bags.reader import open_bag
 from executive.testing.replay import replay_bag
 from knowledge.description import RobotDescription
+from knowledge.errors import BagError
 from knowledge.robot import load_robot
 from tests.conftest import USECASE
 from tests.executive.bags.recorded import (
@@ -104,3 +106,27 @@ def test_a_bag_and_its_conversion_give_the_same_timeline(tmp_path: Path) -> None
         folder = write_scan_bag(tmp_path / distribution, "sqlite3", times=times)
         timeline = replay_bag(as_written_by(folder, distribution), USECASE)
         assert timeline.to_payload() == mcap.to_payload(), distribution
+
+
+@pytest.mark.parametrize(
+    ("change", "reason"),
+    [
+        ({"version": 10}, "metadata version 10: dura reads 1 to 9"),
+        (
+            {"compression_mode": "file", "compression_format": "lz4"},
+            "compressed with 'lz4': dura reads zstd only",
+        ),
+        ({"storage_identifier": "bagz"}, "storage 'bagz': dura reads sqlite3 and mcap"),
+    ],
+)
+def test_metadata_dura_cannot_read_is_one_line_naming_the_file(
+    tmp_path: Path, change: dict[str, Any], reason: str
+) -> None:
+    folder = write_scan_bag(tmp_path / "bag", "sqlite3", times=EDGES[:3])
+    metadata = folder / "metadata.yaml"
+    info = yaml.safe_load(metadata.read_text())
+    info["rosbag2_bagfile_information"].update(change)
+    metadata.write_text(yaml.safe_dump(info))
+    with pytest.raises(BagError) as error:
+        open_bag(folder)
+    assert str(error.value) == f"{metadata}: {reason}"
