@@ -8,6 +8,8 @@ README's "Architecture" says which may import which; ``tests/test_layers.py`` ch
 - :mod:`.sdk` — what a component author imports;
 - :mod:`.ros2` — ROS 2 over DDS;
 - :mod:`.bags` — recordings: ROS 2 bags and dura's MCAP files, read and written;
+  :mod:`.bag_replay` — a recording routed to a robot's monitoring, ready to replay
+  (``dura replay``, the ``dura_replay`` fixture);
 - :mod:`.runtime` — component processes: the launcher, host agents, translators;
 - :mod:`.tasks` — the task executor;
 - :mod:`.planning` — the high level: goals, plans and their execution;

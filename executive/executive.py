@@ -107,6 +107,8 @@ class Executive:
             the first run, user-only) and the logs (default: the current folder).
         record: record the bus traffic to this MCAP file (``dura run --record``).
         record_max_size: bytes at which the recording is rotated (default: the recorder's).
+        record_flush: seconds between two whole chunks of the recording on disk (default:
+            the recorder's, 1 s).
         on_failure: called with the reason when the executive cannot go on (its domain
             does not fit the robot: checked while it runs, see
             :class:`~executive.planning.high_level.HighLevel`); ``dura run`` stops then.
@@ -131,6 +133,7 @@ class Executive:
         sequential_starts: bool = False,
         record: Path | None = None,
         record_max_size: int | None = None,
+        record_flush: float | None = None,
         on_failure: Callable[[str], None] | None = None,
         on_open: Callable[[], None] | None = None,
         progress: Callable[[str], None] | None = None,
@@ -150,6 +153,7 @@ class Executive:
         self.credentials_path = security.credentials_file(self.folder, robot.name)
         self.record = record
         self.record_max_size = record_max_size
+        self.record_flush = record_flush
         self.on_failure = on_failure
         self.on_open = on_open
         self.progress = progress or (lambda _: None)
@@ -246,7 +250,9 @@ class Executive:
         task executor, so that it watches every component it starts. The high level
         activates after them all, so that it plans once everything else runs."""
         services: list[Service] = [
-            *recording_group(context, self.record, self.record_max_size),
+            *recording_group(
+                context, self.record, self.record_max_size, self.ros2, self.record_flush
+            ),
             *(
                 monitoring_group(context, self._topic_sources())
                 if MONITORING not in self.without

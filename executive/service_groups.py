@@ -117,14 +117,34 @@ def bus_tasks(robot: RobotDescription, bus: Bus, server: str) -> BusTasks:
 # --- the groups ------------------------------------------------------------------------
 
 
-def recording_group(context: Context, path: Path | None, max_size: int | None) -> list[Service]:
+def recording_group(
+    context: Context,
+    path: Path | None,
+    max_size: int | None,
+    ros2: Ros2Link | None = None,
+    flush_every: float | None = None,
+) -> list[Service]:
     """The executive's own recording, if it records (first: it sees every other
-    service's traffic)."""
+    service's traffic), with the robot's ROS 2 topics in their ROS 2 types."""
     if path is None:
         return []
-    from executive.bags.recording import DEFAULT_MAX_SIZE, Recording
+    from executive.bags.recording import DEFAULT_FLUSH_EVERY, DEFAULT_MAX_SIZE, Recording
+    from executive.bus.keys import topic
 
-    return [Recording(context, path, max_size=max_size or DEFAULT_MAX_SIZE)]
+    size, flush = max_size or DEFAULT_MAX_SIZE, flush_every or DEFAULT_FLUSH_EVERY
+    if ros2 is None:
+        return [Recording(context, path, max_size=size, flush_every=flush)]
+    store = ros2.library.store
+    return [
+        Recording(
+            context,
+            path,
+            max_size=size,
+            flush_every=flush,
+            ros2_topics={topic(t.observed_as): ros2.topics for t in ros2.spec.topics.values()},
+            ros2_definition=lambda name: store.generate_msgdef(name, ros_version=2)[0],
+        )
+    ]
 
 
 def ros2_group(context: Context, link: Ros2Link | None) -> list[Service]:

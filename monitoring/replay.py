@@ -20,6 +20,12 @@ two messages runs everything that was due, as the executive's services would hav
   recording's time as their clock; an action that fires is reported
   (:class:`RepairEntry`: "would restart lidar"), never run.
 
+An observer loops as the live observer manager did where the recording says when
+(``loops``: the stamps of a dura run's recorded observations, per observer), else once
+per period from its start: a replay of a live run then sees each silence at the loop
+the live run saw it, diagnoses it at the same time, and before the recorded repair
+that the live diagnosis caused (a restart stops the component a few ms later).
+
 A recording without component states (a ROS 2 bag) counts every component as ready
 from the start. An observer that listens to a key the recording does not have is not
 replayed (:attr:`Timeline.skipped` says why). A recording of a dura run also holds
@@ -28,9 +34,10 @@ what the live run diagnosed and repaired: that goes to :attr:`Timeline.recorded`
 
 from __future__ import annotations
 
+import bisect
 import heapq
 import logging
-from collections.abc import Callable, Collection, Iterable, Sequence
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from executive.bus.keys import DIAGNOSES, EVENTS
@@ -110,6 +117,7 @@ class Replay:
             none, 2 s).
         settle, period: the diagnosis service's timing (as live).
         on_entry: called with each timeline entry as it happens.
+        loops: when each observer (by id) looped live, in the recording's time, sorted.
 
     Raises:
         ConfigError, AspError: an observer or a rules file of the robot is invalid.
@@ -129,8 +137,10 @@ class Replay:
         settle: float = SETTLE,
         period: float = PERIOD,
         on_entry: Callable[[Entry], None] | None = None,
+        loops: Mapping[str, Sequence[float]] | None = None,
     ) -> None:
         self.robot = robot
+        self._loops = dict(loops or {})
         self.origin = origin
         self.start = origin if start is None else start
         self.now = self.start
@@ -185,6 +195,12 @@ class Replay:
     def observers(self) -> list[str]:
         """The ids of the observers that are replayed."""
         return [slot.id for slot in self._slots]
+
+    @property
+    def loop(self) -> float:
+        """The longest loop of the replayed observers (seconds): how far a replay may
+        see something later or sooner than the live run."""
+        return max((slot.observer.period for slot in self._slots), default=0.0)
 
     @property
     def skipped(self) -> list[str]:
@@ -324,7 +340,8 @@ class Replay:
                 self._feeds[key] = tuple(h for h in handlers if h is not handler)
         if should:
             slot.observer.start(t)
-            due = t + slot.observer.first_report
+            first = t + slot.observer.first_report
+            due = self._next_loop(slot, first - slot.observer.period / 2, first)
             heapq.heappush(self._due, (due, slot.index, slot.generation))
         else:
             for old in [k for k in self._verdicts if k[0] == slot.id]:
@@ -332,8 +349,17 @@ class Replay:
 
     # --- observers ------------------------------------------------------------------
 
+    def _next_loop(self, slot: _Slot, after: float, otherwise: float) -> float:
+        """The first live loop of the observer after ``after``, if the recording says."""
+        times = self._loops.get(slot.id)
+        if not times:
+            return otherwise
+        i = bisect.bisect_right(times, after)
+        return times[i] if i < len(times) else otherwise
+
     def _loop(self, slot: _Slot, t: float) -> None:
-        heapq.heappush(self._due, (t + slot.observer.period, slot.index, slot.generation))
+        due = self._next_loop(slot, t, t + slot.observer.period)
+        heapq.heappush(self._due, (due, slot.index, slot.generation))
         try:
             results = slot.observer.observe(t)
         except Exception:

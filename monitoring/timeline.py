@@ -169,6 +169,20 @@ class Hold:
         }
 
 
+def _close(ours: list[float], theirs: list[float], tolerance: float) -> bool:
+    return len(ours) == len(theirs) and all(
+        abs(a - b) <= tolerance for a, b in zip(ours, theirs, strict=True)
+    )
+
+
+def _periods(periods: tuple[tuple[float, float], ...]) -> str:
+    return ", ".join(f"{a:.3f}-{b:.3f}" for a, b in periods) or "never"
+
+
+def _firings(entries: list[RepairEntry]) -> str:
+    return ", ".join(f"{e.rule} at {e.time:.3f}" for e in entries) or "none"
+
+
 def holds(entries: tuple[DiagnosisEntry, ...], end: float) -> list[Hold]:
     """Compute how long each diagnosis held, in order of first appearance."""
     since: dict[Names, float] = {}
@@ -236,6 +250,32 @@ class Timeline:
     def diagnosed(self) -> list[Names]:
         """List every diagnosis that held at some time, in order of first appearance."""
         return [h.diagnosis for h in self.holds()]
+
+    def differences(self, tolerance: float) -> list[str]:
+        """Compare the replay with what the recording says the live run diagnosed and
+        fired: one line per difference (none: as live, within ``tolerance`` seconds)."""
+        if not self.recorded:
+            return []
+        found = []
+        live = {h.diagnosis: h.periods for h in self.recorded_holds()}
+        replayed = {h.diagnosis: h.periods for h in self.holds()}
+        for diagnosis in [*live, *(d for d in replayed if d not in live)]:
+            ours, theirs = replayed.get(diagnosis, ()), live.get(diagnosis, ())
+            if not _close([x for p in ours for x in p], [x for p in theirs for x in p], tolerance):
+                found.append(
+                    f"diagnosis {', '.join(diagnosis) or '(none)'}: live {_periods(theirs)}, "
+                    f"replayed {_periods(ours)}"
+                )
+        live_fired = [e for e in self.recorded if isinstance(e, RepairEntry)]
+        fired = self.repairs()
+        rules = [e.rule for e in fired] == [e.rule for e in live_fired]
+        if not rules or not _close(
+            [e.time for e in fired], [e.time for e in live_fired], tolerance
+        ):
+            found.append(f"rules fired: live {_firings(live_fired)}, replayed {_firings(fired)}")
+        if found and self.skipped:
+            found.append(f"not replayed, so not compared: {'; '.join(self.skipped)}")
+        return found
 
     def to_payload(self) -> dict[str, Any]:
         return {

@@ -40,11 +40,13 @@ ALLOWED: dict[str, set[str]] = {
         "executive.planning.expression",
         "knowledge",
     },
-    # the replay helper composes the bag reader and the offline replay of monitoring
+    # the replay of a recording composes the bag reader and the offline replay of monitoring
+    "executive.bag_replay": {"executive.bus", "executive.bags", "monitoring", "knowledge"},
     "executive.testing": {
         "executive.bus",
         "executive.sdk",
         "executive.bags",
+        "executive.bag_replay",
         "monitoring",
         "knowledge",
     },
@@ -79,6 +81,7 @@ ALLOWED: dict[str, set[str]] = {
         "executive.sdk",
         "executive.ros2",
         "executive.bags",
+        "executive.bag_replay",
         "executive.tasks",
         "executive.planning",
         "executive.testing",

@@ -7,8 +7,8 @@ offline replay itself is :mod:`monitoring.replay`; ``dura replay`` composes the 
 - :mod:`.reader` — :func:`~.reader.open_bag`: open a recording, whatever it is;
 - :mod:`.bag` — an opened recording: its topics, its messages as bus messages, and how
   its topics map to a robot's;
-- :mod:`.mcap_bag` — MCAP files: rosbag2's MCAP storage and dura's recordings;
-- :mod:`.rosbag2_bag` — rosbag2's sqlite3 storage and compressed folders;
+- :mod:`.mcap_bag` — MCAP files: rosbag2's MCAP storage and dura's recordings, whole or cut off;
+- :mod:`.rosbag2_bag` — rosbag2's sqlite3 storage, file by file, and its zstd compression;
 - :mod:`.ros_messages` — a bag's ROS 2 messages as the plain dicts observers read;
 - :mod:`.recording` — a robot's bus traffic written to MCAP, rotated by size;
 - :mod:`.schemas` — JSON schemas of the recorded payloads, made from their dataclasses.

@@ -57,12 +57,22 @@ class Bag(ABC):
 
     path: Path
     format: str  # "rosbag2 (mcap)", "rosbag2 (sqlite3)", "dura recording (mcap)"
-    start: float  # seconds: the first message's receive time
-    end: float  # seconds: the last message's receive time
+    start_ns: int = 0  # the first message's receive time, in ns (from the messages)
+    end_ns: int = 0  # the last message's receive time, in ns
     topics: tuple[BagTopic, ...] = ()
     robot: str | None = None  # the robot a dura recording is of
     keys_are_bus_keys: bool = False  # a dura recording: topics are bus keys
-    skipped: list[str] = field(default_factory=list)  # why some topics cannot be read
+    notes: list[str] = field(default_factory=list)  # what was not read, each in one line
+
+    @property
+    def start(self) -> float:
+        """The first message's receive time, in seconds."""
+        return self.start_ns / 1e9
+
+    @property
+    def end(self) -> float:
+        """The last message's receive time, in seconds."""
+        return self.end_ns / 1e9
 
     def __enter__(self) -> Bag:
         return self
@@ -79,22 +89,24 @@ class Bag(ABC):
 
     @abstractmethod
     def messages(
-        self, routes: Mapping[str, Route], start: float | None = None, end: float | None = None
+        self, routes: Mapping[str, Route], start: int | None = None, end: int | None = None
     ) -> Iterator[Message]:
-        """Yield the messages of the routed topics from ``start`` to ``end`` (seconds,
-        both included) in order of reception, after the component states before
-        ``start`` (they say which components run when the window opens).
+        """Yield the messages of the routed topics from ``start`` to ``end`` (integer
+        nanoseconds, both included) in order of reception, after the component states
+        before ``start`` (they say which components run when the window opens).
+
+        A message whose type the bag does not define is still yielded (observers that
+        do not decode it use its times); decoding it fails, and :attr:`notes` says so
+        once per topic.
 
         Raises:
-            BagError: the file is truncated or corrupt, or a routed topic unreadable.
+            BagError: the file is corrupt, or a routed topic unreadable.
         """
 
-    def check(self, routes: Mapping[str, Route]) -> None:  # noqa: B027 - an optional hook
-        """Refuse routes to topics that cannot be read (an unknown message type).
-
-        Raises:
-            BagError: naming the file, the topic and the reason.
-        """
+    def note(self, text: str) -> None:
+        """Say once why something of the bag was not read."""
+        if text not in self.notes:
+            self.notes.append(text)
 
 
 def _bag_topic(bag: Bag, name: str) -> BagTopic | None:

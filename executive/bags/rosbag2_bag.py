@@ -1,20 +1,30 @@
-"""rosbag2 bags read with ``rosbags``: sqlite3 storage (``.db3``), and folders whose files
-are compressed (MCAP folders are read by :mod:`executive.bags.mcap_bag`, which keeps
-the publish times).
+"""rosbag2's sqlite3 storage (``.db3`` files), read file by file with ``rosbags``, and
+the zstd compression rosbag2 writes (whole files or each message) in both storages.
 
-A sqlite3 bag records when each message was received, not when it was sent; message
-definitions come from the bag (rosbag2 stores them since Jazzy) or from ``rosbags``'
-type store of the bag's ROS distribution.
+Each ``.db3`` file is read on its own and the files merged by time: a file's topics
+are matched to the routes by name, never through ``metadata.yaml``, whose topic list
+and QoS text need not agree with the files' (rosbag2's own test bags differ there, and
+``rosbags`` then finds no message at all). The ``timestamp`` of a sqlite3 message is
+when it was received; sqlite3 storage records no send time. The window is the first
+and last message's time as the files hold them, in integer nanoseconds. Every schema
+of the ``messages`` and ``topics`` tables from Foxy on is read (``rosbags`` tells them
+apart); message definitions come from the file (rosbag2 stores them since Jazzy), else
+from the ``--types`` files, else from ``rosbags``' type store of the bag's distribution.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
+import contextlib
+import heapq
+import tempfile
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
+import zstandard
 from rosbags.interfaces import Connection, MessageDefinitionFormat
-from rosbags.rosbag2 import Reader
+from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
 
 from executive.bags.bag import Bag, BagTopic, Route
 from executive.bags.ros_messages import Definition, RosTypes
@@ -22,122 +32,180 @@ from executive.bus.session import Message
 from executive.ros2.message import RosMessage
 from knowledge.errors import BagError
 
+FORMATS = {MessageDefinitionFormat.MSG: "ros2msg", MessageDefinitionFormat.IDL: "ros2idl"}
 
-def _reason(error: BaseException) -> str:
+
+def reason(error: BaseException) -> str:
     text = str(error).strip()
     return f"{type(error).__name__}: {text}" if text else type(error).__name__
 
 
-@dataclass
-class RosbagsBag(Bag):
-    """A rosbag2 bag that ``rosbags`` reads."""
+def unpack_message(data: bytes) -> bytes:
+    """Decompress one message of a bag compressed per message (zstd)."""
+    return bytes(zstandard.ZstdDecompressor().decompressobj().decompress(data))
 
-    reader: Reader | None = None
-    connections: tuple[Connection, ...] = ()
+
+def unpack_files(files: Sequence[Path], into: Path) -> list[Path]:
+    """Decompress the files of a bag compressed per file (``x.db3.zstd`` -> ``x.db3``).
+
+    Raises:
+        BagError: a file is not zstd or is cut short.
+    """
+    unpacked = []
+    for path in files:
+        target = into / path.name.removesuffix(".zstd")
+        try:
+            with path.open("rb") as source, target.open("wb") as out:
+                zstandard.ZstdDecompressor().copy_stream(source, out)
+        except (OSError, zstandard.ZstdError) as e:
+            raise BagError(f"{path}: cannot decompress it ({reason(e)})") from e
+        unpacked.append(target)
+    return unpacked
+
+
+@dataclass
+class Sqlite3Bag(Bag):
+    """rosbag2 ``.db3`` files, read as one bag."""
+
+    readers: list[Sqlite3Reader] = field(default_factory=list)
     distro: str | None = None
+    unpack: Callable[[bytes], bytes] | None = None  # messages compressed one by one
+    temporary: tempfile.TemporaryDirectory[str] | None = None  # decompressed files
+    extra_types: Mapping[str, Any] = field(default_factory=dict)
     _types: RosTypes | None = field(default=None, repr=False)
 
     def close(self) -> None:
-        if self.reader is not None and self.reader.is_open:
-            self.reader.close()
+        for reader in self.readers:
+            with contextlib.suppress(Exception):  # closed already
+                reader.close()
+        self.readers.clear()
+        if self.temporary is not None:
+            self.temporary.cleanup()
+            self.temporary = None
 
     def _ros_types(self) -> RosTypes:
         if self._types is None:
-            formats = {
-                MessageDefinitionFormat.MSG: "ros2msg",
-                MessageDefinitionFormat.IDL: "ros2idl",
-            }
             definitions = {
-                c.msgtype: Definition(c.msgtype, formats[c.msgdef.format], c.msgdef.data)
-                for c in self.connections
-                if c.msgdef.format in formats and c.msgdef.data
+                c.msgtype: Definition(c.msgtype, FORMATS[c.msgdef.format], c.msgdef.data)
+                for reader in self.readers
+                for c in reader.connections
+                if c.msgdef.format in FORMATS and c.msgdef.data
             }
-            self._types = RosTypes(definitions.values(), self.distro, str(self.path))
+            self._types = RosTypes(definitions.values(), self.distro, self.extra_types)
         return self._types
 
-    def check(self, routes: Mapping[str, Route]) -> None:
-        types = self._ros_types()
-        for connection in self.connections:
-            if connection.topic in routes and not types.knows(connection.msgtype):
-                raise BagError(
-                    f"{self.path}: unknown message type '{connection.msgtype}' of topic "
-                    f"'{connection.topic}' (the bag does not define it and rosbags' "
-                    f"{types.store.name.lower()} types do not know it)"
-                )
-
     def messages(
-        self, routes: Mapping[str, Route], start: float | None = None, end: float | None = None
+        self, routes: Mapping[str, Route], start: int | None = None, end: int | None = None
     ) -> Iterator[Message]:
-        self.check(routes)
-        if self.reader is None:
+        if not self.readers:
             raise BagError(f"{self.path}: the bag is closed")
-        types = self._ros_types()
-        makers: dict[int, Callable[[bytes, int], Message]] = {}
-        chosen = [c for c in self.connections if c.topic in routes]
-        for connection in chosen:
-            makers[connection.id] = _maker(routes[connection.topic], types, connection.msgtype)
-        found = self.reader.messages(
-            chosen,
-            start=None if start is None else round(start * 1e9),
-            stop=None if end is None else round(end * 1e9) + 1,
-        )
+        streams = []
+        for reader in self.readers:
+            chosen = [c for c in reader.connections if c.topic in routes]
+            if chosen:  # none: rosbags would read every topic
+                makers = {c.id: self._maker(routes[c.topic], c) for c in chosen}
+                streams.append(self._read(reader, chosen, makers, start, end))
+        merged = streams[0] if len(streams) == 1 else heapq.merge(*streams, key=_time)
+        for _, message in merged:
+            yield message
+
+    def _read(
+        self,
+        reader: Sqlite3Reader,
+        chosen: list[Connection],
+        makers: dict[int, Callable[[bytes, int], Message]],
+        start: int | None,
+        end: int | None,
+    ) -> Iterator[tuple[int, Message]]:
+        stop = None if end is None else end + 1
+        found = reader.messages(chosen, start=start, stop=stop)
         while True:
             try:
                 connection, timestamp, raw = next(found)
+                data = bytes(raw) if self.unpack is None else self.unpack(bytes(raw))
             except StopIteration:
                 return
             except Exception as e:  # a cut or corrupt database fails in many ways
-                raise BagError(f"{self.path}: truncated or corrupt ({_reason(e)})") from e
-            yield makers[connection.id](bytes(raw), timestamp)
+                raise BagError(f"{reader.path}: truncated or corrupt ({reason(e)})") from e
+            yield timestamp, makers[connection.id](data, timestamp)
+
+    def _maker(self, route: Route, connection: Connection) -> Callable[[bytes, int], Message]:
+        topic = connection.topic
+        decoder = self._ros_types().decoder(
+            connection.msgtype,
+            lambda why: self.note(f"{self.path}: topic '{topic}' not decoded: {why}"),
+        )
+        key, caller = route.key, route.caller
+
+        def make(raw: bytes, timestamp: int) -> Message:
+            return RosMessage(key, raw, caller, None, timestamp / 1e9, decode=decoder)
+
+        return make
 
 
-def _maker(route: Route, types: RosTypes, msgtype: str) -> Callable[[bytes, int], Message]:
-    key, caller, decoder = route.key, route.caller, types.decoder(msgtype)
-
-    def make(raw: bytes, timestamp: int) -> Message:
-        return RosMessage(key, raw, caller, None, timestamp / 1e9, decode=decoder)
-
-    return make
+def _time(item: tuple[int, Message]) -> int:
+    return item[0]
 
 
-def open_rosbags(path: Path, *, file: bool = False) -> RosbagsBag:
-    """Open a rosbag2 folder or (``file``) a sqlite3 file with ``rosbags``.
+def open_sqlite3(
+    path: Path,
+    files: Sequence[Path],
+    *,
+    distro: str | None = None,
+    compression: str = "",
+    extra_types: Mapping[str, Any] | None = None,
+) -> Sqlite3Bag:
+    """Open rosbag2 ``.db3`` files as one bag (``path`` names it in messages).
+
+    Args:
+        compression: rosbag2's compression mode: ``file``, ``message`` or none.
 
     Raises:
-        BagError: it is not a bag ``rosbags`` can read, or it is truncated or corrupt.
+        BagError: a file is not a database ``rosbags`` reads, or is truncated or corrupt.
     """
+    bag = Sqlite3Bag(path=path, format="rosbag2 (sqlite3)", distro=distro)
+    bag.extra_types = extra_types or {}
     try:
-        reader = Reader(path)
+        if compression == "file":
+            bag.temporary = tempfile.TemporaryDirectory(prefix="dura-bag-")
+            files = unpack_files(files, Path(bag.temporary.name))
+        elif compression == "message":
+            bag.unpack = unpack_message
+        for name in files:
+            bag.readers.append(_open_file(name))
+        _read_topics(bag)
+    except BaseException:
+        bag.close()
+        raise
+    return bag
+
+
+def _open_file(path: Path) -> Sqlite3Reader:
+    try:
+        reader = Sqlite3Reader(path)
         reader.open()
     except Exception as e:  # rosbags and sqlite3 fail in many ways on a bad file
-        what = "truncated or corrupt" if file else "not a readable rosbag2"
-        raise BagError(f"{path}: {what} ({_reason(e)})") from e
-    try:
-        connections = tuple(reader.connections)
-        storage = "sqlite3" if path.suffix == ".db3" or _stored_in(path, "sqlite3") else "rosbags"
-        topics = tuple(
-            BagTopic(name, info.msgtype or "?", info.msgcount)
-            for name, info in sorted(reader.topics.items())
-        )
-        count = reader.message_count
-        start = reader.start_time / 1e9 if count else 0.0
-        end = (reader.end_time - 1) / 1e9 if count else 0.0
-        distro = reader.ros_distro
-    except Exception as e:
-        reader.close()
-        raise BagError(f"{path}: truncated or corrupt ({_reason(e)})") from e
-    return RosbagsBag(
-        path=path,
-        format=f"rosbag2 ({storage})",
-        start=start,
-        end=end,
-        topics=topics,
-        reader=reader,
-        connections=connections,
-        distro=distro,
+        raise BagError(f"{path}: truncated or corrupt ({reason(e)})") from e
+    return reader
+
+
+def _read_topics(bag: Sqlite3Bag) -> None:
+    counts: dict[str, int] = {}
+    types: dict[str, set[str]] = {}
+    starts, ends = [], []
+    for reader in bag.readers:
+        try:
+            for connection in reader.connections:
+                counts[connection.topic] = counts.get(connection.topic, 0) + connection.msgcount
+                types.setdefault(connection.topic, set()).add(connection.msgtype)
+            if reader.metadata.message_count:
+                starts.append(reader.metadata.start_time)
+                ends.append(reader.metadata.end_time - 1)  # rosbags: the time after the last
+        except Exception as e:
+            raise BagError(f"{reader.path}: truncated or corrupt ({reason(e)})") from e
+    bag.start_ns = min(starts) if starts else 0
+    bag.end_ns = max(ends) if ends else 0
+    bag.topics = tuple(
+        BagTopic(name, " | ".join(sorted(types[name])) or "?", counts[name])
+        for name in sorted(counts)
     )
-
-
-def _stored_in(path: Path, storage: str) -> bool:
-    metadata = path / "metadata.yaml"
-    return metadata.is_file() and f"storage_identifier: {storage}" in metadata.read_text()

@@ -1,4 +1,5 @@
-"""``dura record [--robot ROBOT.yaml] OUT.mcap``: record a running robot's bus traffic."""
+"""``dura record [--robot ROBOT.yaml] OUT.mcap``: record a running robot's bus traffic;
+``dura record --repair FILE``: make a recording cut off by a crash whole again."""
 
 from __future__ import annotations
 
@@ -9,19 +10,22 @@ from pathlib import Path
 from typing import Any
 
 from executive.bags.recording import (
+    DEFAULT_FLUSH_EVERY,
     DEFAULT_KEEP,
     DEFAULT_MAX_SIZE,
     MB,
     BusRecording,
     Recorder,
+    repair,
 )
 from executive.bus.api.components import COMPONENT_LIST, lifecycle
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.wording import plural
-from executive.cli.arguments import count, megabytes
+from executive.cli.arguments import count, megabytes, seconds
 from executive.cli.client import add_client_options, connect
 from executive.cli.output import add_json_flag, print_json, shown
 from executive.cli.stopping import stop_on_signals, wait
+from knowledge.errors import BagError
 
 
 def register(sub: Any) -> None:
@@ -32,9 +36,20 @@ def register(sub: Any) -> None:
         "observations, diagnoses, resources, events and component states) to an MCAP file "
         "with JSON schemas, for MCAP tools and 'dura replay'. It stops on Ctrl-C or "
         "SIGTERM, or when the executive stops. The file is rotated at --max-size "
-        "(OUT.mcap becomes OUT.1.mcap, ...), with --keep older files kept.",
+        "(OUT.mcap becomes OUT.1.mcap, ...), with --keep older files kept. What was "
+        "recorded is on disk as a whole chunk every --flush seconds, so a recorder "
+        "killed loses at most that; 'dura record --repair FILE' makes such a file whole.",
     )
-    p.add_argument("out", metavar="OUT.mcap", type=Path, help="the recording")
+    p.add_argument("out", metavar="OUT.mcap", type=Path, nargs="?", help="the recording")
+    p.add_argument(
+        "--repair", metavar="FILE", type=Path,
+        help="rewrite a recording cut off by a crash as a whole file, with its messages up "
+        "to its last whole chunk, and say how much was cut (no robot needed)",
+    )  # fmt: skip
+    p.add_argument(
+        "--flush", type=seconds(), default=DEFAULT_FLUSH_EVERY, metavar="S",
+        help=f"write a whole chunk at least every S seconds (default {DEFAULT_FLUSH_EVERY:g})",
+    )  # fmt: skip
     add_client_options(p)
     p.add_argument(
         "--max-size",
@@ -55,6 +70,10 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.repair is not None:
+        return run_repair(args)
+    if args.out is None:
+        raise BagError("record: give OUT.mcap to record to, or --repair FILE")
     stop = stop_on_signals()
     with connect(args) as bus:
         seen = threading.Event()
@@ -67,7 +86,9 @@ def run(args: argparse.Namespace) -> int:
 
         bus.watch_alive(EXECUTIVE_ALIVE, on_executive)
         states = [lifecycle(c).to_payload() for c in COMPONENT_LIST.call(bus).components]
-        recorder = Recorder(args.out, bus.robot, max_size=args.max_size, keep=args.keep)
+        recorder = Recorder(
+            args.out, bus.robot, max_size=args.max_size, keep=args.keep, flush_every=args.flush
+        )
         recording = BusRecording(bus, recorder, on_failure=lambda _: stop.set())
         recording.start(states)
         if not args.json:
@@ -88,5 +109,21 @@ def run(args: argparse.Namespace) -> int:
         print(
             f"dura: recorded {plural(recorder.messages, 'message')} of robot '{bus.robot}' in "
             f"{plural(recorder.files, 'file')}, the newest {shown(args.out)}"
+        )
+    return 0
+
+
+def run_repair(args: argparse.Namespace) -> int:
+    repaired = repair(args.repair)
+    if args.json:
+        print_json({"path": str(args.repair), **vars(repaired)})
+        return 0
+    until = "" if repaired.end is None else f", the last at {repaired.end:.3f}"
+    if not repaired.rewritten:
+        print(f"dura: {shown(args.repair)} is whole ({plural(repaired.messages, 'message')})")
+    else:
+        print(
+            f"dura: repaired {shown(args.repair)}: kept {plural(repaired.messages, 'message')}"
+            f"{until}; cut {repaired.lost} bytes after its last whole chunk"
         )
     return 0

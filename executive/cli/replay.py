@@ -10,11 +10,11 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any, TextIO
 
+from executive.bag_replay import BagReplay, MessageCounts
 from executive.bus.session import Message
 from executive.bus.wording import plural
 from executive.cli.arguments import factor, seconds
 from executive.cli.output import add_json_flag, print_json, shown
-from executive.testing.replay import BagReplay
 from knowledge.robot import load_robot
 from monitoring.replay import Replay
 from monitoring.timeline import Entry, RepairEntry, Timeline
@@ -58,12 +58,17 @@ def register(sub: Any) -> None:
         "--map", action="append", default=[], metavar="BAG_TOPIC=TOPIC",
         help="replay a recorded topic as one of the robot's (repeatable)",
     )  # fmt: skip
+    p.add_argument(
+        "--types", action="append", default=[], type=Path, metavar="DIR",
+        help="read message types the bag does not define from the .msg, .srv, .action "
+        "(laid out as in ROS packages) and .idl files under DIR (repeatable)",
+    )  # fmt: skip
     add_json_flag(p)
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    robot = load_robot(args.robot)
+    robot = load_robot(args.robot, domain=False)  # a replay plans nothing
     printer = None if args.json else Printer(sys.stdout)
     with BagReplay(
         args.bag,
@@ -72,6 +77,7 @@ def run(args: argparse.Namespace) -> int:
         begin=args.begin,
         end=args.end,
         on_entry=printer.entry if printer is not None else None,
+        types=args.types,
     ) as session:
         bag = session.bag
         if printer is not None:
@@ -82,8 +88,11 @@ def run(args: argparse.Namespace) -> int:
         if printer is not None and sys.stderr.isatty():
             messages = Progress(sys.stderr, session.start, session.end).wrap(messages)
         timeline = session.run(messages)
+        counts = session.counts(timeline)
+        tolerance = session.replay.loop
     if printer is not None:
-        printer.summary(timeline)
+        printer.tolerance = tolerance
+        printer.summary(timeline, counts, bag.notes)
     else:
         print_json(
             {
@@ -92,6 +101,9 @@ def run(args: argparse.Namespace) -> int:
                 "robot": robot.name,
                 "routes": {name: vars(route) for name, route in session.routes.items()},
                 **timeline.to_payload(),
+                "counts": counts.to_payload(),
+                "notes": bag.notes,
+                "live": {"tolerance": tolerance, "differences": timeline.differences(tolerance)},
             }
         )
     return 0
@@ -150,6 +162,7 @@ class Printer:
 
     def __init__(self, out: TextIO) -> None:
         self.out = out
+        self.tolerance = 0.0  # seconds within which a replay is as live
 
     def header(self, session: BagReplay) -> None:
         bag, start, end = session.bag, session.start, session.end
@@ -176,10 +189,22 @@ class Printer:
         self.out.write(f"{entry.time:9.3f}  {entry.kind.value:<11}  {entry.describe()}\n")
         self.out.flush()
 
-    def summary(self, timeline: Timeline) -> None:
+    def summary(self, timeline: Timeline, counts: MessageCounts, notes: list[str]) -> None:
         out = self.out
         length = timeline.end - timeline.begin
-        out.write(f"\nsummary: {length:.3f} s replayed, {plural(timeline.messages, 'message')}\n")
+        used = plural(timeline.messages, "message")
+        if counts.in_bag != timeline.messages:
+            used = f"{timeline.messages} of the bag's {plural(counts.in_bag, 'message')}"
+            left = []
+            if counts.not_routed:
+                topics = ", ".join(counts.not_routed_topics)
+                left.append(f"{counts.not_routed} on topics the robot does not watch: {topics}")
+            if counts.outside_window:
+                left.append(f"{counts.outside_window} outside the window")
+            used += f" ({'; '.join(left)})" if left else ""
+        out.write(f"\nsummary: {length:.3f} s replayed, {used}\n")
+        for note in notes:
+            out.write(f"  note: {note}\n")
         holds = timeline.holds()
         if not holds:
             out.write("  nothing was diagnosed\n")
@@ -206,3 +231,11 @@ class Printer:
                 out.write(
                     f"  recorded (live) rule {entry.rule} fired: {entry.action} ({entry.time:.3f})\n"
                 )
+        if timeline.recorded:
+            differences = timeline.differences(self.tolerance)
+            if not differences:
+                out.write(
+                    f"  as live: the same diagnoses and rule firings (within {self.tolerance:.3f} s)\n"
+                )
+            for difference in differences:
+                out.write(f"  not as live: {difference}\n")

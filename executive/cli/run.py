@@ -71,6 +71,12 @@ def register(sub: Any) -> None:
         metavar="MB",
         help="rotate the recording at this size (default 100)",
     )
+    p.add_argument(
+        "--record-flush",
+        type=seconds(),
+        metavar="S",
+        help="write the recording as a whole chunk at least every S seconds (default 1)",
+    )
     split = p.add_mutually_exclusive_group()
     split.add_argument(
         "--only",
@@ -112,6 +118,7 @@ def run(args: argparse.Namespace) -> int:
         sequential_starts=args.starts == "sequential",
         record=args.record.resolve() if args.record is not None else None,
         record_max_size=args.record_max_size,
+        record_flush=args.record_flush,
         on_failure=failed,
         without=args.without,
     )

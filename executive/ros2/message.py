@@ -24,6 +24,7 @@ class RosMessage(Message):
     """A ROS 2 message; ``payload`` is decoded from its CDR bytes when first read."""
 
     decode: Decode | None = field(default=None, repr=False)
+    type: str = ""  # its ROS 2 type (sensor_msgs/msg/LaserScan), where known: recordings
 
     @property
     def payload(self) -> dict[str, Any]:

@@ -216,6 +216,7 @@ class Ros2Topics:
                     received,
                     None,
                     feed.decode,
+                    feed.type or "",
                 )
                 for handler in handlers:
                     try:

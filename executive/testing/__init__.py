@@ -92,8 +92,9 @@ def dura_robot(tmp_path: Path) -> Iterator[Callable[..., RobotProcess]]:
 
 @pytest.fixture
 def dura_replay() -> Callable[..., Timeline]:
-    """Replay recordings: ``dura_replay(bag, robot, maps=(), begin=None, end=None)`` → the
-    :class:`monitoring.timeline.Timeline` of the robot's monitoring over the recording."""
+    """Replay recordings: ``dura_replay(bag, robot, maps=(), begin=None, end=None,
+    types=())`` → the :class:`monitoring.timeline.Timeline` of the robot's monitoring over
+    the recording (``types``: folders of message definitions the bag does not have)."""
     from executive.testing.replay import replay_bag  # monitoring and bag readers: only when used
 
     return replay_bag

@@ -23,7 +23,7 @@ from executive.bags.bag import Route
 from executive.bags.reader import open_bag
 from executive.bus.keys import OBSERVATIONS, observers_api
 from executive.testing.harness import RobotProcess, robot_variant
-from executive.testing.replay import replay_bag
+from executive.testing.replay import BagReplay, replay_bag
 from monitoring.timeline import Timeline
 from tests.conftest import ROOT, USECASE, wait_for
 
@@ -134,3 +134,59 @@ def test_dura_run_records_its_own_traffic_and_its_observers_replay_as_they_ran(
         for ready in readies:  # the first report after each start: its start-up time
             first = min(t for t in replayed if t > ready)
             assert first == pytest.approx(min(t for t in stamps if t > ready), abs=0.05)
+
+
+def test_a_run_whose_lidar_was_restarted_replays_to_the_same_diagnosis_and_firing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The use case's own rule restarts lidar a few ms after the diagnosis: the replay
+    loops as the live observers did, so it diagnoses before the recorded restart."""
+    monkeypatch.setenv("PYTHONPATH", str(ROOT))
+    description = robot_variant(
+        USECASE, tmp_path / "description", {"behaviors": {"move_to": LONG_MOVE}}
+    )
+    out = tmp_path / "robot" / "run.mcap"
+    run_args = ["--record", str(out), "--record-flush", "0.5"]
+    robot = RobotProcess(description, tmp_path / "robot", run_args=run_args)
+    robot.start()
+    try:
+        robot.request("task/start", MOVE)
+        assert wait_for(lambda: lidar_observed_ok(robot), 30)
+        robot.inject_fault("lidar", "stop_publishing")
+        assert wait_for(lambda: robot.events("RULE_FIRED"), 20)
+        assert wait_for(lambda: lidar_observed_ok(robot), 30)  # restarted, publishing again
+    finally:
+        robot.stop()
+    with BagReplay(out, description) as session:
+        timeline = session.run()
+        tolerance = session.replay.loop
+    live = timeline.recorded_holds()
+    assert [h.diagnosis for h in live][:1] == [("lidar",)]
+    assert timeline.differences(tolerance) == []
+    assert [h.diagnosis for h in timeline.holds()] == [h.diagnosis for h in live]
+    assert [r.rule for r in timeline.repairs()][:1] == ["restart_lidar"]
+
+
+def test_a_run_whose_lidar_was_restarted_replays_as_live_from_dura_record(
+    dura_robot: Callable[..., RobotProcess], tmp_path: Path
+) -> None:
+    """The same, recorded by ``dura record`` in a process of its own: its receive times
+    come a little after the executive's."""
+    robot = dura_robot(USECASE, changes={"behaviors": {"move_to": LONG_MOVE}})
+    out = tmp_path / "run.mcap"
+    recorder = record(robot, out)
+    try:
+        robot.request("task/start", MOVE)
+        assert wait_for(lambda: lidar_observed_ok(robot), 30)
+        robot.inject_fault("lidar", "stop_publishing")
+        assert wait_for(lambda: robot.events("RULE_FIRED"), 20)
+        assert wait_for(lambda: lidar_observed_ok(robot), 30)  # restarted, publishing again
+    finally:
+        robot.stop()
+        recorder.wait(30)
+    with BagReplay(out, robot.description) as session:
+        timeline = session.run()
+        tolerance = session.replay.loop
+    assert [h.diagnosis for h in timeline.recorded_holds()][:1] == [("lidar",)]
+    assert timeline.differences(tolerance) == []
+    assert [r.rule for r in timeline.repairs()][:1] == ["restart_lidar"]

@@ -3,6 +3,7 @@ rules driven by scripted messages, with the messages' time as the clock."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from collections.abc import Iterator
 
@@ -145,3 +146,36 @@ def test_with_component_states_observers_run_only_while_their_component_is_ready
         (8.0, "lidar/1", "ok"),
     ]
     assert timeline.diagnoses() == []  # a stopped component is no fault
+
+
+def test_observers_loop_when_the_live_run_says_they_did(robot: RobotDescription) -> None:
+    # the live timeout observer (8 Hz) looped 40 ms off the replay's own phase
+    live = [2.04 + k / 8 for k in range(150)]
+    loops = {"lidar/1": [T0 + t for t in live]}
+    timeline = replay(robot, gap_of_two_seconds(), loops=loops)
+    timeouts = [(e.time, e.info.observation_msg) for e in timeline.observations("lidar/1")]
+    assert timeouts == [(2.04, "ok"), (10.415, "timeout"), (12.04, "ok")]  # live loops only
+    own = [(e.time, e.info.observation_msg) for e in replay(robot, gap_of_two_seconds())
+           .observations("lidar/1")]  # fmt: skip
+    assert own == [(2.0, "ok"), (10.5, "timeout"), (12.125, "ok")]
+
+
+def test_the_replay_says_where_it_differs_from_the_live_run(robot: RobotDescription) -> None:
+    timeline = replay(robot, gap_of_two_seconds())
+    assert timeline.differences(0.125) == []  # nothing recorded: nothing to compare
+    live = [
+        DiagnosisEntry(10.6, "DIAGNOSED", (("lidar",),)),
+        DiagnosisEntry(12.6, "OK"),
+        RepairEntry(10.6, "restart_lidar", "restart lidar", ("lidar",)),
+    ]
+    as_live = dataclasses.replace(timeline, recorded=tuple(live))
+    assert as_live.differences(0.125) == []
+    assert as_live.differences(0.05) == [
+        "diagnosis lidar: live 10.600-12.600, replayed 10.520-12.520",
+        "rules fired: live restart_lidar at 10.600, replayed restart_lidar at 10.520",
+    ]
+    never = dataclasses.replace(timeline, recorded=(DiagnosisEntry(3.0, "OK"),))
+    assert never.differences(0.125) == [
+        "diagnosis lidar: live never, replayed 10.520-12.520",
+        "rules fired: live none, replayed restart_lidar at 10.520",
+    ]

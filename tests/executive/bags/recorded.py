@@ -8,8 +8,9 @@ import sqlite3
 from pathlib import Path
 
 import numpy as np
+import yaml
 from mcap.writer import Writer as McapWriter
-from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 T0 = 1_700_000_000  # seconds since the epoch: the bags' first message
@@ -49,9 +50,15 @@ def write_scan_bag(
     topic: str = "/scan",
     times: list[int] | None = None,
     version: int = 9,
+    compression: str = "",
 ) -> Path:
-    """A rosbag2 folder with a lidar's scan at 10 Hz that stops for 2 s at 10 s."""
-    with Writer(path, version=version, storage_plugin=STORAGES[storage]) as writer:  # type: ignore[arg-type]
+    """A rosbag2 folder with a lidar's scan at 10 Hz that stops for 2 s at 10 s
+    (``compression``: rosbag2's zstd per ``file`` or per ``message``)."""
+    writer = Writer(path, version=version, storage_plugin=STORAGES[storage])  # type: ignore[arg-type]
+    if compression:
+        mode = {"file": CompressionMode.FILE, "message": CompressionMode.MESSAGE}
+        writer.set_compression(mode[compression], CompressionFormat.ZSTD)
+    with writer:
         connection = writer.add_connection(topic, SCAN, typestore=TYPES)
         for t in scan_times() if times is None else times:
             writer.write(connection, t, scan(t))
@@ -62,16 +69,17 @@ UNKNOWN = "acme_msgs/msg/Sweep"
 SWEEP = "float32 angle\n"
 
 
-def write_unknown_type_bag(path: Path) -> Path:
-    """A sqlite3 bag of a type nobody knows, without its definition (as Humble wrote them)."""
+def write_unknown_type_bag(path: Path, times: list[int] | None = None) -> Path:
+    """A sqlite3 bag of a type nobody knows, without its definition (as Humble wrote
+    them): ten messages at 10 Hz, or one at each of ``times``."""
     types = get_typestore(Stores.EMPTY)
     types.register(get_types_from_msg(SWEEP, UNKNOWN))
     with Writer(path, version=8, storage_plugin=StoragePlugin.SQLITE3) as writer:
         connection = writer.add_connection("/scan", UNKNOWN, typestore=types)
-        for k in range(10):
+        for k, t in enumerate(times or [T0 * 10**9 + k * 10**8 for k in range(10)]):
             message = types.types[UNKNOWN](angle=float(k))
             data = bytes(types.serialize_cdr(message, UNKNOWN))
-            writer.write(connection, T0 * 10**9 + k * 10**8, data)
+            writer.write(connection, t, data)
     (database,) = path.glob("*.db3")
     with contextlib.closing(sqlite3.connect(database)) as db, db:
         db.execute("DELETE FROM message_definitions")
@@ -97,4 +105,88 @@ def write_mcap(
         for received, published in records:
             writer.add_message(channel, received, scan(published), published)
         writer.finish()
+    return path
+
+
+# The sqlite3 schema and metadata.yaml version each ROS 2 distribution's rosbag2 wrote.
+SQLITE3_SCHEMAS = {
+    "eloquent": (1, 3),  # topics without QoS, no schema table
+    "foxy": (2, 4),  # topics with QoS profiles
+    "humble": (3, 5),  # a schema table, a metadata table
+    "jazzy": (4, 9),  # message definitions, type hashes (as rosbags writes it)
+}
+QOS = (  # as Foxy wrote it in metadata.yaml: its database says 2147483647 for "none"
+    "- history: 3\n  depth: 0\n  reliability: 1\n  durability: 2\n  deadline:\n    sec: 0\n"
+    "    nsec: 0\n  lifespan:\n    sec: 0\n    nsec: 0\n  liveliness: 1\n"
+    "  liveliness_lease_duration:\n    sec: 0\n    nsec: 0\n"
+    "  avoid_ros_namespace_conventions: false"
+)
+_TOPICS = {
+    1: "id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL, "
+    "serialization_format TEXT NOT NULL",
+    2: "id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL, "
+    "serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL",
+}
+_COLUMNS = {1: "id, name, type, serialization_format", 2: _TOPICS[2].replace(
+    " INTEGER PRIMARY KEY", "").replace(" TEXT NOT NULL", "")}  # fmt: skip
+
+
+def as_written_by(folder: Path, distribution: str) -> Path:
+    """Rewrite a rosbags sqlite3 bag as ``distribution``'s rosbag2 wrote it: its tables'
+    schema, its metadata version, and a ``metadata.yaml`` whose topics come in another
+    order with QoS text that differs from the database's, as in rosbag2's test bags."""
+    schema, version = SQLITE3_SCHEMAS[distribution]
+    with contextlib.closing(sqlite3.connect(next(folder.glob("*.db3")))) as db, db:
+        if schema < 4:
+            db.execute("DROP TABLE message_definitions")
+            columns = _TOPICS[min(schema, 2)]
+            db.execute(f"CREATE TABLE topics_old({columns})")
+            names = _COLUMNS[min(schema, 2)]
+            db.execute(f"INSERT INTO topics_old SELECT {names} FROM topics")  # noqa: S608 - ours
+            db.execute("DROP TABLE topics")
+            db.execute("ALTER TABLE topics_old RENAME TO topics")
+        if schema == 3:
+            db.execute("UPDATE schema SET schema_version = 3, ros_distro = 'humble'")
+        if schema < 3:
+            db.execute("DROP TABLE schema")
+            db.execute("DROP TABLE metadata")
+    metadata = folder / "metadata.yaml"
+    info = yaml.safe_load(metadata.read_text())
+    bag = info["rosbag2_bagfile_information"]
+    bag["version"] = version
+    for key in ("custom_data", "files", "ros_distro") if version < 9 else ():
+        bag.pop(key, None)
+    bag["topics_with_message_count"].reverse()
+    bag["topics_with_message_count"].append(
+        {"message_count": 0, "topic_metadata": {"name": "/parameter_events",
+         "type": "rcl_interfaces/msg/ParameterEvent", "serialization_format": "cdr"}}
+    )  # fmt: skip
+    for topic in bag["topics_with_message_count"]:
+        topic["topic_metadata"]["offered_qos_profiles"] = QOS
+        topic["topic_metadata"].pop("type_description_hash", None)
+    metadata.write_text(yaml.safe_dump(info))
+    return folder
+
+
+def write_split_bag(
+    path: Path, storage: str, parts: list[list[int]], *, compression: str = ""
+) -> Path:
+    """A scan bag in several files, ``parts`` the receive times in each (as rosbag2
+    splits a bag by size or duration)."""
+    path.mkdir()
+    files, infos = [], []
+    for index, times in enumerate(parts):
+        part = write_scan_bag(path.parent / f"{path.name}_part{index}", storage, times=times,
+                              compression=compression)  # fmt: skip
+        info = yaml.safe_load((part / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+        (source,) = [part / name for name in info["relative_file_paths"]]
+        target = path / source.name.replace(part.name, f"{path.name}_{index}")
+        source.rename(target)
+        files.append(target.name)
+        infos.append(info)
+    merged = dict(infos[0])
+    merged["relative_file_paths"] = files
+    merged["message_count"] = sum(i["message_count"] for i in infos)
+    merged.pop("files", None)
+    (path / "metadata.yaml").write_text(yaml.safe_dump({"rosbag2_bagfile_information": merged}))
     return path

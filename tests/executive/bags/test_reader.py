@@ -9,16 +9,21 @@ import sqlite3
 from pathlib import Path
 
 import pytest
+from mcap.writer import Writer as McapWriter
 
 from executive.bags.bag import Route, routes
-from executive.bags.reader import open_bag
+from executive.bags.reader import open_bag, read_types
 from knowledge.description import RobotDescription
-from knowledge.errors import BagError
+from knowledge.errors import BagError, BusError
 from knowledge.robot import load_robot
 from monitoring.replay import Replay
 from tests.conftest import USECASE
 from tests.executive.bags.recorded import (
+    SCAN,
+    SWEEP,
     T0,
+    TYPES,
+    scan,
     scan_times,
     write_mcap,
     write_scan_bag,
@@ -52,7 +57,7 @@ def test_a_rosbag2_is_read_as_bus_messages_with_the_bags_times_and_decoded_paylo
 
 def test_a_window_yields_only_the_messages_in_it(tmp_path: Path, robot: RobotDescription) -> None:
     with open_bag(write_scan_bag(tmp_path / "bag")) as bag:
-        messages = list(bag.messages(routes(bag, robot), T0 + 1.0, T0 + 2.0))
+        messages = list(bag.messages(routes(bag, robot), (T0 + 1) * 10**9, (T0 + 2) * 10**9))
     assert [round(m.received - T0, 3) for m in messages] == [1.0 + k / 10 for k in range(11)]
 
 
@@ -114,24 +119,77 @@ def test_a_humble_bag_without_definitions_reads_its_types_from_the_type_store(
     assert first.payload["scan_time"] == pytest.approx(0.1)
 
 
-def test_a_type_that_neither_the_bag_nor_the_store_defines_is_an_error_naming_it(
+def test_a_type_that_neither_the_bag_nor_the_store_defines_gives_times_and_is_noted_once_when_decoded(
     tmp_path: Path, robot: RobotDescription
 ) -> None:
     path = write_unknown_type_bag(tmp_path / "bag")
-    with open_bag(path) as bag, pytest.raises(BagError) as error:
-        bag.check(routes(bag, robot))
-    assert str(error.value) == (
-        f"{path}: unknown message type 'acme_msgs/msg/Sweep' of topic '/scan' (the bag does "
-        "not define it and rosbags' latest types do not know it)"
-    )
+    with open_bag(path) as bag:
+        messages = list(bag.messages(routes(bag, robot)))
+        assert [m.received for m in messages] == [T0 + k / 10 for k in range(10)]
+        assert bag.notes == []  # nothing decoded yet
+        for message in messages:
+            with pytest.raises(BusError, match="acme_msgs/msg/Sweep"):
+                _ = message.payload
+    assert bag.notes == [
+        f"{path}: topic '/scan' not decoded: its type 'acme_msgs/msg/Sweep' is unknown (the "
+        "bag does not define it, rosbags' latest types do not know it; --types DIR reads "
+        ".msg files)"
+    ]
 
 
-def test_an_mcap_channel_without_a_schema_is_of_an_unknown_type(
+def test_types_from_msg_and_idl_files_decode_what_the_bag_does_not_define(
+    tmp_path: Path, robot: RobotDescription
+) -> None:
+    (tmp_path / "types" / "acme_msgs" / "msg").mkdir(parents=True)
+    (tmp_path / "types" / "acme_msgs" / "msg" / "Sweep.msg").write_text(SWEEP)
+    path = write_unknown_type_bag(tmp_path / "bag")
+    with open_bag(path, read_types([tmp_path / "types"])) as bag:
+        angles = [m.payload["angle"] for m in bag.messages(routes(bag, robot))]
+    assert angles == [float(k) for k in range(10)]
+    idl = tmp_path / "idl" / "Sweep.idl"
+    idl.parent.mkdir()
+    idl.write_text(
+        "module acme_msgs { module msg { struct Sweep { float angle; }; }; };\n"
+    )  # as rosidl writes it for Sweep.msg
+    with open_bag(path, read_types([tmp_path / "idl"])) as bag:
+        assert [m.payload["angle"] for m in bag.messages(routes(bag, robot))] == angles
+    idl.write_text("module acme_msgs { struct")
+    with pytest.raises(BagError, match=r"^--types: .*Sweep\.idl: cannot read it"):
+        read_types([tmp_path / "idl"])
+    (tmp_path / "types" / "acme_msgs" / "msg" / "Sweep.msg").write_text("floot32 angle\n")
+    with pytest.raises(BagError, match=r"^--types: .*Sweep\.msg:1: "):
+        read_types([tmp_path / "types"])
+
+
+def test_an_mcap_channel_without_a_schema_gives_times_and_cannot_be_decoded(
     tmp_path: Path, robot: RobotDescription
 ) -> None:
     path = write_mcap(tmp_path / "s.mcap", [(T0 * 10**9, T0 * 10**9)], schema=False)
-    with open_bag(path) as bag, pytest.raises(BagError, match=r"unknown message type '\?'"):
-        list(bag.messages(routes(bag, robot)))
+    with open_bag(path) as bag:
+        (message,) = bag.messages(routes(bag, robot))
+        assert message.received == T0
+        with pytest.raises(BusError, match=r"its type '\?' is unknown"):
+            _ = message.payload
+
+
+def test_an_empty_mcap_schema_is_a_message_without_fields(
+    tmp_path: Path, robot: RobotDescription
+) -> None:
+    empty = "test_msgs/msg/Empty"
+    raw = bytes(TYPES.serialize_cdr(TYPES.types["std_msgs/msg/Empty"](), "std_msgs/msg/Empty"))
+    path = tmp_path / "e.mcap"
+    with path.open("wb") as stream:
+        writer = McapWriter(stream)
+        writer.start(profile="ros2", library="tests")
+        channel = writer.register_channel(
+            "/scan", "cdr", writer.register_schema(empty, "ros2msg", b"")
+        )
+        writer.add_message(channel, T0 * 10**9, raw, T0 * 10**9)
+        writer.finish()
+    with open_bag(path) as bag:
+        (message,) = bag.messages(routes(bag, robot))
+        assert message.payload == {"structure_needs_at_least_one_member": 0}
+    assert bag.notes == []
 
 
 def truncated(source: Path, target: Path, keep: float) -> Path:
@@ -140,15 +198,28 @@ def truncated(source: Path, target: Path, keep: float) -> Path:
     return target
 
 
-@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
-def test_a_truncated_file_is_an_error_naming_it(tmp_path: Path, storage: str) -> None:
-    (source,) = write_scan_bag(tmp_path / "bag", storage).glob("bag.*")
+def test_a_truncated_database_is_an_error_naming_it(tmp_path: Path) -> None:
+    (source,) = write_scan_bag(tmp_path / "bag", "sqlite3").glob("bag.*")
     cut = truncated(source, tmp_path / f"cut{source.suffix}", 0.6)
     with pytest.raises(BagError, match=f"^{cut}: truncated or corrupt"):
         open_bag(cut)
 
 
-def test_a_corrupt_chunk_is_an_error_naming_the_file_when_it_is_read(
+def test_an_mcap_file_cut_before_its_first_chunk_ends_is_read_empty_and_says_so(
+    tmp_path: Path,
+) -> None:
+    (source,) = write_scan_bag(tmp_path / "bag", "mcap").glob("bag.*")
+    cut = truncated(source, tmp_path / "cut.mcap", 0.6)
+    with open_bag(cut) as bag:
+        assert bag.count == 0
+        (note,) = bag.notes
+    assert note.startswith(f"{cut}: cut off (no summary: the recording did not end): read 0")
+    cut.write_bytes(source.read_bytes()[:12])  # the magic, and not all of the header
+    with pytest.raises(BagError, match=f"^{cut}: truncated or corrupt MCAP"):
+        open_bag(cut)
+
+
+def test_a_corrupt_chunk_is_an_error_naming_the_file(
     tmp_path: Path, robot: RobotDescription
 ) -> None:
     records = [(t, t) for t in scan_times()]
@@ -159,8 +230,8 @@ def test_a_corrupt_chunk_is_an_error_naming_the_file_when_it_is_read(
     corrupt = tmp_path / "corrupt.mcap"
     corrupt.write_bytes(bytes(data))
     with (
-        open_bag(corrupt) as bag,
         pytest.raises(BagError, match=f"^{corrupt}: truncated or corrupt"),
+        open_bag(corrupt) as bag,  # the first and last messages are read when opened
     ):
         list(bag.messages(routes(bag, robot)))
 
@@ -195,3 +266,32 @@ def test_a_bag_split_into_several_mcap_files_is_read_as_one_in_order(
     (folder / "split_1.mcap").unlink()
     with pytest.raises(BagError, match=r"files of the bag are missing: .*split_1\.mcap"):
         open_bag(folder)
+
+
+def test_split_mcap_files_that_number_their_channels_differently_are_read_as_one(
+    tmp_path: Path, robot: RobotDescription
+) -> None:
+    folder = tmp_path / "split"
+    folder.mkdir()
+    text, _ = TYPES.generate_msgdef(SCAN, ros_version=2)
+    times = scan_times(None, 2.0)
+    for index, (topics, part) in enumerate(
+        [(["/scan", "/other"], times[:10]), (["/other", "/scan"], times[10:])]
+    ):
+        with (folder / f"split_{index}.mcap").open("wb") as stream:  # as rosbag2 splits
+            writer = McapWriter(stream)
+            writer.start(profile="ros2", library="tests")
+            schema = writer.register_schema(SCAN, "ros2msg", text.encode())
+            ids = {name: writer.register_channel(name, "cdr", schema) for name in topics}
+            for t in part:
+                writer.add_message(ids["/scan"], t, scan(t), t)
+                writer.add_message(ids["/other"], t + 1, scan(t), t)
+            writer.finish()
+    (folder / "metadata.yaml").write_text(
+        "rosbag2_bagfile_information:\n  version: 9\n  storage_identifier: mcap\n"
+        "  relative_file_paths: [split_0.mcap, split_1.mcap]\n"
+    )
+    with open_bag(folder) as bag:
+        assert bag.count == 40
+        received = [m.received for m in bag.messages(routes(bag, robot))]
+    assert received == [t / 1e9 for t in times]  # /scan only, from both files
