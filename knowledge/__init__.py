@@ -20,6 +20,8 @@ it.
 - :mod:`.availability` — which functionalities can still run, given the permanent
   faults;
 - :mod:`.domain` — temporal PDDL read with unified-planning, the domain's signatures;
+- :mod:`.sources` — where input text comes from: the file, or an editor's unsaved buffer
+  (``dura lsp``);
 - :mod:`.knowledge_base` — the knowledge base, one SQLite file per robot: its tables
   (:mod:`.tables`), its migrations (:mod:`.schema`), whether it is sound and its repair
   (:mod:`.health`);

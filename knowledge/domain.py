@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from knowledge.errors import DomainError, located
+from knowledge.sources import read_text
 
 if TYPE_CHECKING:
     from unified_planning.model import Problem
@@ -71,7 +72,7 @@ def type_name(kind: Any) -> str:
 
 def _read(path: Path) -> str:
     try:
-        return path.read_text(encoding="utf-8")
+        return read_text(path)
     except OSError as e:
         raise DomainError(located(path, None, f"cannot read: {e.strerror or e}")) from e
     except UnicodeDecodeError as e:

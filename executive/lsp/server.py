@@ -1,0 +1,154 @@
+"""``dura lsp``: the language server, wired to pygls.
+
+This module only connects the protocol to dura: the open documents and the projects
+they belong to (:class:`Session`), the debounced checks, and one handler per feature,
+each a call into the module that knows the answer.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+from lsprotocol import types
+from pygls.lsp.server import LanguageServer
+from pygls.uris import from_fs_path, to_fs_path
+
+from executive.lsp.checks import check
+from executive.lsp.diagnostics import diagnostic
+from executive.lsp.pddl_syntax import Lines
+from executive.lsp.project import Project, find_robots, is_robot_text, projects_of, robot_project
+from knowledge.finding import Finding
+from knowledge.sources import read_text
+
+DEBOUNCE = 0.25  # seconds of quiet typing before the checks run
+
+
+def path_of(uri: str) -> Path | None:
+    """The file of a ``file:`` URI, resolved; ``None`` for another scheme."""
+    path = to_fs_path(uri)
+    return Path(path).resolve() if path and uri.startswith("file:") else None
+
+
+def uri_of(path: Path) -> str:
+    return from_fs_path(str(path)) or path.as_uri()
+
+
+class Session:
+    """The open documents, the robot descriptions of the workspace, and the checks that
+    are due; every method runs in the server's event loop (its one owner)."""
+
+    def __init__(self, server: LanguageServer) -> None:
+        self.server = server
+        self.robots: dict[Path, Project] = {}
+        self.due: dict[Project, asyncio.TimerHandle] = {}
+        self.checker = ThreadPoolExecutor(
+            1, thread_name_prefix="dura-lsp-check"
+        )  # UP is not thread-safe
+
+    def texts(self) -> dict[Path, str]:
+        """The open documents' texts, by file."""
+        found = {}
+        for uri, document in self.server.workspace.text_documents.items():
+            path = path_of(uri)
+            if path is not None:
+                found[path] = document.source
+        return found
+
+    def text(self, path: Path) -> str:
+        """A file's text: its open document's, else the file's, else empty."""
+        texts = self.texts()
+        if path in texts:
+            return texts[path]
+        try:
+            return read_text(path)
+        except (OSError, UnicodeDecodeError):
+            return ""
+
+    def scan(self, folders: list[Path]) -> None:
+        for robot in find_robots(folders):
+            self.robots[robot] = robot_project(robot, self.text(robot))
+
+    def changed(self, path: Path, delay: float = DEBOUNCE) -> None:
+        """A document opened, changed or saved: check every project it belongs to."""
+        if path.suffix in (".yaml", ".yml"):
+            text = self.text(path)
+            if is_robot_text(text):
+                self.robots[path] = robot_project(path, text)
+            else:
+                self.robots.pop(path, None)
+        for project in projects_of(path, self.robots, self.texts()):
+            self.schedule(project, delay)
+
+    def schedule(self, project: Project, delay: float) -> None:
+        previous = self.due.pop(project, None)
+        if previous is not None:
+            previous.cancel()
+        loop = asyncio.get_running_loop()
+        self.due[project] = loop.call_later(
+            delay, lambda: loop.create_task(self.run_checks(project))
+        )
+
+    async def run_checks(self, project: Project) -> None:
+        self.due.pop(project, None)
+        texts = self.texts()
+        loop = asyncio.get_running_loop()
+        try:
+            by_file = await loop.run_in_executor(self.checker, check, project, texts)
+        except Exception as e:  # a check that breaks must not take the server with it
+            self.server.window_log_message(
+                types.LogMessageParams(types.MessageType.Error, f"dura: checking failed: {e!r}")
+            )
+            return
+        for path, findings in by_file.items():
+            self.publish(path, findings)
+
+    def publish(self, path: Path, findings: list[Finding]) -> None:
+        lines = Lines(self.text(path))
+        self.server.text_document_publish_diagnostics(
+            types.PublishDiagnosticsParams(
+                uri=uri_of(path), diagnostics=[diagnostic(f, lines) for f in findings]
+            )
+        )
+
+
+def make_server(version: str) -> LanguageServer:
+    """The language server with every feature registered."""
+    server = LanguageServer(
+        "dura", version, text_document_sync_kind=types.TextDocumentSyncKind.Incremental
+    )
+    session = Session(server)
+
+    @server.feature(types.INITIALIZED)
+    def initialized(ls: LanguageServer, params: types.InitializedParams) -> None:
+        folders = [path_of(f.uri) for f in ls.workspace.folders.values()]
+        session.scan([f for f in folders if f is not None])
+
+    @server.feature(types.TEXT_DOCUMENT_DID_OPEN)
+    def did_open(ls: LanguageServer, params: types.DidOpenTextDocumentParams) -> None:
+        path = path_of(params.text_document.uri)
+        if path is not None:
+            session.changed(path, delay=0)
+
+    @server.feature(types.TEXT_DOCUMENT_DID_CHANGE)
+    def did_change(ls: LanguageServer, params: types.DidChangeTextDocumentParams) -> None:
+        path = path_of(params.text_document.uri)
+        if path is not None:
+            session.changed(path)
+
+    @server.feature(types.TEXT_DOCUMENT_DID_SAVE)
+    def did_save(ls: LanguageServer, params: types.DidSaveTextDocumentParams) -> None:
+        path = path_of(params.text_document.uri)
+        if path is not None:
+            session.changed(path, delay=0)
+
+    @server.feature(types.TEXT_DOCUMENT_DID_CLOSE)
+    def did_close(ls: LanguageServer, params: types.DidCloseTextDocumentParams) -> None:
+        path = path_of(params.text_document.uri)
+        if path is not None:  # its file on disk is what counts now
+            with contextlib.suppress(RuntimeError):
+                session.changed(path, delay=0)
+
+    return server

@@ -1,0 +1,31 @@
+"""An editor's unsaved text is read instead of the file, only where it is lent."""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+
+from knowledge.domain import read_domain
+from knowledge.sources import read_text, unsaved
+from tests.conftest import ROOT
+
+
+def test_unsaved_text_is_read_instead_of_the_file_inside_unsaved_only(tmp_path: Path) -> None:
+    path = tmp_path / "domain.pddl"
+    path.write_text("on disk")
+    with unsaved({tmp_path / "." / "domain.pddl": "in the editor"}):
+        assert read_text(path) == "in the editor"
+        elsewhere: list[str] = []
+        other = threading.Thread(target=lambda: elsewhere.append(read_text(path)))
+        other.start()
+        other.join()
+        assert elsewhere == ["on disk"]
+    assert read_text(path) == "on disk"
+
+
+def test_the_domain_reader_reads_the_unsaved_text() -> None:
+    path = ROOT / "domains" / "usecase" / "domain.pddl"
+    renamed = path.read_text().replace("durative-action take_picture", "durative-action snap")
+    with unsaved({path: renamed}):
+        assert sorted(read_domain(path).actions) == ["move_to", "snap"]
+    assert sorted(read_domain(path).actions) == ["move_to", "take_picture"]
