@@ -16,8 +16,10 @@ from lsprotocol import types
 from pygls.lsp.server import LanguageServer
 from pygls.uris import from_fs_path, to_fs_path
 
+from executive.lsp import features
 from executive.lsp.checks import check
 from executive.lsp.diagnostics import diagnostic
+from executive.lsp.navigation import Names
 from executive.lsp.pddl_syntax import Lines
 from executive.lsp.project import Project, find_robots, is_robot_text, projects_of, robot_project
 from knowledge.finding import Finding
@@ -76,7 +78,9 @@ class Session:
         if path.suffix in (".yaml", ".yml"):
             text = self.text(path)
             if is_robot_text(text):
-                self.robots[path] = robot_project(path, text)
+                project = robot_project(path, text)
+                if project.domain is not None or path not in self.robots:
+                    self.robots[path] = project  # else half-typed: it keeps its files
             else:
                 self.robots.pop(path, None)
         for project in projects_of(path, self.robots, self.texts()):
@@ -104,6 +108,13 @@ class Session:
             return
         for path, findings in by_file.items():
             self.publish(path, findings)
+
+    def names(self, path: Path) -> Names:
+        """The names of the files checked with ``path`` (and of ``path``)."""
+        projects = projects_of(path, self.robots, self.texts())
+        files = dict.fromkeys([path, *(f for p in projects for f in p.files)])
+        robot = next((p.robot for p in projects if p.robot is not None), None)
+        return Names.of({f: self.text(f) for f in files}, robot)
 
     def publish(self, path: Path, findings: list[Finding]) -> None:
         lines = Lines(self.text(path))
@@ -151,4 +162,5 @@ def make_server(version: str) -> LanguageServer:
             with contextlib.suppress(RuntimeError):
                 session.changed(path, delay=0)
 
+    features.register(server, session)
     return server
