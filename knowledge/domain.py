@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from knowledge.errors import DomainError, located
-from knowledge.sources import read_text
+from knowledge.sources import read_text, remembered
 
 if TYPE_CHECKING:
     from unified_planning.model import Problem
@@ -129,6 +129,16 @@ def _reader() -> Any:
     return PDDLReader(environment)
 
 
+def _parsed(domain_text: str, problem_text: str | None) -> Problem:
+    """UP's reading of a domain (and a problem), remembered where the language server
+    asks for it (:func:`knowledge.sources.remembered`)."""
+    return remembered(
+        ("pddl", domain_text, problem_text),
+        lambda: _reader().parse_problem_string(domain_text, problem_text),
+        lambda problem: problem.clone(),
+    )
+
+
 def parse(domain: Path) -> Problem:
     """Parse a domain into a UP problem with no objects, initial state or goals.
 
@@ -137,7 +147,7 @@ def parse(domain: Path) -> Problem:
     """
     text = _read(domain)
     try:
-        return _reader().parse_problem_string(_prepare(text), None)
+        return _parsed(_prepare(text), None)
     except Exception as e:  # the reader raises pyparsing, SyntaxError and UP exceptions
         raise DomainError(located(domain, _error_line(e, text), f"PDDL: {_error_text(e)}")) from e
 
@@ -151,7 +161,7 @@ def parse_problem(
     if not domain_checked:
         parse(domain)
     try:
-        return _reader().parse_problem_string(_prepare(_read(domain)), problem_text)
+        return _parsed(_prepare(_read(domain)), problem_text)
     except Exception as e:
         line = _error_line(e, problem_text)
         raise DomainError(located(source, line, f"PDDL: {_error_text(e)}")) from e

@@ -11,17 +11,20 @@ from executive.lsp.project import Project
 from executive.planning.domain_check import check_domain
 from knowledge.errors import DomainError
 from knowledge.finding import Finding, finding_of
-from knowledge.sources import unsaved
+from knowledge.sources import Memo, unsaved
 from knowledge.validation import validate
 from monitoring.observer_config import check_observers
 
 
-def check(project: Project, texts: Mapping[Path, str]) -> dict[Path, list[Finding]]:
+def check(
+    project: Project, texts: Mapping[Path, str], memo: Memo | None = None
+) -> dict[Path, list[Finding]]:
     """Every finding about the project's files, by resolved path (an empty list for a
     file with none, so that an editor clears what it showed); ``texts``: the editor's
-    unsaved documents, read instead of their files."""
+    unsaved documents, read instead of their files; ``memo``: what the PDDL reader
+    parsed before, by text."""
     findings: list[Finding] = []
-    with unsaved(texts):
+    with unsaved(texts, memo):
         if project.robot is not None:
             findings += _robot_findings(project.robot)
         elif project.domain is not None:

@@ -23,9 +23,9 @@ from executive.lsp.navigation import Names
 from executive.lsp.pddl_syntax import Lines
 from executive.lsp.project import Project, find_robots, is_robot_text, projects_of, robot_project
 from knowledge.finding import Finding
-from knowledge.sources import read_text
+from knowledge.sources import Memo, read_text
 
-DEBOUNCE = 0.25  # seconds of quiet typing before the checks run
+DEBOUNCE = 0.1  # seconds of quiet typing before the checks run
 
 
 def path_of(uri: str) -> Path | None:
@@ -46,6 +46,9 @@ class Session:
         self.server = server
         self.robots: dict[Path, Project] = {}
         self.due: dict[Project, asyncio.TimerHandle] = {}
+        self.running: set[Project] = set()  # being checked
+        self.again: set[Project] = set()  # changed while being checked
+        self.memo = Memo()  # written by the checker thread only
         self.checker = ThreadPoolExecutor(
             1, thread_name_prefix="dura-lsp-check"
         )  # UP is not thread-safe
@@ -96,18 +99,33 @@ class Session:
         )
 
     async def run_checks(self, project: Project) -> None:
+        """Check a project, once at a time: changes made meanwhile are checked after."""
         self.due.pop(project, None)
-        texts = self.texts()
+        if project in self.running:
+            self.again.add(project)
+            return
+        self.running.add(project)
         loop = asyncio.get_running_loop()
         try:
-            by_file = await loop.run_in_executor(self.checker, check, project, texts)
-        except Exception as e:  # a check that breaks must not take the server with it
-            self.server.window_log_message(
-                types.LogMessageParams(types.MessageType.Error, f"dura: checking failed: {e!r}")
-            )
-            return
-        for path, findings in by_file.items():
-            self.publish(path, findings)
+            while True:
+                self.again.discard(project)
+                texts = self.texts()
+                try:
+                    by_file = await loop.run_in_executor(
+                        self.checker, check, project, texts, self.memo
+                    )
+                except Exception as e:  # a check that breaks must not take the server with it
+                    message = f"dura: checking failed: {e!r}"
+                    self.server.window_log_message(
+                        types.LogMessageParams(types.MessageType.Error, message)
+                    )
+                    by_file = {}
+                for path, findings in by_file.items():
+                    self.publish(path, findings)
+                if project not in self.again:
+                    return
+        finally:
+            self.running.discard(project)
 
     def names(self, path: Path) -> Names:
         """The names of the files checked with ``path`` (and of ``path``)."""
