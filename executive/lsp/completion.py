@@ -114,6 +114,8 @@ def _yaml(names: Names, text: str, offset: int) -> list[types.CompletionItem]:
             return _items(names, "action")
         return _keys(parents)
     key = code.split(":", 1)[0].strip(" -")
+    if key == "name" and parents[-1:] == ["topics"]:  # an observer's topic
+        key = "topic"
     return _values(names, key)
 
 

@@ -109,7 +109,7 @@ def register(server: LanguageServer, session: Session) -> None:
                 detail=o.detail or o.kind,
             )
             for o in names.occurrences
-            if o.declared and o.kind in _SYMBOL_KINDS
+            if o.kind in _SYMBOL_KINDS and (o.declared or o.kind == "action")  # tasks too
         ]
 
     @server.feature(types.TEXT_DOCUMENT_FORMATTING)

@@ -8,7 +8,6 @@ each a call into the module that knows the answer.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -177,8 +176,7 @@ def make_server(version: str) -> LanguageServer:
     def did_close(ls: LanguageServer, params: types.DidCloseTextDocumentParams) -> None:
         path = path_of(params.text_document.uri)
         if path is not None:  # its file on disk is what counts now
-            with contextlib.suppress(RuntimeError):
-                session.changed(path, delay=0)
+            session.changed(path, delay=0)
 
     features.register(server, session)
     return server

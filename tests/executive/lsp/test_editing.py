@@ -151,3 +151,35 @@ async def test_a_did_you_mean_has_a_quick_fix_that_writes_the_name(
     assert action.edit is not None and action.edit.changes is not None
     fixed = _apply(typo, list(action.edit.changes[uri(robot)]))
     assert fixed == robot.read_text()
+
+
+async def test_the_outline_of_a_robot_description_lists_its_components_and_tasks(
+    client: LanguageClient, usecase: Path
+) -> None:
+    robot = usecase / "examples" / "usecase" / "robot.yaml"
+    open_file(client, robot)
+    symbols = await client.text_document_document_symbol_async(
+        types.DocumentSymbolParams(text_document=_doc(robot))
+    )
+    assert symbols is not None
+    assert [(s.name, s.detail) for s in symbols if isinstance(s, types.DocumentSymbol)] == [
+        ("lidar", "functionality"),
+        ("lidar_filter", "functionality"),
+        ("robot_base", "functionality"),
+        ("cam", "functionality"),
+        ("cam_to_lidar", "functionality"),
+        ("move_to", "behavior"),
+        ("take_picture", "behavior"),
+        ("move_to", "action"),
+        ("take_picture", "action"),
+    ]
+
+
+async def test_completion_of_an_observers_topic_offers_the_robots_topics(
+    client: LanguageClient, usecase: Path
+) -> None:
+    robot = usecase / "examples" / "usecase" / "robot.yaml"
+    text = robot.read_text()
+    open_file(client, robot)
+    labels = await _labels(client, robot, text, "          - name: scan", len("          - name: "))
+    assert {"scan", "scan_filtered", "image"} <= set(labels)
