@@ -20,7 +20,15 @@ from executive.lsp.checks import check
 from executive.lsp.diagnostics import diagnostic
 from executive.lsp.navigation import Names
 from executive.lsp.pddl_syntax import Lines
-from executive.lsp.project import Project, find_robots, is_robot_text, projects_of, robot_project
+from executive.lsp.project import (
+    Project,
+    domain_name,
+    find_robots,
+    is_robot_text,
+    problem_domain,
+    projects_of,
+    robot_project,
+)
 from knowledge.finding import Finding
 from knowledge.sources import Memo, read_text
 
@@ -127,9 +135,15 @@ class Session:
             self.running.discard(project)
 
     def names(self, path: Path) -> Names:
-        """The names of the files checked with ``path`` (and of ``path``)."""
-        projects = projects_of(path, self.robots, self.texts())
+        """The names of the files checked with ``path`` (and of ``path``), and of the open
+        problems of their domain."""
+        texts = self.texts()
+        projects = projects_of(path, self.robots, texts)
         files = dict.fromkeys([path, *(f for p in projects for f in p.files)])
+        domains = {domain_name(self.text(p.domain)) for p in projects if p.domain is not None}
+        for other, text in texts.items():
+            if other.suffix.lower() == ".pddl" and problem_domain(text) in domains - {None}:
+                files[other] = None
         robot = next((p.robot for p in projects if p.robot is not None), None)
         return Names.of({f: self.text(f) for f in files}, robot)
 

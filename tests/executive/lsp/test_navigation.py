@@ -121,3 +121,24 @@ async def test_references_of_an_object_span_the_problem_and_the_integrity_goals(
     in_problem = [f for f in found if f.uri == uri(problem)]
     assert len(in_problem) == 1 + text.split("(:objects", 1)[1].count("dock") - 1
     assert [f.uri for f in found if f.uri != uri(problem)] == [uri(integrity)]
+
+
+async def test_references_of_a_predicate_reach_every_open_problem_of_its_domain(
+    client: LanguageClient, usecase: Path
+) -> None:
+    _, domain, _ = await _opened(client, usecase)
+    pictures = usecase / "examples" / "usecase" / "pictures.pddl"
+    open_file(client, pictures)
+    found = await client.text_document_references_async(
+        types.ReferenceParams(
+            text_document=_doc(domain),
+            position=_position(domain.read_text(), "(picture_taken ?p - place)", 1),
+            context=types.ReferenceContext(include_declaration=False),
+        )
+    )
+    assert found is not None
+    files = sorted({f.uri for f in found})
+    assert files == sorted({uri(domain), uri(pictures)})  # the goal of pictures.pddl
+    assert len([f for f in found if f.uri == uri(pictures)]) == pictures.read_text().count(
+        "picture_taken"
+    )
