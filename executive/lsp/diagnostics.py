@@ -1,8 +1,9 @@
 """A finding as the editor shows it: at the exact place of the name it is about.
 
-A finding has a line; the place in the line is that of the last name it quotes which
-the line holds (``requires unknown capability 'scna'`` -> ``scna``), else the line's
-text. A did-you-mean travels with the diagnostic, for the code action that applies it.
+A finding has a line; the place in the line is the one unified-planning's message
+gives (``from line: 5, col 15 to line: 5, col 19``), else that of the last name it
+quotes which the line holds (``requires unknown capability 'scna'`` -> ``scna``), else
+the line's text. A did-you-mean travels with the diagnostic, for the code action that applies it.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from knowledge.finding import Finding
 
 SOURCE = "dura"
 _QUOTED = re.compile(r"'([^'\s]+)'")
+_SPAN = re.compile(r"line:? (\d+), col:? (\d+) to line:? (\d+), col:? (\d+)", re.IGNORECASE)
 _DID_YOU_MEAN = re.compile(r" \(did you mean '([^']+)'\?\)")
 
 
@@ -27,8 +29,13 @@ def diagnostic(finding: Finding, lines: Lines) -> types.Diagnostic:
     suggestion = _DID_YOU_MEAN.search(message)
     plain = _DID_YOU_MEAN.sub("", message)
     start, end = _place(text, [m.group(1) for m in _QUOTED.finditer(plain)])
+    where = types.Range(types.Position(line, start), types.Position(line, end))
+    span = _SPAN.search(message)  # unified-planning's own place: lines and columns from 1
+    if span is not None and int(span.group(1)) - 1 == line:
+        first, column, last, end_column = (int(g) - 1 for g in span.groups())
+        where = types.Range(types.Position(first, column), types.Position(last, end_column))
     return types.Diagnostic(
-        range=types.Range(types.Position(line, start), types.Position(line, end)),
+        range=where,
         message=message,
         severity=types.DiagnosticSeverity.Error
         if finding.is_error

@@ -122,4 +122,5 @@ async def test_an_unknown_object_in_the_problem_is_an_error_on_its_line(
     open_file(client, problem, wrong)
     shown = await diagnostics_until(client, problem, lambda d: len(d) > 0)
     assert [d.severity for d in shown] == [types.DiagnosticSeverity.Error]
-    assert shown[0].range.start.line == wrong.splitlines().index("    (robot_at dokc)")
+    line = wrong.splitlines().index("    (robot_at dokc)")
+    assert shown[0].range == _at(wrong, line, "dokc")
