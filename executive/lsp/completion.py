@@ -11,9 +11,9 @@ from lsprotocol import types
 from executive.lsp.names import EXPRESSION_WORDS, SECTION_WORDS
 from executive.lsp.navigation import Names
 from executive.lsp.pddl_syntax import Form, Token, parse
-from knowledge.description import BehaviorSpec, FunctionalitySpec, TaskSpec
+from knowledge.description import BehaviorSpec, FunctionalitySpec, PlannerSpec, TaskSpec
 from knowledge.field_plan import fields_of
-from knowledge.robot import RobotFile
+from knowledge.robot import BusSpec, RobotFile
 from knowledge.sensing_spec import SensingRuleSpec
 
 _WORD = re.compile(r"[^\s();\[\],:{}]*$")
@@ -34,6 +34,8 @@ _KEYS_OF = {
     ("behaviors", "*"): BehaviorSpec,
     ("tasks", "*"): TaskSpec,
     ("sensing",): SensingRuleSpec,
+    ("planner",): PlannerSpec,
+    ("bus",): BusSpec,
 }
 _VALUES = {
     "provides": "capability",

@@ -69,6 +69,8 @@ async def test_completion_in_the_robot_description_offers_keys_and_names(
     )
     assert {"provides", "requires", "command", "max_faults"} <= set(labels)
     assert "behavior" not in labels
+    labels = await _labels(client, robot, text, "  timeout: 30", 2)
+    assert {"engine", "timeout"} <= set(labels)
     typed = text.replace("  take_picture:\n    behavior", "  mo\n  take_picture:\n    behavior")
     change_file(client, robot, typed)
     labels = await _labels(client, robot, typed, "  mo\n", 4)
