@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 from typing import Any
 
 from executive.cli import exits_at_once
@@ -31,5 +32,19 @@ def run(args: argparse.Namespace) -> int:
     from executive.fast_start import use_reader_environment
 
     use_reader_environment()
+    handler = logging.StreamHandler()  # stderr: the editor's log of the server
+    handler.setFormatter(_OneLine())
+    for name in ("pygls", "executive.lsp"):
+        logger = logging.getLogger(name)
+        logger.handlers, logger.propagate = [handler], False
     make_server(__version__).start_io()
     return 0
+
+
+class _OneLine(logging.Formatter):
+    """A problem the server met (a malformed message from the client, say) on one line,
+    with its reason and no traceback."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        error = record.exc_info[1] if record.exc_info else None
+        return f"dura lsp: {record.getMessage()}" + (f": {error}" if error else "")

@@ -29,3 +29,18 @@ def test_dura_lsp_is_in_the_help() -> None:
         check=True,
     ).stdout
     assert "lsp" in shown and "language server" in shown
+
+
+def test_a_malformed_message_is_one_line_on_stderr_and_the_server_ends_with_its_input() -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "executive.cli", "lsp"],
+        input=b"Content-Length: 5\r\n\r\nhello",
+        capture_output=True,
+        cwd=ROOT,
+        timeout=60,
+        check=False,
+    )
+    assert done.returncode == 0
+    assert done.stderr.decode().splitlines() == [
+        "dura lsp: Unable to handle message: Expecting value: line 1 column 1 (char 0)"
+    ]
