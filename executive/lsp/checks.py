@@ -13,7 +13,7 @@ from knowledge.errors import DomainError
 from knowledge.finding import Finding, finding_of
 from knowledge.sources import Memo, unsaved
 from knowledge.validation import validate
-from monitoring.observer_config import check_observers
+from monitoring.observer_config import check_observer_file, check_observers
 
 
 def check(
@@ -27,6 +27,9 @@ def check(
     with unsaved(texts, memo):
         if project.robot is not None:
             findings += _robot_findings(project.robot)
+        elif project.alone is not None:
+            observers = check_observer_file(project.alone)
+            findings += observers[1] if observers is not None else []
         elif project.domain is not None:
             findings += _domain_findings(
                 project.domain, project.problems[0] if project.problems else None

@@ -27,16 +27,19 @@ _PROBLEM_DOMAIN = re.compile(r"\(\s*:domain\s+([^\s()]+)", re.IGNORECASE)
 
 @dataclass(frozen=True)
 class Project:
-    """The files checked together; ``robot`` is ``None`` for PDDL on its own."""
+    """The files checked together; ``robot`` is ``None`` for PDDL on its own, or for a
+    YAML file that no robot names (a standalone observers file, checked as ``dura
+    validate`` checks one: ``alone``)."""
 
     robot: Path | None
     domain: Path | None
     problems: tuple[Path, ...] = ()
     rule_files: tuple[Path, ...] = ()
+    alone: Path | None = None
 
     @property
     def files(self) -> tuple[Path, ...]:
-        found = [self.robot, self.domain, *self.problems, *self.rule_files]
+        found = [self.robot, self.domain, *self.problems, *self.rule_files, self.alone]
         return tuple(dict.fromkeys(p for p in found if p is not None))
 
 
@@ -110,11 +113,14 @@ def find_robots(folders: Iterable[Path]) -> list[Path]:
 def projects_of(
     path: Path, robots: Mapping[Path, Project], texts: Mapping[Path, str]
 ) -> list[Project]:
-    """The projects a file belongs to: the robots that name it, else the PDDL on its own."""
+    """The projects a file belongs to: the robots that name it, else the file on its own
+    (a PDDL problem with its domain)."""
     path = path.resolve()
     mine = [p for p in robots.values() if path in p.files]
     if mine:
         return mine
+    if path.suffix.lower() in (".yaml", ".yml"):
+        return [Project(None, None, alone=path)]
     if path.suffix.lower() != ".pddl":
         return []
     text = texts.get(path) or _read(path)

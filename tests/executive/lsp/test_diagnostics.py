@@ -10,6 +10,7 @@ from lsprotocol import types
 from pytest_lsp import LanguageClient
 
 from knowledge.validation import validate
+from monitoring.observer_config import check_observer_file
 from tests.executive.lsp.conftest import change_file, diagnostics_until, open_file
 
 pytestmark = [pytest.mark.slow, pytest.mark.asyncio]
@@ -124,3 +125,22 @@ async def test_an_unknown_object_in_the_problem_is_an_error_on_its_line(
     assert [d.severity for d in shown] == [types.DiagnosticSeverity.Error]
     line = wrong.splitlines().index("    (robot_at dokc)")
     assert shown[0].range == _at(wrong, line, "dokc")
+
+
+async def test_a_standalone_observers_file_is_checked_as_dura_validate_checks_it(
+    client: LanguageClient, usecase: Path
+) -> None:
+    observers = usecase / "observers.yaml"
+    text = "- type: timeout\n  topics:\n    - name: scan\n      callerids:\n        - {callerid: [], timeout: 0.5, max_timeouts_in_a_row: 2}\n"
+    observers.write_text(text)
+    open_file(client, observers)
+    assert await diagnostics_until(client, observers, lambda d: True) == []
+    wrong = text.replace("type: timeout", "type: timeot")
+    change_file(client, observers, wrong)
+    shown = await diagnostics_until(client, observers, lambda d: len(d) > 0)
+    copy = usecase / "copy.yaml"
+    copy.write_text(wrong)
+    checked = check_observer_file(copy)
+    assert checked is not None
+    assert _words(shown) == [f.message for f in checked[1]]
+    assert shown[0].range == _at(wrong, 0, "timeot")
