@@ -19,6 +19,7 @@ README's "Architecture" says which may import which; ``tests/test_layers.py`` ch
   services in a process of its own; :mod:`.service_groups` — one builder per group of
   services, used by both;
 - :mod:`.cli` — the ``dura`` command;
+- :mod:`.lsp` — ``dura lsp``, the language server for PDDL, robot descriptions and rules;
 - :mod:`.fast_start` — every trick that makes dura's processes start fast, measured (it
   imports nothing of dura: the command line and the planner worker both use it).
 

@@ -21,6 +21,8 @@ it.
   faults;
 - :mod:`.domain` — temporal PDDL read with unified-planning, the domain's signatures
   (:mod:`.pddl_errors`: the reader's errors worded as ``file:line:col: reason``);
+- :mod:`.sources` — where input text comes from: the file, or an editor's unsaved buffer
+  (``dura lsp``);
 - :mod:`.knowledge_base` — the knowledge base, one SQLite file per robot: its tables
   (:mod:`.tables`), its migrations (:mod:`.schema`), whether it is sound and its repair
   (:mod:`.health`);

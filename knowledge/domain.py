@@ -31,6 +31,7 @@ from knowledge.pddl_errors import (
     position,
     uncommented,
 )
+from knowledge.sources import read_text, remembered
 
 if TYPE_CHECKING:
     from unified_planning.model import Problem
@@ -110,7 +111,7 @@ def type_name(kind: Any) -> str:
 
 def _read(path: Path) -> str:
     try:
-        return path.read_text(encoding="utf-8")
+        return read_text(path)
     except OSError as e:
         raise DomainError(located(path, None, f"cannot read: {e.strerror or e}")) from e
     except UnicodeDecodeError as e:
@@ -156,6 +157,16 @@ def _reader() -> Any:
     return PDDLReader(environment)
 
 
+def _parsed(domain_text: str, problem_text: str | None) -> Problem:
+    """UP's reading of a domain (and a problem), remembered where the language server
+    asks for it (:func:`knowledge.sources.remembered`)."""
+    return remembered(
+        ("pddl", domain_text, problem_text),
+        lambda: _reader().parse_problem_string(domain_text, problem_text),
+        lambda problem: problem.clone(),
+    )
+
+
 def parse(domain: Path) -> Problem:
     """Parse a domain into a UP problem with no objects, initial state or goals.
 
@@ -164,7 +175,7 @@ def parse(domain: Path) -> Problem:
     """
     text = _read(domain)
     try:
-        return _reader().parse_problem_string(_prepare(text), None)
+        return _parsed(_prepare(text), None)
     except Exception as e:  # the reader raises pyparsing, SyntaxError and UP exceptions
         raise _error(domain, e, text, declared(text)) from e
 
@@ -179,7 +190,7 @@ def parse_problem(
         parse(domain)
     domain_text = _read(domain)
     try:
-        problem = _reader().parse_problem_string(_prepare(domain_text), problem_text)
+        problem = _parsed(_prepare(domain_text), problem_text)
     except Exception as e:
         names = declared(domain_text) + declared(problem_text)
         raise _error(source, e, problem_text, names) from e

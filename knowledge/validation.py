@@ -28,6 +28,7 @@ from knowledge.finding import Finding, Report, Severity, finding_of
 from knowledge.robot import read_robot
 from knowledge.ros2_components import check_ros2_components
 from knowledge.sensing_spec import check_sensing
+from knowledge.sources import read_text
 
 RESERVED_PREFIXES = ("AB", "/AB")
 
@@ -270,7 +271,7 @@ def validate(path: Path, text: str | None = None, *, domain: bool = True) -> Val
             objects: dict[str, str] = {}
             if robot.problem is not None and robot.problem.is_file():
                 try:
-                    text_of_problem = robot.problem.read_text(encoding="utf-8")
+                    text_of_problem = read_text(robot.problem)
                     problem = parse_problem(robot.domain, text_of_problem, str(robot.problem))
                     objects = {o.name: type_name(o.type) for o in problem.all_objects}
                 except (OSError, UnicodeDecodeError) as e:

@@ -18,6 +18,7 @@ import yaml
 
 from knowledge.field_plan import PathPart, dotted
 from knowledge.finding import Report
+from knowledge.sources import read_text
 from knowledge.value_source import Source
 
 MAX_BYTES = 1 << 20  # a robot description, rules or observers file is far smaller
@@ -51,7 +52,7 @@ def compose(path: Path, report: Report, text: str | None = None) -> yaml.Node | 
                     None, f"too large: {_size(path.stat().st_size)} (at most {_size(MAX_BYTES)})"
                 )
                 return None
-            text = path.read_text(encoding="utf-8")
+            text = read_text(path)
         except OSError as e:
             report.error(None, f"cannot read: {e.strerror or e}")
             return None

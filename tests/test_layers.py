@@ -51,6 +51,15 @@ ALLOWED: dict[str, set[str]] = {
         "knowledge",
     },
     "executive.dashboard": {"executive.bus", "executive.planning", "knowledge"},
+    # the language server runs the checks of `dura validate` (its rule files' included)
+    # and of `dura domain check`
+    "executive.lsp": {
+        "executive.bus",
+        "executive.cli.validate",
+        "executive.planning",
+        "monitoring",
+        "knowledge",
+    },
     # the builders of the groups of services, for the composition root
     "executive.service_groups": {
         "executive.bus",
@@ -87,6 +96,7 @@ ALLOWED: dict[str, set[str]] = {
         "executive.testing",
         "executive.dashboard",
         "executive.executive",
+        "executive.lsp",
         "monitoring",
         "knowledge",
     },

@@ -60,6 +60,7 @@ COMMANDS = (
     "replay",
     "rules",
     "kb",
+    "lsp",
     "version",
 )
 

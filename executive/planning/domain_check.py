@@ -33,6 +33,7 @@ from executive.planning.reachability import (
 from knowledge.domain import parse, parse_problem, read_domain
 from knowledge.errors import DomainError, located
 from knowledge.finding import Finding, Report
+from knowledge.sources import read_text
 
 if TYPE_CHECKING:
     from unified_planning.model import Problem
@@ -56,7 +57,7 @@ def check_domain(domain: Path, problem: Path | None = None) -> list[Finding]:
     """
     info = read_domain(domain)
     lifted = parse(domain)
-    text = domain.read_text(encoding="utf-8")
+    text = read_text(domain)
     report = Report(str(domain))
     uses = _Uses()
     for action in lifted.actions:
@@ -66,7 +67,7 @@ def check_domain(domain: Path, problem: Path | None = None) -> list[Finding]:
     init: set[str] = set()
     if problem is not None:
         try:
-            problem_text = problem.read_text(encoding="utf-8")
+            problem_text = read_text(problem)
         except (OSError, UnicodeDecodeError) as e:
             raise DomainError(located(problem, None, f"cannot read: {e}")) from e
         ground_problem = parse_problem(domain, problem_text, str(problem))
@@ -240,6 +241,6 @@ def _declared_lines(text: str, section: str, names: Iterable[str]) -> dict[str, 
 
 
 def _goal_line(path: Path) -> int | None:
-    text = path.read_text(encoding="utf-8")
+    text = read_text(path)
     at = text.lower().find("(:goal")
     return None if at < 0 else text.count("\n", 0, at) + 1

@@ -41,6 +41,7 @@ from knowledge.domain import parse, parse_problem, type_name
 from knowledge.errors import DomainError, located
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Fact
+from knowledge.sources import read_text
 
 if TYPE_CHECKING:
     from unified_planning.model import FNode, Problem
@@ -298,7 +299,7 @@ def read_world(
         DomainError: the file cannot be read or does not fit the domain (``file:line``).
     """
     try:
-        text = problem_file.read_text(encoding="utf-8")
+        text = read_text(problem_file)
     except (OSError, UnicodeDecodeError) as e:
         raise DomainError(located(problem_file, None, f"cannot read: {e}")) from e
     problem = parse_problem(domain, text, str(problem_file), domain_checked=parsed is not None)

@@ -1,0 +1,67 @@
+"""The checks of ``dura validate`` and ``dura domain check``, run on a project's open
+texts, with their findings grouped by file."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+from executive.cli.validate import check_rule_files
+from executive.lsp.project import Project
+from executive.planning.domain_check import check_domain
+from knowledge.errors import DomainError
+from knowledge.finding import Finding, finding_of
+from knowledge.sources import Memo, unsaved
+from knowledge.validation import validate
+from monitoring.observer_config import check_observer_file, check_observers
+
+
+def check(
+    project: Project, texts: Mapping[Path, str], memo: Memo | None = None
+) -> dict[Path, list[Finding]]:
+    """Every finding about the project's files, by resolved path (an empty list for a
+    file with none, so that an editor clears what it showed); ``texts``: the editor's
+    unsaved documents, read instead of their files; ``memo``: what the PDDL reader
+    parsed before, by text."""
+    findings: list[Finding] = []
+    with unsaved(texts, memo):
+        if project.robot is not None:
+            findings += _robot_findings(project.robot)
+        elif project.alone is not None:
+            observers = check_observer_file(project.alone)
+            findings += observers[1] if observers is not None else []
+        elif project.domain is not None:
+            findings += _domain_findings(
+                project.domain, project.problems[0] if project.problems else None
+            )
+    by_file: dict[Path, list[Finding]] = {p: [] for p in project.files}
+    seen: set[tuple[Path, int | None, str]] = set()
+    for f in findings:
+        path = Path(f.path).resolve()
+        key = (path, f.line, f.message)
+        if key not in seen:
+            seen.add(key)
+            by_file.setdefault(path, []).append(f)
+    return by_file
+
+
+def _robot_findings(robot_path: Path) -> list[Finding]:
+    """As ``dura validate``, then ``dura domain check`` of its domain and problem."""
+    result = validate(robot_path)
+    findings = list(result.findings)
+    robot = result.robot
+    if robot is None:
+        return findings
+    findings += check_observers(robot)
+    if result.domain is not None and not any(f.is_error for f in findings):
+        findings += check_rule_files(robot, result.domain)
+    if result.domain is not None:
+        findings += _domain_findings(robot.domain, robot.problem)
+    return findings
+
+
+def _domain_findings(domain: Path, problem: Path | None) -> list[Finding]:
+    try:
+        return check_domain(domain, problem)
+    except DomainError as e:
+        return [finding_of(e, str(domain))]

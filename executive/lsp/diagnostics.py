@@ -1,0 +1,58 @@
+"""A finding as the editor shows it: at the exact place of the name it is about.
+
+A finding has a line; the place in the line is the one unified-planning's message
+gives (``from line: 5, col 15 to line: 5, col 19``), else that of the last name it
+quotes which the line holds (``requires unknown capability 'scna'`` -> ``scna``), else
+the line's text. A did-you-mean travels with the diagnostic, for the code action that applies it.
+"""
+
+from __future__ import annotations
+
+import re
+
+from lsprotocol import types
+
+from executive.lsp.pddl_syntax import Lines
+from knowledge.finding import Finding
+
+SOURCE = "dura"
+_QUOTED = re.compile(r"'([^'\s]+)'")
+_SPAN = re.compile(r"line:? (\d+), col:? (\d+) to line:? (\d+), col:? (\d+)", re.IGNORECASE)
+_DID_YOU_MEAN = re.compile(r" \(did you mean '([^']+)'\?\)")
+
+
+def diagnostic(finding: Finding, lines: Lines) -> types.Diagnostic:
+    """The finding as a diagnostic in the text ``lines``."""
+    line = max((finding.line or 1) - 1, 0)
+    text = lines.line_text(line)
+    message = finding.message
+    suggestion = _DID_YOU_MEAN.search(message)
+    plain = _DID_YOU_MEAN.sub("", message)
+    start, end = _place(text, [m.group(1) for m in _QUOTED.finditer(plain)])
+    where = types.Range(types.Position(line, start), types.Position(line, end))
+    span = _SPAN.search(message)  # unified-planning's own place: lines and columns from 1
+    if span is not None and int(span.group(1)) - 1 == line:
+        first, column, last, end_column = (int(g) - 1 for g in span.groups())
+        where = types.Range(types.Position(first, column), types.Position(last, end_column))
+    return types.Diagnostic(
+        range=where,
+        message=message,
+        severity=types.DiagnosticSeverity.Error
+        if finding.is_error
+        else types.DiagnosticSeverity.Warning,
+        source=SOURCE,
+        data={"replacement": suggestion.group(1)} if suggestion else None,
+    )
+
+
+def _place(text: str, names: list[str]) -> tuple[int, int]:
+    """The columns of the last of ``names`` written in ``text`` as a whole word, else of
+    the text without its indentation and comment."""
+    code = re.split(r";|(?:^|\s)#", text, maxsplit=1)[0]  # no PDDL or YAML comment
+    for name in reversed(names):
+        found = re.search(rf"(?<![\w?:-]){re.escape(name)}(?![\w-])", code, re.IGNORECASE)
+        if found:
+            return found.start(), found.end()
+    stripped = code.rstrip()
+    start = len(stripped) - len(stripped.lstrip())
+    return start, max(len(stripped), start)

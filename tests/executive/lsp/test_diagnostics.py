@@ -1,0 +1,146 @@
+"""Diagnostics as the user types: the words of ``dura validate`` and ``dura domain
+check``, each at the name it is about, the domain and the robot checked together."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from lsprotocol import types
+from pytest_lsp import LanguageClient
+
+from knowledge.validation import validate
+from monitoring.observer_config import check_observer_file
+from tests.executive.lsp.conftest import change_file, diagnostics_until, open_file
+
+pytestmark = [pytest.mark.slow, pytest.mark.asyncio]
+
+
+def _words(diagnostics: list[types.Diagnostic]) -> list[str]:
+    return [d.message for d in diagnostics]
+
+
+def _at(text: str, line: int, word: str) -> types.Range:
+    column = text.splitlines()[line].index(word)
+    return types.Range(types.Position(line, column), types.Position(line, column + len(word)))
+
+
+async def test_the_valid_use_case_has_no_diagnostics(client: LanguageClient, usecase: Path) -> None:
+    robot = usecase / "examples" / "usecase" / "robot.yaml"
+    open_file(client, robot)
+    shown = await diagnostics_until(client, robot, lambda d: True)
+    assert shown == []
+    domain = usecase / "domains" / "usecase" / "domain.pddl"
+    assert await diagnostics_until(client, domain, lambda d: True) == []
+
+
+async def test_an_unknown_capability_typed_is_shown_at_its_name_in_dura_validates_words(
+    client: LanguageClient, usecase: Path
+) -> None:
+    robot = usecase / "examples" / "usecase" / "robot.yaml"
+    text = robot.read_text()
+    open_file(client, robot)
+    await diagnostics_until(client, robot, lambda d: True)
+    typo = text.replace("requires: [obstacle_scan, base]", "requires: [obstacle_scna, base]")
+    change_file(client, robot, typo)
+    shown = await diagnostics_until(client, robot, lambda d: len(d) > 0)
+    copy = robot.with_name("typo.yaml")
+    copy.write_text(typo)
+    expected = [f.message for f in validate(copy).findings]
+    assert _words(shown) == expected
+    assert (
+        "requires unknown capability 'obstacle_scna' (did you mean 'obstacle_scan'?)" in expected[0]
+    )
+    line = typo.splitlines().index("    requires: [obstacle_scna, base]")
+    assert shown[0].range == _at(typo, line, "obstacle_scna")
+    assert shown[0].severity == types.DiagnosticSeverity.Error
+    assert robot.read_text() == text  # unsaved: the file is as it was
+
+
+async def test_an_action_renamed_in_the_domain_rechecks_the_robot_description(
+    client: LanguageClient, usecase: Path
+) -> None:
+    robot = usecase / "examples" / "usecase" / "robot.yaml"
+    domain = usecase / "domains" / "usecase" / "domain.pddl"
+    open_file(client, robot)
+    domain_text = domain.read_text()
+    open_file(client, domain)
+    await diagnostics_until(client, robot, lambda d: True)
+    renamed = domain_text.replace("(:durative-action take_picture", "(:durative-action snap")
+    change_file(client, domain, renamed)
+    on_robot = await diagnostics_until(client, robot, lambda d: len(d) > 0)
+    assert _words(on_robot) == ["task 'take_picture' names no action of domain 'usecase'"]
+    robot_text = robot.read_text()
+    lines = robot_text.splitlines()
+    line = len(lines) - 1 - lines[::-1].index("  take_picture:")  # the task, not the behavior
+    assert on_robot[0].range == _at(robot_text, line, "take_picture")
+    on_domain = await diagnostics_until(client, domain, lambda d: len(d) > 0)
+    assert _words(on_domain) == [
+        "action 'snap' has no task in robot.yaml: it will be applied without running a behavior"
+    ]
+    line = renamed.splitlines().index("  (:durative-action snap")
+    assert on_domain[0].range == _at(renamed, line, "snap")
+    assert on_domain[0].severity == types.DiagnosticSeverity.Warning
+    change_file(client, domain, domain_text, version=3)  # undone: both are clean again
+    assert await diagnostics_until(client, robot, lambda d: len(d) == 0) == []
+    assert await diagnostics_until(client, domain, lambda d: len(d) == 0) == []
+
+
+async def test_a_pddl_syntax_error_is_shown_on_its_line(
+    client: LanguageClient, usecase: Path
+) -> None:
+    domain = usecase / "domains" / "usecase" / "domain.pddl"
+    text = domain.read_text()
+    broken = text.replace("(at end (picture_taken ?p)))", "(at end (picture_taken ?p))")
+    open_file(client, domain, broken)
+    shown = await diagnostics_until(client, domain, lambda d: len(d) > 0)
+    assert len(shown) == 1
+    assert shown[0].message.startswith("PDDL: ")
+    assert shown[0].severity == types.DiagnosticSeverity.Error
+
+
+async def test_domain_check_warnings_are_shown_at_the_name(
+    client: LanguageClient, usecase: Path
+) -> None:
+    domain = usecase / "domains" / "usecase" / "domain.pddl"
+    text = domain.read_text()
+    unused = text.replace(
+        "(photographable ?p - place))", "(photographable ?p - place)\n    (charged))"
+    )
+    open_file(client, domain, unused)
+    shown = await diagnostics_until(client, domain, lambda d: len(d) > 0)
+    assert _words(shown) == ["predicate 'charged' is not used by any action or the problem"]
+    line = next(i for i, t in enumerate(unused.splitlines()) if t.startswith("    (charged))"))
+    assert shown[0].range == _at(unused, line, "charged")
+
+
+async def test_an_unknown_object_in_the_problem_is_an_error_on_its_line(
+    client: LanguageClient, usecase: Path
+) -> None:
+    problem = usecase / "examples" / "usecase" / "problem.pddl"
+    text = problem.read_text()
+    wrong = text.replace("(robot_at dock)", "(robot_at dokc)")
+    open_file(client, problem, wrong)
+    shown = await diagnostics_until(client, problem, lambda d: len(d) > 0)
+    assert [d.severity for d in shown] == [types.DiagnosticSeverity.Error]
+    line = wrong.splitlines().index("    (robot_at dokc)")
+    assert shown[0].range == _at(wrong, line, "dokc")
+
+
+async def test_a_standalone_observers_file_is_checked_as_dura_validate_checks_it(
+    client: LanguageClient, usecase: Path
+) -> None:
+    observers = usecase / "observers.yaml"
+    text = "- type: timeout\n  topics:\n    - name: scan\n      callerids:\n        - {callerid: [], timeout: 0.5, max_timeouts_in_a_row: 2}\n"
+    observers.write_text(text)
+    open_file(client, observers)
+    assert await diagnostics_until(client, observers, lambda d: True) == []
+    wrong = text.replace("type: timeout", "type: timeot")
+    change_file(client, observers, wrong)
+    shown = await diagnostics_until(client, observers, lambda d: len(d) > 0)
+    copy = usecase / "copy.yaml"
+    copy.write_text(wrong)
+    checked = check_observer_file(copy)
+    assert checked is not None
+    assert _words(shown) == [f.message for f in checked[1]]
+    assert shown[0].range == _at(wrong, 0, "timeot")
