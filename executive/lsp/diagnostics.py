@@ -1,7 +1,8 @@
 """A finding as the editor shows it: at the exact place of the name it is about.
 
-A finding has a line; the place in the line is the one unified-planning's message
-gives (``from line: 5, col 15 to line: 5, col 19``), else that of the last name it
+A finding has a line, and PDDL findings a column too (``file:line:col: reason``): the
+place is the word that starts at that column; without a column, the one unified-planning's
+message gives (``from line: 5, col 15 to line: 5, col 19``), else that of the last name it
 quotes which the line holds (``requires unknown capability 'scna'`` -> ``scna``), else
 the line's text. A did-you-mean travels with the diagnostic, for the code action that applies it.
 """
@@ -18,6 +19,7 @@ from knowledge.finding import Finding
 SOURCE = "dura"
 _QUOTED = re.compile(r"'([^'\s]+)'")
 _SPAN = re.compile(r"line:? (\d+), col:? (\d+) to line:? (\d+), col:? (\d+)", re.IGNORECASE)
+_WORD = re.compile(r"\(?[^\s()]+")
 _DID_YOU_MEAN = re.compile(r" \(did you mean '([^']+)'\?\)")
 
 
@@ -28,7 +30,8 @@ def diagnostic(finding: Finding, lines: Lines) -> types.Diagnostic:
     message = finding.message
     suggestion = _DID_YOU_MEAN.search(message)
     plain = _DID_YOU_MEAN.sub("", message)
-    start, end = _place(text, [m.group(1) for m in _QUOTED.finditer(plain)])
+    quoted = [m.group(1) for m in _QUOTED.finditer(plain)]
+    start, end = _at_column(text, finding.column - 1) if finding.column else _place(text, quoted)
     where = types.Range(types.Position(line, start), types.Position(line, end))
     span = _SPAN.search(message)  # unified-planning's own place: lines and columns from 1
     if span is not None and int(span.group(1)) - 1 == line:
@@ -43,6 +46,13 @@ def diagnostic(finding: Finding, lines: Lines) -> types.Diagnostic:
         source=SOURCE,
         data={"replacement": suggestion.group(1)} if suggestion else None,
     )
+
+
+def _at_column(text: str, start: int) -> tuple[int, int]:
+    """The columns of the word (or the parenthesised head, ``(define``) that starts at
+    ``start``; one character where none does."""
+    word = _WORD.match(text, start)
+    return start, word.end() if word is not None and word.end() > start else start + 1
 
 
 def _place(text: str, names: list[str]) -> tuple[int, int]:

@@ -95,7 +95,11 @@ async def test_a_pddl_syntax_error_is_shown_on_its_line(
     open_file(client, domain, broken)
     shown = await diagnostics_until(client, domain, lambda d: len(d) > 0)
     assert len(shown) == 1
-    assert shown[0].message.startswith("PDDL: ")
+    assert _words(shown) == [
+        "'(define' is not closed before the end of the file (a ')' is missing)"
+    ]
+    opened = next(i for i, t in enumerate(broken.splitlines()) if t.startswith("(define"))
+    assert shown[0].range == _at(broken, opened, "(define")  # the list left open
     assert shown[0].severity == types.DiagnosticSeverity.Error
 
 
