@@ -9,7 +9,8 @@ router on every message that reaches it from a client:
   everything under ``dura/<robot>/``;
 - ``host.<name>`` (one user per host agent, ``dura host``): serve its own requests
   (``host/<name>/...``: spawn, signal, logs), publish the exits of its processes and the
-  resources of its components, declare its own liveliness token, and listen — nothing
+  resources of its components (on ``host/<name>/resources``: the executive passes on
+  only those of the components placed on that host), declare its own liveliness token, and listen — nothing
   else, so a host cannot command components, forge a state or call the API;
 - ``operator`` (the CLI, the dashboard, the test harness, scripts): call the services'
   APIs, command components (fault injection), read the diagnosis model and switch
@@ -284,7 +285,7 @@ def access_control(
         rules.append(_rule(f"{own} serves", ["declare_queryable", "reply"],
                            [f"{root}/host/{name}/*"]))  # fmt: skip
         rules.append(_rule(f"{own} reports", ["put"],
-                           [f"{root}/host/{name}/exit", f"{root}/resources"]))  # fmt: skip
+                           [f"{root}/host/{name}/exit", f"{root}/host/{name}/resources"]))  # fmt: skip
         rules.append(_rule(f"{own} token", ["liveliness_token"], [f"{root}/alive/host/{name}"]))
         subjects.append({"id": own, "usernames": [host_user(name)]})
         policies.append(

@@ -10,13 +10,15 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from executive.bus import security
 from executive.bus.api.monitoring import DIAGNOSIS_MODEL_CHANGE, DIAGNOSIS_MODEL_READ, ModelChange
+from executive.bus.keys import RESOURCES
 from executive.bus.session import Bus, Message
-from executive.testing.harness import RobotProcess
+from executive.testing.harness import RobotProcess, robot_variant
 from knowledge.errors import BusError
 from tests.conftest import USECASE, wait_for
 
@@ -85,3 +87,25 @@ def test_an_operator_reads_the_diagnosis_model_but_cannot_blind_it(robot: RobotP
 def test_forgeries_leave_the_executive_running(robot: RobotProcess, tmp_path: Path) -> None:
     assert robot.running
     assert "Traceback" not in robot.log_tail(100_000)
+
+
+def test_a_host_reports_resources_of_its_own_components_only(tmp_path: Path) -> None:
+    placed = {"functionalities": {"cam": {"host": "back"}}}
+    description = robot_variant(USECASE, tmp_path / "description", placed)
+    with RobotProcess(description, tmp_path) as robot:
+        heard: list[dict[str, Any]] = []
+        login = security.find_host_login("usecase", "back", robot.folder)
+        with Bus("usecase", name="back", endpoint=robot.endpoint, login=login) as host:
+            robot.bus.subscribe(RESOURCES, lambda m: heard.append(m.payload))
+            nodes = [
+                {"name": name, "pid": 1, "hostname": "back", "cpu": 99.0, "memory": 1 << 40}
+                for name in ("cam", "lidar")
+            ]
+            report = {"hostname": "back", "nodes": nodes, "stamp": time.time()}
+            assert host.wait_for_subscriber("host/back/resources")
+            host.publish(RESOURCES, report)  # not a key a host may publish on
+            host.publish("host/back/resources", report)  # lidar is not placed on back
+            assert wait_for(lambda: any(p["hostname"] == "back" for p in heard))
+            time.sleep(0.3)
+        from_back = [p for p in heard if p["hostname"] == "back"]
+        assert [[n["name"] for n in p["nodes"]] for p in from_back] == [["cam"]]
