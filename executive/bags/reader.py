@@ -5,12 +5,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import yaml
-
 from executive.bags.bag import Bag
 from executive.bags.mcap_bag import MAGIC, open_mcap
 from executive.bags.rosbag2_bag import open_rosbags
-from knowledge.errors import BagError
+from knowledge.errors import BagError, ConfigError
+from knowledge.yamlsource import load as load_yaml
 
 SQLITE_MAGIC = b"SQLite format 3\x00"
 
@@ -42,15 +41,18 @@ def open_bag(path: Path) -> Bag:
 def _folder(path: Path) -> Bag:
     """Open a rosbag2 folder: its MCAP files read as one, anything else with rosbags."""
     metadata = path / "metadata.yaml"
+    if not metadata.is_file():
+        raise BagError(f"{path}: not a rosbag2 folder (no metadata.yaml)")
     try:
-        info = yaml.safe_load(metadata.read_text())["rosbag2_bagfile_information"]
+        # the safe reader: an alias bomb is refused in a moment, before rosbags reads it
+        info = load_yaml(metadata)["rosbag2_bagfile_information"]
         storage = str(info["storage_identifier"])
         files = [path / Path(str(name)).name for name in info["relative_file_paths"]]
         compressed = str(info.get("compression_mode") or "").lower() not in ("", "none")
         distro = info.get("ros_distro")
-    except FileNotFoundError:
-        raise BagError(f"{path}: not a rosbag2 folder (no metadata.yaml)") from None
-    except (OSError, yaml.YAMLError, KeyError, TypeError) as e:
+    except ConfigError as e:
+        raise BagError(str(e)) from None
+    except (KeyError, TypeError) as e:
         raise BagError(f"{metadata}: not rosbag2 metadata ({type(e).__name__}: {e})") from e
     if storage == "mcap" and not compressed:
         missing = [str(f) for f in files if not f.is_file()]
