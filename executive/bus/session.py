@@ -28,13 +28,14 @@ import zenoh
 
 from executive.bus.keys import listened_key, sender_of, wire_key
 from executive.bus.security import Login
-from knowledge.errors import BusError, DuraError, NoAnswer
+from knowledge.errors import QUOTED, BusError, DuraError, NoAnswer, excerpt
 
 if TYPE_CHECKING:
     import logging
 
 _BAD_KEY = re.compile(r"[*$?#\s]|//")
 MAX_PAYLOAD = 1 << 20  # bytes: a larger message is dropped (a robot's messages are far smaller)
+ERROR_REPLY = 2 * QUOTED  # characters of an error reply: a reason and a short quote
 
 Handler = Callable[["Message"], None]
 RequestHandler = Callable[[dict[str, Any]], Mapping[str, Any]]
@@ -374,8 +375,8 @@ class Bus:
                     request[caller] = key_expr.rpartition("/")[2]
                 reply = handler(request)
                 query.reply(query.key_expr, encode(reply))
-            except DuraError as e:
-                query.reply_err(str(e).encode())
+            except DuraError as e:  # the reason, quoting little of a long request
+                query.reply_err(excerpt(str(e), ERROR_REPLY).encode())
             except Exception as e:
                 _log().exception("request handler for %s failed", key_expr)
                 query.reply_err(f"internal error: {type(e).__name__}: {e}".encode())
