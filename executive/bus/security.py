@@ -285,7 +285,8 @@ def access_control(
         rules.append(_rule(f"{own} serves", ["declare_queryable", "reply"],
                            [f"{root}/host/{name}/*"]))  # fmt: skip
         rules.append(_rule(f"{own} reports", ["put"],
-                           [f"{root}/host/{name}/exit", f"{root}/host/{name}/resources"]))  # fmt: skip
+                           [f"{root}/host/{name}/exit", f"{root}/host/{name}/resources",
+                            f"{root}/host/{name}/stopping"]))  # fmt: skip
         rules.append(_rule(f"{own} token", ["liveliness_token"], [f"{root}/alive/host/{name}"]))
         subjects.append({"id": own, "usernames": [host_user(name)]})
         policies.append(
