@@ -217,6 +217,7 @@ def hostile_inputs(folder: Path) -> Row:
         ("NaN deadline", lambda f: ["goal", "add", "(robot_at dock)", "--deadline", "nan"]),
         ("negative timeout", lambda f: ["diagnose", "m.yaml", "--observations", "o.yaml", "--timeout", "-1"]),
         ("id zero", lambda f: ["goal", "show", "0"]),
+        ("bag metadata bomb", lambda f: ["replay", str(_bag(f, BOMB)), "--robot", str(USECASE)]),
     ]  # fmt: skip
     clean = 0
     failures = []
@@ -244,6 +245,12 @@ def hostile_inputs(folder: Path) -> Row:
             failures.append(f"{name}: exit {done.returncode}, {len(lines)} lines")
     return Row("hostile files and arguments (clean errors / tried)", clean, len(cases),
                "; ".join(failures))  # fmt: skip
+
+
+def _bag(folder: Path, metadata: str) -> Path:
+    (folder / "bag").mkdir()
+    _write(folder / "bag" / "metadata.yaml", metadata)
+    return folder / "bag"
 
 
 def _write(path: Path, text: str) -> Path:
