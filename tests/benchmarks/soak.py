@@ -6,9 +6,10 @@ Each goal sends the robot to another place, ``(robot_at lab)``, ``(robot_at offi
 ``(robot_at dock)`` in turn, and waits until it is achieved; nothing is injected. After
 the warm-up, the executive's process (and its planner worker, measured apart) is
 sampled after every goal: resident memory, threads, open files, and the knowledge
-base's size (its file: the WAL beside it is bounded by SQLite's checkpoints). The table gives each at the end of the warm-up and at the
-end, and the growth per goal; false repairs are the faults counted and the repair rules
-fired with nothing injected (0 is the only right answer).
+base's size (its file: the WAL beside it is bounded by SQLite's checkpoints). The table
+gives each at the end of the warm-up and at the end, and the growth per goal; false
+repairs are the faults counted and the repair rules fired with nothing injected (0 is
+the only right answer).
 """
 
 from __future__ import annotations
