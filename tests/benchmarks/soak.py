@@ -91,7 +91,7 @@ def main() -> None:
             if n >= args.warm_up:
                 samples.append(sample(robot, n))
         repairs = [f"{e.kind} {e.subject}: {e.data.get('reason', e.data.get('faulty', ''))}"
-                   for e in robot.events() if e.kind in ("FAULT", "RULE_FIRED")]  # fmt: skip
+                   for kind in ("FAULT", "RULE_FIRED") for e in robot.events(kind)]  # fmt: skip
         faults = sum(r.startswith("FAULT") for r in repairs)
         fired = len(repairs) - faults
     first, last = samples[0], samples[-1]
