@@ -186,11 +186,14 @@ class Executive:
                     listen=True,
                     login=credentials.login(security.EXECUTIVE),
                     dictionary=security.dictionary(credentials, users),
-                    access=security.access_control(robot.name, components, robot.hosts),
+                    access=security.access_control(
+                        robot.name, components, robot.hosts, topics=security.topics_of(robot)
+                    ),
                 )
             )
             self.progress(f"opening the knowledge base {self.kb_path}")
             self.kb = stack.enter_context(KnowledgeBase(self.kb_path))
+            lock.hold_file()  # a new knowledge base is a file now
             self.kb.log_event(
                 "EXECUTIVE_STARTED",
                 self.robot.name,

@@ -76,3 +76,14 @@ def did_you_mean(word: str, choices: object) -> str:
     names = [str(c) for c in choices]  # type: ignore[attr-defined]
     close = difflib.get_close_matches(word, names, n=1, cutoff=0.6)
     return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+QUOTED = 200  # characters of someone's input an error message quotes, at most
+
+
+def excerpt(text: str, limit: int = QUOTED) -> str:
+    """``text`` as an error message quotes it: at most ``limit`` characters, and how
+    many more there were (a 900 KB goal gets a short refusal, not a 1.8 MB one)."""
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]}... ({len(text) - limit} more characters)"

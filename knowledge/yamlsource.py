@@ -1,6 +1,7 @@
 """YAML documents as plain values with the line of every place, for the typed reader.
 
-:func:`compose` parses a file (refusing what no robot needs: too large, too deep, alias
+Every YAML file dura reads goes through here: :func:`load` for a plain value (a bag's
+``metadata.yaml``), :func:`read_file` for the typed reader. :func:`compose` parses a file (refusing what no robot needs: too large, too deep, alias
 bombs; duplicate keys are problems); :func:`document` turns the nodes into plain values
 and the lines of their keys and values; :class:`DocumentSource` lets
 :mod:`knowledge.typed_reader` read them against a schema with ``file:line`` messages
@@ -16,6 +17,7 @@ from typing import Any
 
 import yaml
 
+from knowledge.errors import ConfigError
 from knowledge.field_plan import PathPart, dotted
 from knowledge.finding import Report
 from knowledge.sources import read_text
@@ -225,3 +227,17 @@ def read_file(path: Path, report: Report, text: str | None = None) -> Document |
     or is empty: reported, but for an empty one)."""
     node = compose(path, report, text)
     return document(node) if node is not None else None
+
+
+def load(path: Path) -> Any:
+    """A YAML file's plain value, read as safely as a robot description (too large, too
+    deep and alias bombs refused; ``None`` for an empty file).
+
+    Raises:
+        ConfigError: it cannot be read or is refused: one line, ``file:line: reason``.
+    """
+    report = Report(str(path))
+    node = compose(path, report)
+    if report.errors:
+        raise ConfigError(str(report.errors[0]))
+    return None if node is None else to_python(node)

@@ -1,8 +1,11 @@
 """The resource monitor (thesis 6.2.4): CPU and memory of each component's process tree.
 
 It learns the components' processes from the launcher's reports on
-``component/*/state`` (a host agent tells it of the processes it starts) and publishes a :class:`~executive.bus.payloads.ResourceInfo` on
-``resources`` at its rate (default 1 Hz). A component whose process vanished (or is a
+``component/*/state`` and publishes a :class:`~executive.bus.payloads.ResourceInfo` on
+``resources`` at its rate (default 1 Hz). A host agent measures the processes it starts
+itself and publishes on ``host/<name>/resources``, the only resource key its login may
+use; the monitor passes on from there the components placed on that host, and only
+those: a host speaks only for its own processes. A component whose process vanished (or is a
 zombie) while it should be alive is reported with an ``error``. CPU is measured between
 two samples, so a process's first report shows 0 %.
 """
@@ -19,13 +22,15 @@ from typing import Any
 
 import psutil
 
-from executive.bus.keys import RESOURCES, component
+from executive.bus.keys import RESOURCES, component, host
 from executive.bus.payloads import ComponentState, NodeInfo, ResourceInfo
 from executive.bus.service import Context, Service
 from executive.bus.session import Bus, Message
 from knowledge.errors import ConfigError, DuraError
 
 log = logging.getLogger("dura.resources")
+
+HOST_RESOURCES = "resources"  # a host agent's leaf: host/<name>/resources
 
 
 class ResourceMonitor(Service):
@@ -51,22 +56,41 @@ class ResourceMonitor(Service):
         super().__init__(context)
         self.sampler = ResourceSampler(context.bus, rate=rate, hostname=hostname)
         self.components = None if components is None else frozenset(components)
-        self._subscriber: Any = None
+        self._subscribers: list[Any] = []
 
     @property
     def hostname(self) -> str:
         return self.sampler.hostname
 
     def on_activate(self) -> None:
-        self._subscriber = self.context.bus.subscribe(component("*", "state"), self._on_state)
+        bus = self.context.bus
+        self._subscribers = [
+            bus.subscribe(component("*", "state"), self._on_state),
+            bus.subscribe(host("*", HOST_RESOURCES), self._on_host),
+        ]
         self.sampler.start()
 
     def on_deactivate(self) -> None:
         self.sampler.stop()
-        if self._subscriber is not None:
+        for subscriber in self._subscribers:
             with contextlib.suppress(Exception):
-                self._subscriber.undeclare()
-            self._subscriber = None
+                subscriber.undeclare()
+        self._subscribers = []
+
+    def _on_host(self, message: Message) -> None:
+        """Pass a host agent's report on, with only the components placed on that host."""
+        name = message.key.split("/")[1]
+        try:
+            info = ResourceInfo.from_payload(message.payload)
+        except (KeyError, ValueError, TypeError) as e:
+            log.warning("malformed resources of host '%s': %s", name, e)
+            return
+        own = set(self.context.robot.placed_on(name))
+        nodes = tuple(n for n in info.nodes if n.name in own)
+        if len(nodes) < len(info.nodes):
+            others = sorted({n.name for n in info.nodes} - own)[:5]
+            log.warning("host '%s' reported resources of %s, not its own: ignored", name, others)
+        self.context.bus.publish(RESOURCES, ResourceInfo(name, nodes, info.stamp).to_payload())
 
     def measure(self) -> ResourceInfo:
         """One sample of every tracked component."""
@@ -94,14 +118,23 @@ class ResourceSampler:
         bus: where to publish.
         rate: samples per second.
         hostname: the name in each report (default: this computer's).
+        key: where to publish (a host agent: ``host/<name>/resources``).
     """
 
-    def __init__(self, bus: Bus, *, rate: float = 1.0, hostname: str | None = None) -> None:
+    def __init__(
+        self,
+        bus: Bus,
+        *,
+        rate: float = 1.0,
+        hostname: str | None = None,
+        key: str = RESOURCES,
+    ) -> None:
         if rate <= 0:
             raise ConfigError(f"the resource monitor's rate must be positive, not {rate:g}")
         self.bus = bus
         self.rate = rate
         self.hostname = hostname or socket.gethostname()
+        self.key = key
         self._pids: dict[str, int] = {}
         self._processes: dict[int, psutil.Process] = {}
         self._lock = threading.Lock()
@@ -131,7 +164,7 @@ class ResourceSampler:
         while not self._stopped.wait(max(0.0, due - time.monotonic())):
             due = max(due + period, time.monotonic() - period)
             try:
-                self.bus.publish(RESOURCES, self.measure().to_payload())
+                self.bus.publish(self.key, self.measure().to_payload())
             except DuraError as e:
                 log.warning("cannot publish resources: %s", e)
 

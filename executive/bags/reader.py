@@ -13,12 +13,11 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from executive.bags.bag import Bag
 from executive.bags.mcap_bag import MAGIC, open_mcap
 from executive.bags.rosbag2_bag import open_sqlite3
-from knowledge.errors import BagError
+from knowledge.errors import BagError, ConfigError
+from knowledge.yamlsource import load as load_yaml
 
 SQLITE_MAGIC = b"SQLite format 3\x00"
 MAX_VERSION = 9  # the newest rosbag2 metadata version read (Jazzy's; Foxy wrote 4)
@@ -54,17 +53,20 @@ def open_bag(path: Path, types: Mapping[str, Any] | None = None) -> Bag:
 def _folder(path: Path, types: Mapping[str, Any] | None) -> Bag:
     """Open a rosbag2 folder: its files read as one."""
     metadata = path / "metadata.yaml"
+    if not metadata.is_file():
+        raise BagError(f"{path}: not a rosbag2 folder (no metadata.yaml)")
     try:
-        info = yaml.safe_load(metadata.read_text())["rosbag2_bagfile_information"]
+        # the safe reader: an alias bomb is refused in a moment, before rosbags reads it
+        info = load_yaml(metadata)["rosbag2_bagfile_information"]
         version = int(info.get("version", 0))
         storage = str(info["storage_identifier"])
         files = [path / Path(str(name)).name for name in info["relative_file_paths"]]
         mode = str(info.get("compression_mode") or "").lower()
         fmt = str(info.get("compression_format") or "").lower()
         distro = str(info["ros_distro"]) if info.get("ros_distro") else None
-    except FileNotFoundError:
-        raise BagError(f"{path}: not a rosbag2 folder (no metadata.yaml)") from None
-    except (OSError, yaml.YAMLError, KeyError, TypeError, ValueError) as e:
+    except ConfigError as e:
+        raise BagError(str(e)) from None
+    except (KeyError, TypeError, ValueError) as e:
         raise BagError(f"{metadata}: not rosbag2 metadata ({type(e).__name__}: {e})") from e
     if version > MAX_VERSION:
         raise BagError(f"{metadata}: metadata version {version}: dura reads 1 to {MAX_VERSION}")

@@ -28,7 +28,7 @@ NAMED = frozenset(
         "TASK_PAUSED", "TASK_RESUMED", "TASK_RESTARTED", "CONFIGURATION", "REPAIR", "FAULT",
         "PERMANENT_FAULT", "COMPONENT_RESET",
         # the computers of a robot (host agents)
-        "HOST_JOINED", "HOST_LOST",
+        "HOST_JOINED", "HOST_LOST", "HOST_STOPPED",
         # monitoring
         "RULE_FIRED", "RULE_FAILED", "EXONERATION",
     }

@@ -271,7 +271,8 @@ def _host(subject: str, data: Data, kind: str) -> str:
     components = list(data.get("components") or [])
     if kind == "HOST_JOINED":
         return f"host {subject} joined" + (f": serves {listed(components)}" if components else "")
-    return f"host {subject} lost" + (f": ended {listed(components)}" if components else "")
+    how = "stopped" if kind == "HOST_STOPPED" else "lost"
+    return f"host {subject} {how}" + (f": ended {listed(components)}" if components else "")
 
 
 def _component(subject: str, data: Data, kind: str) -> str:
@@ -314,7 +315,7 @@ _TEXTS: Mapping[str, Text] = {
     "INTEGRITY_GOAL": _integrity, "INTEGRITY_REFUSED": _integrity,
     "CONFIGURATION": _configuration, "REPAIR": _repair, "FAULT": _fault,
     "PERMANENT_FAULT": _permanent_fault, "COMPONENT_RESET": _reset,
-    "HOST_JOINED": _host, "HOST_LOST": _host,
+    "HOST_JOINED": _host, "HOST_LOST": _host, "HOST_STOPPED": _host,
     "RULE_FIRED": _rule, "RULE_FAILED": _rule,
 }  # fmt: skip
 """The readable form of each named kind."""

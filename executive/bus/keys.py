@@ -16,6 +16,30 @@ EXECUTIVE_ALIVE = "alive/executive"  # liveliness token of the executive process
 EVENTS = "events"  # every KB event, as it is logged
 
 
+TOPICS = "topic/"  # the keys of topic data, as publishers and subscribers name them
+SENT = "from/"  # where topic data travels: ``from/<sender>/topic/<name>``
+
+
+def wire_key(key: str, sender: str) -> str:
+    """The key a message on ``key`` travels on when ``sender`` publishes it: the
+    sender's name is part of the key of topic data, where access control checks it."""
+    return f"{SENT}{sender}/{key}" if key.startswith(TOPICS) else key
+
+
+def listened_key(key: str) -> str:
+    """The key a subscriber of ``key`` listens on: every sender of topic data."""
+    return f"{SENT}*/{key}" if key.startswith(TOPICS) else key
+
+
+def sender_of(key: str) -> tuple[str, str]:
+    """``(key as published, sender)`` of a key as it travels; ``(key, "")`` for a key
+    that names no sender (the caller id then is the attachment's)."""
+    if key.startswith(SENT):
+        sender, _, rest = key[len(SENT) :].partition("/")
+        return rest, sender
+    return key, ""
+
+
 def topic(name: str) -> str:
     """Component data on a named topic."""
     return f"topic/{name.strip('/')}"

@@ -9,14 +9,23 @@ router on every message that reaches it from a client:
   everything under ``dura/<robot>/``;
 - ``host.<name>`` (one user per host agent, ``dura host``): serve its own requests
   (``host/<name>/...``: spawn, signal, logs), publish the exits of its processes and the
-  resources of its components, declare its own liveliness token, and listen — nothing
+  resources of its components (on ``host/<name>/resources``: the executive passes on
+  only those of the components placed on that host), declare its own liveliness token, and listen — nothing
   else, so a host cannot command components, forge a state or call the API;
 - ``operator`` (the CLI, the dashboard, the test harness, scripts): call the services'
-  APIs, command components (fault injection), subscribe and watch liveliness — but
-  publish nothing, so no operator can forge a diagnosis, an observation or a state;
-- ``component.<name>`` (one user per component): publish topics and its own results and
-  feedback, answer its own commands, declare its own liveliness token, and call the few
-  verbs a component needs (achievements, facts).
+  APIs, command components (fault injection), read the diagnosis model and switch
+  exoneration, subscribe and watch liveliness — but publish nothing and change no
+  diagnosis model (only the executive and its services do), so no operator can forge a
+  diagnosis, an observation or a state, nor make the diagnosis blind;
+- ``component.<name>`` (one user per component): publish the topics its description
+  lists under ``publishes``, and only under its own name (``from/<name>/topic/<t>``: the
+  caller id observers see is the login's, see :mod:`executive.bus.session`), subscribe
+  to the topics it ``subscribes``, publish its own results and feedback, answer its own
+  commands, declare its own liveliness token, watch liveliness, and call the few verbs
+  a component needs: its own achievements (``.../component/achieve/<name>``) and facts.
+
+The rules are made from the robot description each time the executive starts: a
+changed description changes them.
 
 Credentials are generated on the executive's first run into ``.dura/<robot>.bus.json``
 (user-only permissions, 0600) and kept; components get theirs from the launcher in their
@@ -36,9 +45,12 @@ import stat
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from knowledge.errors import BusError
+
+if TYPE_CHECKING:
+    from knowledge.description import RobotDescription
 
 EXECUTIVE = "executive"
 SERVICE = "service"
@@ -61,6 +73,14 @@ ALL = [
     "declare_liveliness_subscriber",
     "liveliness_query",
 ]
+
+
+@dataclass(frozen=True)
+class Topics:
+    """The topics a component may publish and subscribe (its description's)."""
+
+    publishes: tuple[str, ...] = ()
+    subscribes: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -198,20 +218,27 @@ def dictionary(credentials: Credentials, path: Path) -> Path:
 
 
 def access_control(
-    robot: str, components: Iterable[str], hosts: Iterable[str] = ()
+    robot: str,
+    components: Iterable[str],
+    hosts: Iterable[str] = (),
+    *,
+    topics: Mapping[str, Topics] | None = None,
 ) -> dict[str, Any]:
-    """Zenoh's access control configuration for a robot's bus (see the module doc)."""
+    """Zenoh's access control configuration for a robot's bus (see the module doc);
+    ``topics`` are what each component may publish and subscribe (none if absent)."""
     root = f"dura/{robot}"
+    topics = topics or {}
     rules: list[dict[str, Any]] = [
         _rule("everything", ALL, [f"{root}/**"]),
         _rule("deliver", ALL, [f"{root}/**"], flows=["egress"]),
         _rule("ask", ["query"], [f"{root}/executive/api/**", f"{root}/monitoring/**",
-                                 f"{root}/diagnosis/**", f"{root}/component/*/cmd"]),
+                                 f"{root}/diagnosis/model/read", f"{root}/diagnosis/exonerate",
+                                 f"{root}/component/*/cmd"]),
         _rule("listen", ["declare_subscriber", "declare_liveliness_subscriber",
                          "liveliness_query"], [f"{root}/**"]),
-        _rule("publish topics", ["put"], [f"{root}/topic/**"]),
-        _rule("component calls", ["query"], [f"{root}/executive/api/component/achieve",
-                                             f"{root}/executive/api/state/set",
+        _rule("watch", ["declare_liveliness_subscriber", "liveliness_query"],
+              [f"{root}/alive/**"]),
+        _rule("component calls", ["query"], [f"{root}/executive/api/state/set",
                                              f"{root}/executive/api/state/unset"]),
     ]  # fmt: skip
     subjects = [
@@ -224,13 +251,21 @@ def access_control(
     ]
     for name in components:
         own = f"own {name}"
+        allowed = topics.get(name, Topics())
+        published = [f"{root}/from/{name}/topic/{t.strip('/')}" for t in allowed.publishes]
         rules.append(
             _rule(
                 own,
                 ["put"],
-                [f"{root}/component/{name}/result", f"{root}/component/{name}/feedback"],
+                [f"{root}/component/{name}/result", f"{root}/component/{name}/feedback",
+                 *published],
             )
-        )
+        )  # fmt: skip
+        rules.append(_rule(f"{own} calls", ["query"],
+                           [f"{root}/executive/api/component/achieve/{name}"]))  # fmt: skip
+        heard = [f"{root}/from/*/topic/{t.strip('/')}" for t in allowed.subscribes]
+        if heard:
+            rules.append(_rule(f"{own} subscribes", ["declare_subscriber"], heard))
         rules.append(_rule(f"{own} commands", ["declare_queryable", "reply"],
                            [f"{root}/component/{name}/cmd"]))  # fmt: skip
         rules.append(_rule(f"{own} token", ["liveliness_token"],
@@ -239,8 +274,9 @@ def access_control(
         subjects.append({"id": subject, "usernames": [component_user(name)]})
         policies.append(
             {
-                "rules": ["deliver", "listen", "publish topics", "component calls", own,
-                          f"{own} commands", f"{own} token"],
+                "rules": ["deliver", "watch", "component calls", own, f"{own} calls",
+                          f"{own} commands", f"{own} token",
+                          *([f"{own} subscribes"] if heard else [])],
                 "subjects": [subject],
             }
         )  # fmt: skip
@@ -249,7 +285,8 @@ def access_control(
         rules.append(_rule(f"{own} serves", ["declare_queryable", "reply"],
                            [f"{root}/host/{name}/*"]))  # fmt: skip
         rules.append(_rule(f"{own} reports", ["put"],
-                           [f"{root}/host/{name}/exit", f"{root}/resources"]))  # fmt: skip
+                           [f"{root}/host/{name}/exit", f"{root}/host/{name}/resources",
+                            f"{root}/host/{name}/stopping"]))  # fmt: skip
         rules.append(_rule(f"{own} token", ["liveliness_token"], [f"{root}/alive/host/{name}"]))
         subjects.append({"id": own, "usernames": [host_user(name)]})
         policies.append(
@@ -264,6 +301,14 @@ def access_control(
         "rules": rules,
         "subjects": subjects,
         "policies": policies,
+    }
+
+
+def topics_of(robot: RobotDescription) -> dict[str, Topics]:
+    """What each component of a robot may publish and subscribe, from its description."""
+    return {
+        name: Topics(tuple(spec.publishes), tuple(spec.subscribes))
+        for name, spec in robot.components.items()
     }
 
 

@@ -1,8 +1,13 @@
 """The message bus: a thin wrapper over one eclipse-zenoh session.
 
-Every key lives under ``dura/<robot>/``. Payloads are JSON objects; published
-messages carry the sender's component name as caller id (the zenoh attachment)
-and a source timestamp. The executive opens the bus listening on its endpoint
+Every key lives under ``dura/<robot>/``. Payloads are JSON objects with a source
+timestamp. Who sent a topic's message is in its key, not in a field the sender
+writes: a session publishes ``topic/<name>`` on ``from/<its name>/topic/<name>``, and
+Zenoh's access control lets each component's login publish only under its own name
+(:mod:`executive.bus.security`); a subscriber of ``topic/<name>`` hears every sender
+and gets the name from the key as the message's caller id. Other keys carry the
+sender's name in the attachment, which only the executive's own services may publish.
+The executive opens the bus listening on its endpoint
 (router mode); components and the CLI connect to it as clients. Multicast
 scouting is always off: processes meet at explicit endpoints only.
 """
@@ -21,14 +26,16 @@ from typing import TYPE_CHECKING, Any
 
 import zenoh
 
+from executive.bus.keys import listened_key, sender_of, wire_key
 from executive.bus.security import Login
-from knowledge.errors import BusError, DuraError, NoAnswer
+from knowledge.errors import QUOTED, BusError, DuraError, NoAnswer, excerpt
 
 if TYPE_CHECKING:
     import logging
 
 _BAD_KEY = re.compile(r"[*$?#\s]|//")
 MAX_PAYLOAD = 1 << 20  # bytes: a larger message is dropped (a robot's messages are far smaller)
+ERROR_REPLY = 2 * QUOTED  # characters of an error reply: a reason and a short quote
 
 Handler = Callable[["Message"], None]
 RequestHandler = Callable[[dict[str, Any]], Mapping[str, Any]]
@@ -191,6 +198,7 @@ class Bus:
             endpoint = DEFAULT_ENDPOINT
         self.robot = check_name(robot, "robot name")
         self.name = name
+        self._sender = check_name(name, "sender name").replace("/", "_") if name else "anonymous"
         self.endpoint = endpoint
         self.prefix = f"dura/{self.robot}/"
         self._attachment = name.encode()
@@ -293,13 +301,16 @@ class Bus:
         with self._lock:
             publisher = self._publishers.get(key)
             if publisher is None:
-                publisher = self._session.declare_publisher(self.key(key))
+                publisher = self._session.declare_publisher(self.key(wire_key(key, self._sender)))
                 self._publishers[key] = publisher
                 self._declared.append(publisher)
         return publisher
 
     def subscribe(self, key: str, handler: Handler, *, decoded: bool = True) -> Any:
         """Call ``handler`` for every message on ``dura/<robot>/<key>`` (wildcards allowed).
+
+        A message of topic data (``topic/...``) has its sender's name, as the key it
+        came on tells, as caller id; any other message the name in its attachment.
 
         With ``decoded`` (the default) malformed payloads are logged and dropped before
         the handler sees them; without it the handler gets the raw message and decodes
@@ -309,18 +320,18 @@ class Bus:
         dropped = self._dropped
 
         def on_sample(sample: zenoh.Sample) -> None:
-            key_expr = str(sample.key_expr)
+            relative, sender = sender_of(str(sample.key_expr)[prefix_len:])
             if len(sample.payload) > MAX_PAYLOAD:
-                dropped(
-                    key_expr[prefix_len:], f"{len(sample.payload)} bytes (at most {MAX_PAYLOAD})"
-                )
+                dropped(relative, f"{len(sample.payload)} bytes (at most {MAX_PAYLOAD})")
                 return
             attachment = sample.attachment
+            if not sender and attachment is not None:
+                sender = attachment.to_bytes().decode(errors="replace")
             stamp = sample.timestamp
             message = Message(
-                key_expr[prefix_len:],
+                relative,
                 sample.payload.to_bytes(),
-                attachment.to_bytes().decode(errors="replace") if attachment is not None else "",
+                sender,
                 stamp.get_time().timestamp() if stamp is not None else None,
                 time.time(),
             )
@@ -333,15 +344,21 @@ class Bus:
             except Exception:
                 _log().exception("handler for %s failed", message.key)
 
-        subscriber = self._session.declare_subscriber(self.key(key), on_sample)
+        subscriber = self._session.declare_subscriber(self.key(listened_key(key)), on_sample)
         with self._lock:
             self._declared.append(subscriber)
         return subscriber
 
     # --- request / reply --------------------------------------------------------------
 
-    def serve(self, key: str, handler: RequestHandler, *, threaded: bool = False) -> Any:
+    def serve(
+        self, key: str, handler: RequestHandler, *, threaded: bool = False, caller: str = ""
+    ) -> Any:
         """Answer requests on ``dura/<robot>/<key>`` with ``handler(payload) -> reply``.
+
+        With ``caller``, a field name, requests come on ``<key>/<caller's name>`` (see
+        :meth:`request`), where access control lets each login ask only under its own
+        name, and the handler gets that name in the field, whatever the caller wrote.
 
         A :class:`DuraError` raised by the handler becomes an error reply with its
         message; a malformed request gets an error reply naming the problem. With
@@ -353,10 +370,13 @@ class Bus:
             key_expr = str(query.key_expr)
             try:
                 raw = query.payload.to_bytes() if query.payload is not None else b"{}"
-                reply = handler(decode(raw, key_expr))
+                request = decode(raw, key_expr)
+                if caller:
+                    request[caller] = key_expr.rpartition("/")[2]
+                reply = handler(request)
                 query.reply(query.key_expr, encode(reply))
-            except DuraError as e:
-                query.reply_err(str(e).encode())
+            except DuraError as e:  # the reason, quoting little of a long request
+                query.reply_err(excerpt(str(e), ERROR_REPLY).encode())
             except Exception as e:
                 _log().exception("request handler for %s failed", key_expr)
                 query.reply_err(f"internal error: {type(e).__name__}: {e}".encode())
@@ -369,7 +389,9 @@ class Bus:
             else:
                 respond(query)
 
-        queryable = self._session.declare_queryable(self.key(key), on_query)
+        queryable = self._session.declare_queryable(
+            self.key(f"{key}/*" if caller else key), on_query
+        )
         with self._lock:
             self._declared.append(queryable)
         return queryable
@@ -380,13 +402,17 @@ class Bus:
         payload: Mapping[str, Any] | None = None,
         *,
         timeout: float = 5.0,
+        as_caller: bool = False,
     ) -> dict[str, Any]:
-        """Send a request and return the first reply.
+        """Send a request and return the first reply; with ``as_caller`` on
+        ``<key>/<this session's name>`` (a verb served with a ``caller``).
 
         Raises:
             NoAnswer: nobody answered in time (or no service serves the key).
             BusError: the answer is an error (its message).
         """
+        if as_caller:
+            key = f"{key}/{self._sender}"
         replies = self._session.get(
             self.key(key),
             payload=encode(payload or {}),

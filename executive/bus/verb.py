@@ -48,6 +48,9 @@ class Verb(Generic[Req, Rep]):
         timeout: how long a caller waits by default, in seconds.
         threaded: answer each request on a thread of its own (handlers that wait for
             processes or other services must not hold Zenoh's callback thread).
+        caller: a field of the request that names the caller: the verb is asked on
+            ``<key>/<caller's name>`` (the bus session's), which access control checks,
+            and the handler gets that name in the field, never what the caller wrote.
     """
 
     key: str
@@ -55,6 +58,7 @@ class Verb(Generic[Req, Rep]):
     reply: type[Rep]
     timeout: float = 30.0
     threaded: bool = True
+    caller: str = ""
 
     def serve(self, bus: Bus, handler: Callable[[Req], Rep]) -> Any:
         """Answer this verb on ``bus`` with ``handler``; returns the queryable."""
@@ -67,7 +71,7 @@ class Verb(Generic[Req, Rep]):
                 raise DuraError(f"{key}: {e}") from e
             return handler(request).to_payload()
 
-        return bus.serve(key, answer, threaded=self.threaded)
+        return bus.serve(key, answer, threaded=self.threaded, caller=self.caller)
 
     def call(self, bus: Bus, request: Req | None = None, *, timeout: float | None = None) -> Rep:
         """Ask and wait for the reply.
@@ -77,5 +81,6 @@ class Verb(Generic[Req, Rep]):
             PayloadError: the reply does not fit the declared type.
         """
         payload = request.to_payload() if request is not None else {}
-        reply = bus.request(self.key, payload, timeout=self.timeout if timeout is None else timeout)
+        wait = self.timeout if timeout is None else timeout
+        reply = bus.request(self.key, payload, timeout=wait, as_caller=bool(self.caller))
         return self.reply.from_payload(reply)

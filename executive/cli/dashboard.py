@@ -24,6 +24,15 @@ def add_dashboard_address(parser: Any, prefix: str = "") -> None:
         help=f"the address the page listens on (default {DEFAULT_HOST}, this machine only; "
         "any other needs the robot's bus credentials: visitors log in as 'operator')",
     )
+    parser.add_argument(
+        f"--{prefix}allow-host",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="a host name visitors may call the page by (repeatable; default: loopback "
+        "names, IP addresses and, beyond loopback, this machine's names): a page reached by "
+        "another name is refused (DNS rebinding)",
+    )
 
 
 def port(text: str) -> int:
@@ -44,9 +53,9 @@ def register(sub: Any) -> None:
         description="Serve the dashboard of a running robot: goals (add and cancel them), the "
         "plan as a Gantt chart with live progress, the component graph coloured by state with "
         "the diagnoses, the observations with their recent values, and the event log, updated "
-        "live. It listens on 127.0.0.1 by default; with --host another address, only visitors "
-        "with the robot's bus credentials get in (HTTP basic authentication as 'operator', or "
-        "the link printed at start). Ctrl-C stops it.",
+        "live. It listens on 127.0.0.1 by default; only visitors with the robot's bus "
+        "credentials get in, from this machine too (the link printed at start, or HTTP basic "
+        "authentication as 'operator'). Ctrl-C stops it.",
     )
     p.add_argument(
         "--robot",
@@ -89,7 +98,10 @@ def run(args: argparse.Namespace) -> int:
 
     robot, endpoint = target(args)
     stop = stop_on_signals()
-    with Dashboard.connect(robot, endpoint, host=args.host, port=args.port) as dashboard:
+    allow = tuple(args.allow_host)
+    with Dashboard.connect(
+        robot, endpoint, host=args.host, port=args.port, allow=allow
+    ) as dashboard:
         print(
             f"dura: dashboard of robot '{robot.name}' on {dashboard.url} (executive at "
             f"{endpoint}); Ctrl-C stops it",

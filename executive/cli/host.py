@@ -57,11 +57,12 @@ def run(args: argparse.Namespace) -> int:
     executive's)."""
     # the agent's parts load only for `dura host` (`dura --help` imports every command)
     from executive.bus import security
+    from executive.bus.keys import host
     from executive.bus.session import Bus
     from executive.runtime.host_agent import HostAgent
     from executive.runtime.launcher import local_endpoint
     from knowledge.robot import load_robot
-    from monitoring.resource_monitor import ResourceSampler
+    from monitoring.resource_monitor import HOST_RESOURCES, ResourceSampler
 
     robot = load_robot(args.robot)
     endpoint = args.connect or local_endpoint(robot.endpoint)
@@ -80,7 +81,9 @@ def run(args: argparse.Namespace) -> int:
     login = security.find_host_login(robot.name, args.name, Path.cwd(), args.credentials)
 
     def sampler(bus: Bus) -> ResourceSampler:
-        return ResourceSampler(bus, rate=args.resource_rate, hostname=args.name)
+        return ResourceSampler(
+            bus, rate=args.resource_rate, hostname=args.name, key=host(args.name, HOST_RESOURCES)
+        )
 
     agent = HostAgent(
         robot,

@@ -136,7 +136,8 @@ def run(args: argparse.Namespace) -> int:
             from executive.dashboard.server import Dashboard  # the web stack, if asked
 
             page = Dashboard.connect(robot, endpoint, host=args.dashboard_host,
-                                     port=args.dashboard)  # fmt: skip
+                                     port=args.dashboard,
+                                     allow=tuple(args.dashboard_allow_host))  # fmt: skip
             url = running.enter_context(page).url
         if args.json:
             print_json({"robot": robot.name, "endpoint": endpoint, "pid": os.getpid(),

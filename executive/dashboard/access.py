@@ -1,13 +1,18 @@
 """Who may open the dashboard.
 
-A page from the machine itself (a loopback address) may; a page from elsewhere — only
-possible when the dashboard listens beyond loopback — must show the robot's bus
-credentials: HTTP basic authentication as the ``operator`` with its password (from the
-robot's credentials file, :mod:`executive.bus.security`), or a token derived from that
-password (:meth:`Access.token`, given once as ``?token=`` and then kept in a cookie).
-Whatever the client, a request must name the dashboard by a host it listens on, so a
-web page elsewhere cannot reach a loopback dashboard by renaming itself (DNS
-rebinding), and changes (POST) must come from the dashboard's own page.
+When the robot has bus credentials, every visitor must show them, from this machine
+too (another local user cannot read the user-only credentials file, and so cannot act
+on the robot): HTTP basic authentication as the ``operator`` with its password (from
+the robot's credentials file, :mod:`executive.bus.security`), or a token derived from
+that password (:meth:`Access.token`, in the link the dashboard prints at start, given
+once as ``?token=`` and then kept in a cookie). A robot without credentials has a
+loopback dashboard only, open to this machine.
+
+Whatever the client, a request must name the dashboard by a host on its allow-list —
+loopback names, an IP address, the names given with ``--allow-host``, and beyond
+loopback this machine's own names — so that a web page elsewhere cannot reach the
+dashboard by renaming itself (DNS rebinding); and changes (POST) must come from the
+dashboard's own page.
 """
 
 from __future__ import annotations
@@ -55,10 +60,13 @@ class Access:
         host: the address the dashboard listens on.
         password: the operator's bus password (``None``: the robot has no credentials,
             so only loopback clients may come in).
+        names: the host names (``Host`` header) it answers to beyond loopback names and
+            IP addresses (a loopback dashboard answers to loopback names only).
     """
 
     host: str
     password: str | None = None
+    names: tuple[str, ...] = ()  # the host names a request may use, beyond the loopback ones
 
     @property
     def local_only(self) -> bool:
@@ -73,11 +81,18 @@ class Access:
         return digest.hexdigest()[:40]
 
     def host_allowed(self, header: str) -> bool:
-        """Whether a request's ``Host`` header names this dashboard: a loopback
-        dashboard answers only to loopback names."""
-        if not header:
+        """Whether a request's ``Host`` header names this dashboard: a loopback name, or
+        (beyond loopback) an IP address or a name of the allow-list."""
+        host = host_name(header).strip("[]").lower()
+        if not host or is_loopback(host):
+            return bool(host)
+        if self.local_only:
             return False
-        return not self.local_only or is_loopback(host_name(header))
+        try:
+            ipaddress.ip_address(host)
+            return True  # no page renames itself to an address: rebinding needs a name
+        except ValueError:
+            return host.rstrip(".") in {n.lower().rstrip(".") for n in self.names}
 
     def allows(
         self,
@@ -86,12 +101,11 @@ class Access:
         cookies: Mapping[str, str],
         token: str | None = None,
     ) -> bool:
-        """Whether a request may see the dashboard: a loopback client always, another
-        with the operator's password (basic authentication) or the token."""
-        if client is not None and is_loopback(client):
-            return True
+        """Whether a request may see the dashboard: with the operator's password (basic
+        authentication) or the token; without credentials (the robot has none), a
+        loopback client only."""
         if self.password is None:
-            return False
+            return client is not None and is_loopback(client)
         expected = self.token or ""
         for offered in (token, cookies.get(COOKIE)):
             if offered and hmac.compare_digest(offered.encode(), expected.encode()):

@@ -43,6 +43,7 @@ from knowledge.records import Goal
 
 STATIC = Path(__file__).resolve().parent / "static"
 MAX_BODY = 16 * 1024  # bytes of a request body: a goal is a line of text
+BODY_TIMEOUT = 10.0  # seconds a client has to send a request's body
 
 Scope = MutableMapping[str, Any]
 Receive = Callable[[], Awaitable[MutableMapping[str, Any]]]
@@ -89,6 +90,12 @@ class Guard:
         if scope["method"] == "POST" and not Access.same_origin(headers):
             await _plain(send, 403, "changes come only from the dashboard's own page")
             return
+        if scope["method"] != "GET":  # the whole body first, in time and in size
+            body = await _body(receive)
+            if isinstance(body, tuple):
+                await _plain(send, *body)
+                return
+            receive = _replay(body, receive)
         set_cookie = token is not None and token == self.access.token
 
         async def send_with_headers(message: MutableMapping[str, Any]) -> None:
@@ -101,6 +108,43 @@ class Guard:
             await send(message)
 
         await self.app(scope, receive, send_with_headers)
+
+
+async def _body(receive: Receive) -> bytes | tuple[int, str]:
+    """A request's whole body, or the status and reason that refuse it: more than
+    :data:`MAX_BODY` bytes, or not all there within :data:`BODY_TIMEOUT` seconds."""
+    parts: list[bytes] = []
+    size = 0
+    deadline = asyncio.get_running_loop().time() + BODY_TIMEOUT
+    while True:
+        left = deadline - asyncio.get_running_loop().time()
+        try:
+            message = await asyncio.wait_for(receive(), max(left, 0.0))
+        except TimeoutError:
+            return 408, f"the request's body did not arrive within {BODY_TIMEOUT:g} s"
+        if message["type"] != "http.request":
+            return 400, "the client went away"
+        part = message.get("body", b"")
+        size += len(part)
+        if size > MAX_BODY:
+            return 413, f"a request of at most {MAX_BODY} bytes"
+        parts.append(part)
+        if not message.get("more_body", False):
+            return b"".join(parts)
+
+
+def _replay(body: bytes, receive: Receive) -> Receive:
+    """A ``receive`` that gives the body read already, then what the client sends."""
+    given = False
+
+    async def replay() -> MutableMapping[str, Any]:
+        nonlocal given
+        if given:
+            return await receive()
+        given = True
+        return {"type": "http.request", "body": body, "more_body": False}
+
+    return replay
 
 
 async def _plain(

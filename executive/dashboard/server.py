@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import uvicorn
+from uvicorn.protocols.http.h11_impl import H11Protocol
 
 from executive.bus.security import OPERATOR, find_login
 from executive.bus.session import Bus
@@ -23,6 +24,7 @@ from knowledge.description import RobotDescription
 from knowledge.errors import DuraError
 
 START_TIMEOUT = 15.0  # seconds for the server to listen
+HEADER_TIMEOUT = 10.0  # seconds a client has to send a request's headers
 
 
 class DashboardError(DuraError):
@@ -36,6 +38,8 @@ class Dashboard:
         robot: the robot's description (its graph).
         bus: a session with the robot's executive; the caller keeps and closes it.
         password: the operator's bus password; required to listen beyond loopback.
+        allow: host names a request may call it by, beyond loopback names and IP
+            addresses (and this machine's names, when it listens beyond loopback).
 
     Raises:
         DashboardError: listening beyond loopback without credentials.
@@ -49,6 +53,7 @@ class Dashboard:
         host: str = DEFAULT_HOST,
         port: int = DEFAULT_PORT,
         password: str | None = None,
+        allow: tuple[str, ...] = (),
     ) -> None:
         if not is_loopback(host) and password is None:
             raise DashboardError(
@@ -58,7 +63,8 @@ class Dashboard:
             )
         self.robot = robot
         self.host = host
-        self.access = Access(host, password)
+        names = allow if is_loopback(host) else (*allow, *_own_names())
+        self.access = Access(host, password, names)
         self.feed = Feed(bus, LiveState(robot))
         self._socket = _listen(host, port)
         self.port = int(self._socket.getsockname()[1])
@@ -67,7 +73,7 @@ class Dashboard:
             log_level="warning",
             access_log=False,
             lifespan="on",
-            http="h11",
+            http=SlowClientsEnd,
             ws="none",
             timeout_graceful_shutdown=2,
         )
@@ -84,6 +90,7 @@ class Dashboard:
         host: str = DEFAULT_HOST,
         port: int = DEFAULT_PORT,
         folders: list[Path] | None = None,
+        allow: tuple[str, ...] = (),
     ) -> Dashboard:
         """A dashboard with a bus session of its own, as the robot's operator (the
         credentials in ``.dura/`` of ``folders``, default the working folder and the
@@ -97,7 +104,7 @@ class Dashboard:
         login = find_login(robot.name, OPERATOR, folders)
         bus = Bus(robot.name, name="dashboard", endpoint=endpoint, login=login)
         try:
-            dashboard = cls(robot, bus, host=host, port=port,
+            dashboard = cls(robot, bus, host=host, port=port, allow=allow,
                             password=None if login is None else login.password)  # fmt: skip
         except BaseException:
             bus.close()
@@ -107,16 +114,13 @@ class Dashboard:
 
     @property
     def url(self) -> str:
-        """The page's address (with the token when it listens beyond loopback)."""
+        """The page's address, with the token when the robot has credentials (the one
+        link that opens the page: keep it to yourself)."""
         host = self.host
         if host in ("0.0.0.0", "::", ""):  # noqa: S104 - naming it, not binding it
             host = socket.gethostname()
         shown = f"[{host}]" if ":" in host else host
-        token = (
-            ""
-            if self.access.local_only or self.access.token is None
-            else f"?token={self.access.token}"
-        )
+        token = "" if self.access.token is None else f"?token={self.access.token}"
         return f"http://{shown}:{self.port}/{token}"
 
     def start(self, timeout: float = START_TIMEOUT) -> Dashboard:
@@ -170,3 +174,34 @@ def _listen(host: str, port: int) -> socket.socket:
     sock.listen(64)
     sock.set_inheritable(False)
     return sock
+
+
+def _own_names() -> tuple[str, ...]:
+    """This machine's names, as a visitor elsewhere may call it."""
+    names = {socket.gethostname()}
+    with contextlib.suppress(OSError):
+        names.add(socket.getfqdn())
+    return tuple(sorted(n for n in names if n))
+
+
+class SlowClientsEnd(H11Protocol):
+    """uvicorn's HTTP/1.1 protocol, ending a connection whose request headers are not
+    complete within :data:`HEADER_TIMEOUT` seconds (a slow client holds no connection;
+    uvicorn itself waits for ever). Bodies have their own limit (:mod:`.app`)."""
+
+    def connection_made(self, transport: Any) -> None:
+        super().connection_made(transport)
+        self._arm()
+
+    def on_response_complete(self) -> None:
+        super().on_response_complete()
+        self._arm()
+
+    def _arm(self) -> None:
+        served = self.cycle
+        self.loop.call_later(HEADER_TIMEOUT, self._headers_late, served)
+
+    def _headers_late(self, served: Any) -> None:
+        # no new request began since the timer started: the headers have not arrived
+        if self.cycle is served and not self.transport.is_closing():
+            self.transport.close()

@@ -177,8 +177,24 @@ class BehaviorGoals:
         except (KeyError, ValueError, TypeError) as e:
             log.warning("malformed result on %s: %s", message.key, e)
             return
-        if result.component in self._open:
+        if self._sent_by_itself(message, result.component):
             self._finish(result)
+
+    def _sent_by_itself(self, message: Message, named: str) -> bool:
+        """Whether a message on ``component/<name>/...`` speaks of that component: the
+        key is what access control checks (only its own login publishes there), the
+        payload's ``component`` is what the sender wrote."""
+        sender = message.key.split("/")[1]
+        if sender not in self._open:
+            return False
+        if named != sender:
+            log.warning(
+                "refused a message on %s about '%s': a component speaks only for itself",
+                message.key,
+                named[:64],
+            )
+            return False
+        return True
 
     def _finish(self, result: GoalResult) -> None:
         """Resolve the goal's handle (once) and store the result in the KB."""
@@ -204,8 +220,10 @@ class BehaviorGoals:
         except PayloadError as e:
             log.warning("malformed feedback on %s: %s", message.key, e)
             return
+        if not self._sent_by_itself(message, feedback.component):
+            return
         with self._lock:
-            handle = self._open.get(feedback.component, {}).get(feedback.goal_id)
+            handle = self._open[feedback.component].get(feedback.goal_id)
         if handle is not None:
             handle._feedback(feedback.feedback)
 

@@ -40,7 +40,7 @@ from executive.runtime.process_host import Launch, component_environment
 from executive.runtime.processes import ComponentProcess, ProcessThread
 from executive.runtime.spawn import command, describe_exit
 from knowledge.description import RobotDescription
-from knowledge.errors import ComponentError
+from knowledge.errors import ComponentError, DuraError
 
 log = logging.getLogger("dura.host")
 
@@ -140,7 +140,7 @@ class HostAgent:
                 self._changed.clear()
                 self._follow()
         finally:
-            self._leave("the host agent stops")
+            self._leave("the host agent stops", clean=True)
             for entity in self._declared:
                 with contextlib.suppress(Exception):
                     entity.undeclare()
@@ -180,11 +180,15 @@ class HostAgent:
         elif not self._executive and self._joined:
             self._leave("the executive was lost")
 
-    def _leave(self, why: str) -> None:
-        """Withdraw the token and end every component (SIGTERM, then their trees)."""
+    def _leave(self, why: str, *, clean: bool = False) -> None:
+        """Withdraw the token and end every component (SIGTERM, then their trees);
+        ``clean``: tell the executive first that this agent stops (it is not lost)."""
         with self._lock:
             was = self._joined
             self._joined = False
+        if clean and was and self.bus is not None:
+            with contextlib.suppress(DuraError):
+                self.bus.publish(keys.host(self.name, api.STOPPING), {})
         if self._token is not None:
             with contextlib.suppress(Exception):
                 self._token.undeclare()

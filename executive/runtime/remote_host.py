@@ -84,19 +84,26 @@ class RemoteHost(ProcessHost):
         self._processes: dict[str, RemoteProcess] = {}
         self._logs: dict[str, str] = {}
         self._connected = False
-        self._subscriber: Any = None
+        self.stopping = False  # the agent said it stops: its end is not a loss
+        self._subscribers: list[Any] = []
 
     @property
     def connected(self) -> bool:
         return self._connected
 
     def open(self) -> None:
-        self._subscriber = self.bus.subscribe(host(self.name, api.EXIT), self._on_exit_message)
+        self._subscribers = [
+            self.bus.subscribe(host(self.name, api.EXIT), self._on_exit_message),
+            self.bus.subscribe(host(self.name, api.STOPPING), self._on_stopping),
+        ]
 
     def close(self) -> None:
-        if self._subscriber is not None:
-            self._subscriber.undeclare()
-            self._subscriber = None
+        for subscriber in self._subscribers:
+            subscriber.undeclare()
+        self._subscribers = []
+
+    def _on_stopping(self, message: Message) -> None:
+        self.stopping = True
 
     def running(self) -> list[str]:
         """The components of processes started there that have not ended."""
@@ -160,11 +167,13 @@ class RemoteHost(ProcessHost):
 
     def joined(self) -> None:
         self._connected = True
+        self.stopping = False
 
     def lost(self) -> list[str]:
-        """The agent is gone: every process it ran ends; the components they were."""
+        """The agent is gone (lost, or stopped if it said so): every process it ran ends;
+        the components they were."""
         self._connected = False
-        how = f"its host '{self.name}' was lost"
+        how = f"its host '{self.name}' was {'stopped' if self.stopping else 'lost'}"
         with self._lock:
             processes = list(self._processes.values())
         for process in processes:
@@ -272,22 +281,27 @@ class Hosts:
             self._report(name, self._reported.pop(name, set()), available=True)
             self.kb.log_event("HOST_JOINED", name, {"components": self.robot.placed_on(name)})
         else:
+            stopped = remote.stopping
             lost = remote.lost()
-            self.kb.log_event("HOST_LOST", name, {"components": lost})
-            log.warning("host '%s' was lost (its agent's token vanished): %s", name,
-                        ", ".join(lost) or "nothing ran there")  # fmt: skip
+            self.kb.log_event("HOST_STOPPED" if stopped else "HOST_LOST", name,
+                              {"components": lost})  # fmt: skip
+            how = "stopped (its agent said so)" if stopped else "lost (its agent's token vanished)"
+            log.warning("host '%s' %s: %s", name, how, ", ".join(lost) or "nothing ran there")
             self._reported.setdefault(name, set()).update(lost)
-            self._report(name, set(lost), available=False)
+            self._report(name, set(lost), available=False, stopped=stopped)
         for listener in list(self._listeners):
             try:
                 listener(name, alive)
             except Exception:
                 log.exception("host listener %r failed", listener)
 
-    def _report(self, name: str, components: set[str], *, available: bool) -> None:
+    def _report(
+        self, name: str, components: set[str], *, available: bool, stopped: bool = False
+    ) -> None:
         """Tell the diagnosis engine whether the components of a host are there."""
+        gone = "was stopped" if stopped else "was lost"
         for component in sorted(components):
-            message = f"its host '{name}' is back" if available else f"its host '{name}' was lost"
+            message = f"its host '{name}' {'is back' if available else gone}"
             info = ObservationInfo(
                 "component",
                 (component,),

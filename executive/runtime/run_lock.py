@@ -1,7 +1,10 @@
 """One executive per knowledge base, and the end of what a killed one left behind.
 
 An executive holds an exclusive ``flock`` on ``<database>.lock`` beside its knowledge
-base while it runs. The kernel drops the lock when the process ends, however it ends,
+base while it runs, and one on the knowledge base file itself, whatever path names it
+(a lock belongs to the file, not to its name: a hard link is the same file); a
+``--db`` that is a symbolic link is refused, so that each knowledge base has one lock
+file, beside the real file. The kernel drops the lock when the process ends, however it ends,
 so a killed executive never leaves it stuck; a second executive on the same knowledge
 base finds it held and refuses to start, naming the pid the file records.
 
@@ -47,18 +50,25 @@ class RunLock:
         suffix = ".lock" if holder == "executive" else f".{holder}.lock"
         self.database = database
         self.path = database.with_name(database.name + suffix)
+        self.holder = holder
         self.holder_name = holder if holder == "executive" else f"{holder} process"
         self.run_id = uuid.uuid4().hex
         self.predecessor: str | None = None  # the run that held the lock before
         self._fd: int | None = None
+        self._file: int | None = None  # the knowledge base file's own lock (executive)
 
     def acquire(self) -> RunLock:
         """Take the lock and record this run in it.
 
         Raises:
-            KnowledgeError: another executive holds it (its pid in the message), or the
-                lock file cannot be written.
+            KnowledgeError: another executive holds it (its pid in the message), the
+                knowledge base is named by a symbolic link, or a file cannot be opened.
         """
+        if self.database.is_symlink():
+            raise KnowledgeError(
+                f"{self.database}: the knowledge base is a symbolic link (to "
+                f"{self.database.resolve()}): give its real path"
+            )
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o600)
@@ -66,13 +76,18 @@ class RunLock:
             raise KnowledgeError(f"{self.path}: cannot open the lock file: {e.strerror}") from e
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
+            if self.database.exists():
+                self.hold_file()
+        except (BlockingIOError, KnowledgeError):
             holder = _read(fd).get("pid", "unknown")
             os.close(fd)
             raise KnowledgeError(
                 f"{self.database}: the knowledge base is in use by another {self.holder_name} "
                 f"(pid {holder}); stop it first or give this one another --db"
             ) from None
+        except OSError as e:
+            os.close(fd)
+            raise KnowledgeError(f"{self.database}: cannot open it: {e.strerror}") from e
         previous = _read(fd).get("run")
         self.predecessor = previous if isinstance(previous, str) else None
         record = {"pid": os.getpid(), "run": self.run_id, "started": time.time()}
@@ -81,17 +96,50 @@ class RunLock:
         self._fd = fd
         return self
 
+    def hold_file(self) -> None:
+        """(The executive) Lock the knowledge base file itself, once it is there: a new
+        one is locked when it has been made, before anything is stored in it.
+
+        Raises:
+            KnowledgeError: another process holds it, under whatever name.
+        """
+        if self.holder == "executive" and self._file is None:
+            try:
+                self._file = _lock_file(self.database)
+            except BlockingIOError:
+                raise KnowledgeError(
+                    f"{self.database}: the knowledge base is in use by another executive "
+                    "(under another name); stop it first or give this one another --db"
+                ) from None
+
     def release(self) -> None:
         """Drop the lock (the file stays: the next run reads its predecessor there)."""
-        if self._fd is not None:
-            os.close(self._fd)  # closing the only descriptor drops the flock
-            self._fd = None
+        for fd in (self._file, self._fd):
+            if fd is not None:
+                os.close(fd)  # closing the only descriptor drops the flock
+        self._fd = self._file = None
 
     def __enter__(self) -> RunLock:
         return self.acquire()
 
     def __exit__(self, *exc: object) -> None:
         self.release()
+
+
+def _lock_file(database: Path) -> int:
+    """An exclusive ``flock`` on the knowledge base file itself. SQLite's own locks are
+    ``fcntl`` locks, which a ``flock`` does not touch.
+
+    Raises:
+        BlockingIOError: another process holds it, under whatever name.
+    """
+    fd = os.open(database, os.O_RDONLY | os.O_CLOEXEC)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
 
 
 def _read(fd: int) -> dict[str, object]:

@@ -168,7 +168,9 @@ class Component:
 
     @final
     def publish(self, topic: str, payload: Mapping[str, Any]) -> None:
-        """Publish on ``topic/<topic>``; ``stamp`` defaults to now."""
+        """Publish on ``topic/<topic>``; ``stamp`` defaults to now. Only a topic the
+        robot description lists under this component's ``publishes`` reaches anyone (the
+        bus's access control drops the others)."""
         if self.faults.silent:
             return
         stamp = payload["stamp"] if "stamp" in payload else time.time()
@@ -176,7 +178,8 @@ class Component:
 
     @final
     def subscribe(self, topic: str, handler: Callable[[Message], None]) -> None:
-        """Call ``handler`` for each message on ``topic/<topic>`` while running."""
+        """Call ``handler`` for each message on ``topic/<topic>`` while running (a topic
+        the description lists under ``subscribes``; the bus refuses the others)."""
 
         def deliver(message: Message) -> None:
             if not self.running:

@@ -8,9 +8,9 @@ is permanently faulty, stopped, and the tasks are scheduled again on what is lef
 behavior's fault is its task's: restarted up to ``max_restarts``, then the task fails.
 A component started by hand is supervised the same way: its exit is a fault, and it is
 restarted (a behavior without a task up to its ``max_restarts``) until it is
-permanently faulty. A component whose host is lost ends with a fault too, but is not
-restarted: it is unavailable until its host agent is back, and its tasks move to the
-alternatives on other hosts (or fail, and the planner plans again).
+permanently faulty. A component whose host is lost is unavailable, not faulty: no
+fault is counted, no repair restarts it, and its tasks move to the alternatives on other
+hosts (or fail, and the planner plans again); when its host agent is back, so is it.
 """
 
 from __future__ import annotations
@@ -118,7 +118,7 @@ class FaultHandler:
             placed = self.robot.placed_on(host)
             if connected:  # no longer reported unavailable to the diagnosis engine
                 self.configurator.host_back(placed)
-            else:  # every functionality we kept there is a fault, counted here at once
+            else:  # every functionality we kept there is unavailable now: its tasks move
                 kept = [n for n in placed if n in self.robot.functionalities
                         and self.configurator.expects(n)]  # fmt: skip
                 for name in kept:  # before the first repair stops the others

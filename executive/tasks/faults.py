@@ -140,7 +140,8 @@ class Faults:
         permanent: bool = False,
     ) -> FaultDecision:
         """Count a fault of a component and decide what it means. A component whose host
-        is lost is not restarted: the tasks it hits move to what is left.
+        is lost is unavailable, not faulty: no fault is counted and it is not restarted;
+        the tasks it hits move to what is left.
 
         Args:
             name: the component.
@@ -153,13 +154,17 @@ class Faults:
         """
         component = self._component(name)
         before = self.availability(besides=name)
+        unavailable = name in self.unavailable()
         with self.kb.transaction():
             limit = component.max_faults if isinstance(component, FunctionalitySpec) else None
-            record = self.kb.record_fault(name, reason, max_faults=limit)
+            if unavailable and not permanent:  # its host is lost, not the component
+                record = self.kb.component(name)
+            else:
+                record = self.kb.record_fault(name, reason, max_faults=limit)
             if permanent and not record.permanent_fault:
                 record = self.kb.mark_permanent_fault(name, reason)
         decision = FaultDecision(name, component.kind, record.fault_count, record.permanent_fault,
-                                 unavailable=name in self.unavailable())  # fmt: skip
+                                 unavailable=unavailable)  # fmt: skip
         if isinstance(component, FunctionalitySpec):
             return self._functionality_fault(decision, before, running)
         return self._behavior_fault(decision, running)

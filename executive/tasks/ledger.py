@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+from collections import deque
 from collections.abc import Iterator
 from typing import Any
 
@@ -18,6 +19,8 @@ from knowledge.errors import KnowledgeError
 from knowledge.knowledge_base import KnowledgeBase
 
 log = logging.getLogger("dura.task_executor")
+
+KEPT_ENDED = 200  # ended tasks kept in memory (and listed); the knowledge base has all
 
 
 class TaskLedger:
@@ -32,6 +35,7 @@ class TaskLedger:
         self.kb = kb
         self._control = control
         self._tasks: dict[str, Task] = {}
+        self._ended: deque[str] = deque()  # ended tasks still kept, oldest first
 
     def __iter__(self) -> Iterator[Task]:
         return iter(list(self._tasks.values()))  # a copy: callers end and add tasks
@@ -67,8 +71,13 @@ class TaskLedger:
     def set_phase(
         self, task: Task, phase: TaskPhase, *, reason: str = "", result: Any = None
     ) -> None:
-        """Move a task to a phase, record it, and tell its requester."""
+        """Move a task to a phase, record it, and tell its requester. Of the ended tasks
+        the newest :data:`KEPT_ENDED` stay listed; the knowledge base keeps them all."""
         task.phase = phase
+        if phase.final and task.id in self._tasks and task.id not in self._ended:
+            self._ended.append(task.id)
+            while len(self._ended) > KEPT_ENDED:
+                self._tasks.pop(self._ended.popleft(), None)
         with contextlib.suppress(KnowledgeError):
             self.kb.set_task_state(int(task.id), KB_STATE[phase], reason=reason, result=result)
         if task.listener is not None:

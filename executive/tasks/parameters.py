@@ -13,6 +13,7 @@ during a repair. A component that does not run takes it at its next start.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -21,10 +22,13 @@ from executive.bus.payloads import ComponentState
 from executive.bus.states import Lifecycle
 from executive.runtime.launcher import Launcher
 from knowledge.description import ComponentSpec, RobotDescription
-from knowledge.errors import ComponentError, ConfigError
+from knowledge.errors import ComponentError, ConfigError, excerpt
 from knowledge.knowledge_base import KnowledgeBase
 
 DESCRIPTION, KNOWLEDGE_BASE = "description", "knowledge base"
+# a key set at run time, beyond those of the description: stored, listed and shown
+PARAMETER_KEY = re.compile(r"[A-Za-z_][A-Za-z0-9_.-]{0,63}")
+PARAMETER_KEY_RULE = "must be a letter or '_', then up to 63 letters, digits, '_', '-' or '.'"
 RECONFIGURED, RESTARTED, STORED = "reconfigured", "restarted", "stored"
 
 _KINDS: tuple[tuple[type, str], ...] = (
@@ -41,8 +45,11 @@ def checked(component: ComponentSpec, key: str, value: Any) -> Any:
     """The value to store for ``component``'s parameter ``key``.
 
     Raises:
-        ConfigError: the value is not of the type the description gives the parameter.
+        ConfigError: the key breaks the name rule (one the description does not give),
+            or the value is not of the type the description gives the parameter.
     """
+    if key not in component.params and not PARAMETER_KEY.fullmatch(key):
+        raise ConfigError(f"parameter key '{excerpt(key, 64)}' {PARAMETER_KEY_RULE}")
     described = component.params.get(key)
     found = next(((k, w) for k, w in _KINDS if isinstance(described, k)), None)
     if found is None:  # not in the description (or null there): any value
@@ -57,7 +64,7 @@ def checked(component: ComponentSpec, key: str, value: Any) -> Any:
         return value
     raise ConfigError(
         f"parameter '{key}' of '{component.name}' must be {words} (the description gives "
-        f"{described!r}), not {value!r}"
+        f"{excerpt(repr(described))}), not {excerpt(repr(value))}"
     )
 
 

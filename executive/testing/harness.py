@@ -37,6 +37,7 @@ from executive.bus.session import Bus
 from executive.testing.client import INJECT_TIMEOUT, GoalEnded, RobotClient, WaitTimedOut
 from knowledge.errors import BusError, DuraError
 from knowledge.robot import load_robot
+from knowledge.yamlsource import load as load_yaml
 
 __all__ = [  # GoalEnded, WaitTimedOut and INJECT_TIMEOUT live in the client; named here too
     "INJECT_TIMEOUT",
@@ -71,7 +72,7 @@ def robot_variant(description: Path, folder: Path, changes: Mapping[str, Any]) -
     description = Path(description).resolve()
     folder = Path(folder).resolve()
     folder.mkdir(parents=True, exist_ok=True)
-    data = yaml.safe_load(description.read_text(encoding="utf-8"))
+    data = load_yaml(description)  # the safe reader, as dura reads the description
     data["domain"] = str((description.parent / data["domain"]).resolve())
     _merge(data, changes)
     for entry in description.parent.iterdir():

@@ -87,6 +87,7 @@ class DiagnosisService(Service):
         self._entities = [
             bus.subscribe(OBSERVATIONS, self._on_observation),
             api.DIAGNOSIS_MODEL_CHANGE.serve(bus, self._on_model),
+            api.DIAGNOSIS_MODEL_READ.serve(bus, lambda _: self._on_model(api.ModelChange("GET"))),
             api.DIAGNOSIS_EXONERATE.serve(bus, self._on_exonerate),
         ]
 

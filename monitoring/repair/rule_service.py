@@ -14,7 +14,7 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-from executive.bus.keys import DIAGNOSES, OBSERVATIONS
+from executive.bus.keys import DIAGNOSES, OBSERVATIONS, host_alive
 from executive.bus.payloads import DiagnosisInfo, ObservationInfo
 from executive.bus.service import Context, Service
 from executive.bus.session import Message
@@ -52,6 +52,7 @@ class RuleService(Service):
         self._workers = workers
         self._pool: ThreadPoolExecutor | None = None
         self._entities: list[Any] = []
+        self._hosts: set[str] = set()  # the host agents there now
 
     def on_activate(self) -> None:
         self._pool = ThreadPoolExecutor(max_workers=self._workers, thread_name_prefix="dura-repair")
@@ -60,6 +61,22 @@ class RuleService(Service):
             bus.subscribe(OBSERVATIONS, self._on_observation),
             bus.subscribe(DIAGNOSES, self._on_diagnosis),
         ]
+        if self.context.robot.hosts:
+            self._entities.append(bus.watch_alive(host_alive("*"), self._on_host))
+
+    def _on_host(self, key: str, alive: bool) -> None:
+        name = key.rsplit("/", 1)[-1]
+        with self._lock:
+            (self._hosts.add if alive else self._hosts.discard)(name)
+
+    def unavailable(self) -> frozenset[str]:
+        """The components placed on hosts whose agents are not there: a diagnosis of
+        them is their host's absence, not a fault to repair."""
+        return frozenset(
+            name
+            for name, spec in self.context.robot.components.items()
+            if spec.host is not None and spec.host not in self._hosts
+        )
 
     def on_deactivate(self) -> None:
         for entity in self._entities:
@@ -91,7 +108,13 @@ class RuleService(Service):
 
     def _act_on(self, fired: list[Fired]) -> None:
         pool = self._pool
+        unavailable = self.unavailable()
         for item in fired:
+            faulty = set(item.firing.faulty)
+            if faulty and faulty <= unavailable:
+                log.info("rule '%s' not run: %s unavailable (their host is not there)",
+                         item.rule.name, ", ".join(sorted(faulty)))  # fmt: skip
+                continue
             log.info("rule '%s' fired: %s", item.rule.name, item.rule.action.describe())
             self.context.kb.log_event(
                 "RULE_FIRED",

@@ -2,6 +2,7 @@
 "nothing lost".
 
     python -m tests.benchmarks.reliability [--kills N] [--cycles N] [--messages N]
+        [--forgeries N] [--goals N] [--requests N] [--only ROW,...]
 
 Rows:
 - executive kills: SIGKILLs of the executive at random moments across replans, each
@@ -14,7 +15,9 @@ Rows:
   declared verb; the executive must keep answering, with no traceback in its log;
 - hostile files and arguments: YAML bombs, deep nesting, huge files, unsafe names,
   commands that cannot start, damaged knowledge bases, ASP with syntax errors, numbers
-  out of range; each must end in a one-line error with a non-zero exit, within seconds.
+  out of range; each must end in a one-line error with a non-zero exit, within seconds;
+- forged identities, hostile ROS 2 goals, dashboard requests without credentials: see
+  :mod:`tests.benchmarks.trust`.
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ from executive.bus import security
 from executive.bus.session import session_config
 from executive.bus.states import Lifecycle
 from executive.testing.harness import RobotProcess
+from tests.benchmarks import trust
 from tests.conftest import ROOT, USECASE, free_endpoint, wait_for
 from tests.executive.runtime.rig import rig, robot, scripted
 from tests.executive.test_hostile_bus import GARBAGE, KEYS, VERBS
@@ -213,6 +217,7 @@ def hostile_inputs(folder: Path) -> Row:
         ("NaN deadline", lambda f: ["goal", "add", "(robot_at dock)", "--deadline", "nan"]),
         ("negative timeout", lambda f: ["diagnose", "m.yaml", "--observations", "o.yaml", "--timeout", "-1"]),
         ("id zero", lambda f: ["goal", "show", "0"]),
+        ("bag metadata bomb", lambda f: ["replay", str(_bag(f, BOMB)), "--robot", str(USECASE)]),
     ]  # fmt: skip
     clean = 0
     failures = []
@@ -242,6 +247,12 @@ def hostile_inputs(folder: Path) -> Row:
                "; ".join(failures))  # fmt: skip
 
 
+def _bag(folder: Path, metadata: str) -> Path:
+    (folder / "bag").mkdir()
+    _write(folder / "bag" / "metadata.yaml", metadata)
+    return folder / "bag"
+
+
 def _write(path: Path, text: str) -> Path:
     path.write_text(text)
     return path
@@ -260,7 +271,12 @@ def main() -> None:
     parser.add_argument("--kills", type=int, default=30, help="executive kills (200 for the issue)")
     parser.add_argument("--cycles", type=int, default=240, help="component kill cycles")
     parser.add_argument("--messages", type=int, default=1116, help="malformed bus messages")
+    parser.add_argument("--forgeries", type=int, default=300, help="forged identities")
+    parser.add_argument("--goals", type=int, default=100, help="hostile ROS 2 goals")
+    parser.add_argument("--requests", type=int, default=400, help="dashboard requests")
+    parser.add_argument("--only", help="the rows to run, by name (kills,cycles,...)")
     args = parser.parse_args()
+    only = set(args.only.split(",")) if args.only else None
     os.environ["PYTHONPATH"] = str(ROOT)  # the scripted components import tests.*
     rows = []
     with tempfile.TemporaryDirectory(prefix="dura-reliability-") as folder:
@@ -270,7 +286,16 @@ def main() -> None:
             ("cycles", lambda: component_cycles(args.cycles, base / "cycles")),
             ("messages", lambda: malformed_messages(args.messages, base / "messages")),
             ("files", lambda: hostile_inputs(base / "files")),
-        ):
+            ("forgeries", lambda: Row("forged identities (refused / tried)",
+                                      *trust.forged_identities(args.forgeries, base / "forged"))),
+            ("goals", lambda: Row("hostile ROS 2 goals (survived / tried)",
+                                  *trust.hostile_ros2_goals(args.goals, base / "goals"))),
+            ("requests", lambda: Row("dashboard requests without credentials (refused / tried)",
+                                     *trust.dashboard_without_credentials(args.requests,
+                                                                          base / "dashboard"))),
+        ):  # fmt: skip
+            if only is not None and name not in only:
+                continue
             began = time.monotonic()
             print(f"... {name}", file=sys.stderr, flush=True)
             row = run()

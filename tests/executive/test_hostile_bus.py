@@ -78,7 +78,8 @@ def test_the_executive_survives_malformed_messages_and_requests(robot: RobotProc
                 bus.publish_raw(key, payload)
         for verb in VERBS:
             for payload in GARBAGE[:7]:
-                for reply in session.get(prefix + verb.key, payload=payload, timeout=10.0):
+                key = f"{verb.key}/hostile" if verb.caller else verb.key
+                for reply in session.get(prefix + key, payload=payload, timeout=10.0):
                     answers.append("ok" if reply.ok is not None else "error")
         # the executive handles what it got in threads of its own, and nothing tells
         # when they are through: give a failure the time to show

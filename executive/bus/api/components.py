@@ -80,5 +80,8 @@ COMPONENT_LIST = Verb(api("component/list"), Empty, ComponentsReply, threaded=Fa
 COMPONENT_START = Verb(api("component/start"), ComponentName, ComponentState, timeout=60.0)
 COMPONENT_STOP = Verb(api("component/stop"), ComponentName, ComponentState, timeout=60.0)
 COMPONENT_LOGS = Verb(api("component/logs"), LogQuery, LogReply, threaded=False)
-COMPONENT_ACHIEVE = Verb(api("component/achieve"), Achievement, Empty, timeout=5.0)
+# asked on component/achieve/<name>: a component stores achievements for itself only
+COMPONENT_ACHIEVE = Verb(
+    api("component/achieve"), Achievement, Empty, timeout=5.0, caller="component"
+)
 COMPONENT_INJECT = Verb(api("component/inject"), Injection, ComponentState, timeout=10.0)

@@ -80,3 +80,4 @@ def logs(name: str) -> Verb[LogQuery, LogReply]:
 
 
 EXIT = "exit"  # the leaf of host/<name>/exit
+STOPPING = "stopping"  # the leaf of host/<name>/stopping: the agent stops cleanly

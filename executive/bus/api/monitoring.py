@@ -117,5 +117,7 @@ OBSERVER_REMOVE = Verb(observers_api("remove"), ObserverId, ObserverId, threaded
 OBSERVER_ACTIVATE = Verb(observers_api("activate"), ObserverId, ObserverActive, threaded=False)
 OBSERVER_DEACTIVATE = Verb(observers_api("deactivate"), ObserverId, ObserverActive, threaded=False)
 OBSERVER_LATEST = Verb(observers_api("latest"), Empty, LatestReply, threaded=False, timeout=5.0)
+# only the executive and its services change the model; anyone with a login reads it
 DIAGNOSIS_MODEL_CHANGE = Verb(DIAGNOSIS_MODEL, ModelChange, ModelReply, threaded=False)
+DIAGNOSIS_MODEL_READ = Verb(DIAGNOSIS_MODEL + "/read", Empty, ModelReply, threaded=False)
 DIAGNOSIS_EXONERATE = Verb(DIAGNOSIS_EXONERATION, ExonerationChange, Exoneration, timeout=10.0)

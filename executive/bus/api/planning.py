@@ -25,12 +25,15 @@ from executive.bus.reports import (
 )
 from executive.bus.schema import Between, Payload, Text
 from executive.bus.verb import Empty, Verb
+from knowledge.conventions import Above, AtMost
 from knowledge.record_class import record
 from knowledge.records import ComponentRecord, Event, Fact, Goal, KeyAccess, Plan
 from knowledge.transitions import GoalState
 
 Count = Annotated[int, Between(0, 2**63 - 1)]
-Priority = Annotated[int, Between(-(10**9), 10**9)]  # what the CLI accepts too
+LIMIT = 10**9  # no count, priority or number of seconds a person means is larger
+Priority = Annotated[int, Between(-LIMIT, LIMIT)]  # what the CLI accepts too
+Deadline = Annotated[float, Above(0.0), AtMost(LIMIT)]  # seconds from now, as the CLI's
 
 
 @record
@@ -101,7 +104,7 @@ class GoalAdd(Payload):
 
     expression: Text
     priority: Priority = 0
-    deadline: float | None = None
+    deadline: Deadline | None = None
     source: str = "user"
     keep: bool = False
 

@@ -6,17 +6,25 @@ import stat
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from unittest.mock import ANY
 
 import pytest
+import zenoh
 
 from executive.bus import security
+from executive.bus.api.components import COMPONENT_ACHIEVE, Achievement
 from executive.bus.security import Credentials, Login
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus, Message, session_config
+from executive.bus.verb import Empty
 from knowledge.errors import BusError
 from tests.conftest import wait_for
 
 ROBOT = "guarded"
 COMPONENTS = ("lidar", "cam")
+TOPICS = {  # as a robot description would list them
+    "lidar": security.Topics(publishes=("scan",), subscribes=("cmd_vel",)),
+    "cam": security.Topics(publishes=("image",), subscribes=("scan",)),
+}
 
 
 @pytest.fixture
@@ -33,7 +41,7 @@ def router(tmp_path: Path, endpoint: str, credentials: Credentials) -> Iterator[
         listen=True,
         login=credentials.login(security.EXECUTIVE),
         dictionary=security.dictionary(credentials, tmp_path / "users"),
-        access=security.access_control(ROBOT, COMPONENTS),
+        access=security.access_control(ROBOT, COMPONENTS, topics=TOPICS),
     ) as bus:
         yield bus
 
@@ -105,3 +113,71 @@ def test_a_component_publishes_topics_and_its_own_results_only(
         assert wait_for(lambda: scans and any(m.key == "component/lidar/result" for m in results))
     assert [m.key for m in results] == ["component/lidar/result"]
     assert len(scans) == 1
+
+
+def test_the_caller_id_of_a_topic_is_the_login_that_sent_it(
+    router: Bus, endpoint: str, credentials: Credentials
+) -> None:
+    scans = heard(router, "topic/scan")
+    images = heard(router, "topic/image")
+    cam_login = credentials.login(security.component_user("cam"))
+    # the cam's login names itself lidar: on a topic lidar publishes, and on its own
+    with Bus(ROBOT, name="lidar", endpoint=endpoint, login=cam_login) as forger:
+        assert forger.wait_for_subscriber("topic/scan")
+        for _ in range(5):
+            forger.publish("topic/scan", {"forged": True})
+            forger.publish("topic/image", {"forged": True})
+    # the same, written by hand: the key of another sender, the attachment of another
+    prefix = f"dura/{ROBOT}/"
+    with zenoh.open(session_config(connect=(endpoint,), login=cam_login)) as session:
+        for key in ("from/lidar/topic/scan", "from/lidar/topic/image", "topic/scan"):
+            session.put(prefix + key, b'{"forged": true}', attachment=b"lidar")
+    lidar_login = credentials.login(security.component_user("lidar"))
+    with (
+        Bus(ROBOT, name="cam", endpoint=endpoint, login=cam_login) as cam,
+        Bus(ROBOT, name="lidar", endpoint=endpoint, login=lidar_login) as lidar,
+    ):
+        cam.publish("topic/scan", {"forged": True})  # not a topic cam publishes
+        cam.publish("topic/image", {"own": True})
+        lidar.publish("topic/scan", {"own": True})
+        assert wait_for(lambda: scans and images)
+        time.sleep(0.3)  # the forged ones came first, from other sessions: a margin
+    assert [(m.caller_id, m.payload) for m in scans] == [("lidar", {"own": True, "stamp": ANY})]
+    assert [(m.caller_id, m.payload) for m in images] == [("cam", {"own": True, "stamp": ANY})]
+
+
+def test_a_component_hears_only_the_topics_it_subscribes(
+    router: Bus, endpoint: str, credentials: Credentials
+) -> None:
+    got: list[Message] = []
+    login = credentials.login(security.component_user("lidar"))
+    with Bus(ROBOT, name="lidar", endpoint=endpoint, login=login) as lidar:
+        lidar.subscribe("topic/image", got.append)  # cam's pictures: not for lidar
+        lidar.subscribe("topic/cmd_vel", got.append)
+        assert router.wait_for_subscriber("topic/cmd_vel")
+        router.publish("topic/image", {"picture": 1})
+        router.publish("topic/cmd_vel", {"v": 1.0})  # after the picture, to the same session
+        assert wait_for(lambda: got)
+        time.sleep(0.2)
+    assert [m.key for m in got] == ["topic/cmd_vel"]
+
+
+def test_a_component_stores_achievements_for_itself_only(
+    router: Bus, endpoint: str, credentials: Credentials
+) -> None:
+    stored: list[Achievement] = []
+
+    def store(achievement: Achievement) -> Empty:
+        stored.append(achievement)
+        return Empty()
+
+    COMPONENT_ACHIEVE.serve(router, store)
+    login = credentials.login(security.component_user("lidar"))
+    with Bus(ROBOT, name="lidar", endpoint=endpoint, login=login) as lidar:
+        COMPONENT_ACHIEVE.call(lidar, Achievement("cam", "pose", 1))  # names another
+    with (
+        Bus(ROBOT, name="cam", endpoint=endpoint, login=login) as forger,
+        pytest.raises(BusError, match="no answer"),  # asks under another's name
+    ):
+        COMPONENT_ACHIEVE.call(forger, Achievement("cam", "pose", 2), timeout=1.0)
+    assert stored == [Achievement("lidar", "pose", 1)]

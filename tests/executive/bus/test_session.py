@@ -100,7 +100,7 @@ def test_a_malformed_payload_is_dropped_and_the_subscriber_lives_on(
     executive_bus.subscribe("topic/data", got.append)
     with zenoh.open(session_config(connect=(endpoint,))) as raw:
         for payload in (b"not json", b"[1, 2]", b'{"ok": 1}'):
-            raw.put("dura/testbot/topic/data", payload)
+            raw.put("dura/testbot/from/raw/topic/data", payload)
         # from one session to one subscriber in order: the first two came before the last
         assert wait_for(lambda: any(m.raw == b'{"ok": 1}' for m in got))
     assert [m.payload for m in got] == [{"ok": 1}]

@@ -1,4 +1,4 @@
-"""Who may open the dashboard: loopback, or the robot's operator credentials."""
+"""Who may open the dashboard: the robot's operator credentials, from this machine too."""
 
 from __future__ import annotations
 
@@ -35,9 +35,11 @@ def test_the_host_of_a_host_header_drops_the_port() -> None:
     assert host_name("localhost") == "localhost"
 
 
-def test_a_loopback_client_needs_no_credentials() -> None:
-    assert Access("127.0.0.1").allows("127.0.0.1", {}, {})
-    assert Access(ANYWHERE, SECRET).allows("::1", {}, {})
+def test_a_loopback_client_needs_the_credentials_when_the_robot_has_them() -> None:
+    assert Access("127.0.0.1").allows("127.0.0.1", {}, {})  # a robot without credentials
+    assert not Access("127.0.0.1", SECRET).allows("127.0.0.1", {}, {})
+    assert not Access(ANYWHERE, SECRET).allows("::1", {}, {})
+    assert Access("127.0.0.1", SECRET).allows("127.0.0.1", basic("operator", SECRET), {})
 
 
 def test_another_client_needs_the_operators_password_or_its_token() -> None:
@@ -58,10 +60,17 @@ def test_without_credentials_nobody_else_gets_in() -> None:
     assert not Access(ANYWHERE).allows("192.0.2.7", basic("operator", ""), {})
 
 
-def test_a_loopback_dashboard_refuses_other_host_names() -> None:
+def test_every_dashboard_answers_only_to_the_names_of_its_allow_list() -> None:
     assert Access("127.0.0.1").host_allowed("localhost:8470")
     assert not Access("127.0.0.1").host_allowed("attacker.example:8470")
-    assert Access(ANYWHERE, SECRET).host_allowed("robot.local:8470")
+    assert not Access("127.0.0.1").host_allowed("")
+    anywhere = Access(ANYWHERE, SECRET, ("robot.local",))
+    assert anywhere.host_allowed("robot.local:8470")
+    assert anywhere.host_allowed("ROBOT.LOCAL.")
+    assert anywhere.host_allowed("192.168.1.5:8470") and anywhere.host_allowed("[fe80::1]:8470")
+    assert anywhere.host_allowed("localhost")
+    assert not anywhere.host_allowed("attacker.example:8470")  # DNS rebinding
+    assert not Access(ANYWHERE, SECRET).host_allowed("robot.local:8470")  # not on its list
 
 
 def test_a_change_must_come_from_the_same_origin() -> None:
@@ -96,7 +105,7 @@ def ask(access: Access, client: str, headers: dict[str, str], query: str = "") -
 
 
 def test_the_guard_asks_a_remote_visitor_to_log_in_as_the_operator() -> None:
-    access = Access(ANYWHERE, SECRET)
+    access = Access(ANYWHERE, SECRET, ("robot.local",))
     host = {"host": "robot.local:8470"}
     refused = ask(access, "192.0.2.7", host)
     assert refused["status"] == 401

@@ -15,7 +15,7 @@ from typing import Any
 import psutil
 import pytest
 
-from executive.bus.api.monitoring import DIAGNOSIS_MODEL_CHANGE, ModelChange
+from executive.bus.api.monitoring import DIAGNOSIS_MODEL_READ
 from executive.ros2.names import dds_topic
 from executive.ros2.participant import Participant
 from executive.ros2.qos import dds_qos
@@ -76,7 +76,7 @@ def test_a_ros2_robot_takes_goals_from_ros2_diagnoses_its_nodes_from_the_graph_a
         assert patrol.goal(goal).priority == 3
 
     def model() -> dict[str, tuple[list[str], list[str]]]:
-        reply = DIAGNOSIS_MODEL_CHANGE.call(patrol.bus, ModelChange("GET"))
+        reply = DIAGNOSIS_MODEL_READ.call(patrol.bus)
         nodes = (reply.model or {}).get("nodes", [])
         return {n["name"]: (sorted(n["sub_topic"]), sorted(n["pub_topic"])) for n in nodes}
 

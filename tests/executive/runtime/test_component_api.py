@@ -17,6 +17,7 @@ from executive.bus.api.components import (
     LogQuery,
 )
 from executive.bus.service import Context
+from executive.bus.session import Bus
 from executive.bus.states import Lifecycle
 from executive.runtime.component_api import ComponentApi
 from knowledge.errors import BusError
@@ -81,7 +82,8 @@ def test_a_request_with_a_bad_field_is_refused_by_its_declared_type_with_the_key
         api.activate()
         try:
             with pytest.raises(BusError) as refused:
-                r.bus.request(key, request_)
+                # achievements are asked under the caller's name (the session's)
+                r.bus.request(key, request_, as_caller=key == COMPONENT_ACHIEVE.key)
             assert str(refused.value) == f"{key}: {reason}"
             assert r.launcher.state("lidar").state is Lifecycle.STOPPED  # nothing was done
         finally:
@@ -92,7 +94,11 @@ def test_achievements_are_stored_by_the_launcher_for_known_components_only(
     endpoint: str, tmp_path: Path
 ) -> None:
     with rig(robot(usecase("lidar")), endpoint, tmp_path) as r:
-        COMPONENT_ACHIEVE.call(r.bus, Achievement("lidar", "seen", {"scans": 3}))
+        with Bus(r.robot.name, name="lidar", endpoint=endpoint) as lidar:
+            COMPONENT_ACHIEVE.call(lidar, Achievement("lidar", "seen", {"scans": 3}))
         assert r.kb.achievements("lidar") == {"seen": {"scans": 3}}
-        with pytest.raises(BusError, match=r"^achievement for unknown component 'lidr'$"):
-            COMPONENT_ACHIEVE.call(r.bus, Achievement("lidr", "seen", 1))
+        with (
+            Bus(r.robot.name, name="lidr", endpoint=endpoint) as lidr,
+            pytest.raises(BusError, match=r"^achievement for unknown component 'lidr'$"),
+        ):
+            COMPONENT_ACHIEVE.call(lidr, Achievement("lidar", "seen", 1))  # the name asked

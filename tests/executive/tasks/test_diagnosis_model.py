@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from executive.bus.api.monitoring import DIAGNOSIS_MODEL_CHANGE, ModelChange
+from executive.bus.api.monitoring import DIAGNOSIS_MODEL_READ
 from executive.bus.keys import service_alive
 from executive.bus.service import Context
 from executive.bus.session import Bus
@@ -45,7 +45,7 @@ def worker() -> Iterator[Worker]:
 
 
 def model_nodes(bus: Bus) -> set[str]:
-    model = DIAGNOSIS_MODEL_CHANGE.call(bus, ModelChange("GET")).model or {}
+    model = DIAGNOSIS_MODEL_READ.call(bus).model or {}
     return {n["name"] for n in model.get("nodes", [])}
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from executive.bus.api.monitoring import DIAGNOSIS_MODEL_CHANGE, ModelChange
+from executive.bus.api.monitoring import DIAGNOSIS_MODEL_READ
 from executive.testing.harness import RobotProcess, robot_variant
 from tests.conftest import ROOT, USECASE, wait_for
 
@@ -33,7 +33,7 @@ def state_of(robot: RobotProcess, name: str) -> dict[str, object]:
 
 
 def modelled(robot: RobotProcess) -> set[str]:
-    reply = DIAGNOSIS_MODEL_CHANGE.call(robot.bus, ModelChange("GET"))
+    reply = DIAGNOSIS_MODEL_READ.call(robot.bus)
     assert reply.ok and reply.model is not None, reply.error
     return {node["name"] for node in reply.model["nodes"]}
 

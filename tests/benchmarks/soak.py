@@ -1,0 +1,119 @@
+"""Soak: N goals one after another on a real executive of the use case; what grows.
+
+    python -m tests.benchmarks.soak [--goals N] [--warm-up N] [--time-scale S]
+
+Each goal sends the robot to another place, ``(robot_at lab)``, ``(robot_at office)``,
+``(robot_at dock)`` in turn, and waits until it is achieved; nothing is injected. After
+the warm-up, the executive's process (and its planner worker, measured apart) is
+sampled after every goal: resident memory, threads, open files, and the knowledge
+base's size (its file: the WAL beside it is bounded by SQLite's checkpoints). The table
+gives each at the end of the warm-up and at the end, and the growth per goal; false
+repairs are the faults counted and the repair rules fired with nothing injected (0 is
+the only right answer).
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import psutil
+
+from executive.testing.client import GoalEnded
+from executive.testing.harness import RobotProcess
+from tests.conftest import USECASE
+
+PLACES = ("lab", "office", "dock")
+
+
+@dataclass
+class Sample:
+    goals: int
+    rss: int
+    worker_rss: int
+    threads: int
+    files: int
+    kb: int
+
+
+def sample(robot: RobotProcess, goals: int) -> Sample:
+    process = psutil.Process(robot.pid)
+    workers = [c for c in process.children(recursive=True) if _is_worker(c)]
+    kb = robot.kb_path.stat().st_size  # its WAL is bounded by SQLite's checkpoints
+    return Sample(
+        goals,
+        process.memory_info().rss,
+        sum(_rss(w) for w in workers),
+        process.num_threads(),
+        process.num_fds(),
+        kb,
+    )
+
+
+def _is_worker(process: psutil.Process) -> bool:
+    try:
+        return "worker" in " ".join(process.cmdline())
+    except psutil.Error:  # a component's process just ending
+        return False
+
+
+def _rss(process: psutil.Process) -> int:
+    try:
+        return int(process.memory_info().rss)
+    except psutil.Error:
+        return 0
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--goals", type=int, default=60, help="goals after the warm-up")
+    parser.add_argument("--warm-up", type=int, default=10, help="goals before measuring")
+    parser.add_argument("--time-scale", type=float, default=10.0, help="robot time speed-up")
+    args = parser.parse_args()
+    began = time.monotonic()
+    with (
+        tempfile.TemporaryDirectory(prefix="dura-soak-") as folder,
+        RobotProcess(USECASE, Path(folder), time_scale=args.time_scale) as robot,
+    ):
+        samples: list[Sample] = []
+        places = itertools.cycle(PLACES)
+        missed = 0
+        for n in range(1, args.warm_up + args.goals + 1):
+            goal = robot.submit_goal(f"(robot_at {next(places)})")
+            try:
+                robot.wait_for(goal, timeout=120)
+            except GoalEnded:  # e.g. an integrity goal after a false repair came first
+                missed += 1
+            if n >= args.warm_up:
+                samples.append(sample(robot, n))
+        repairs = [f"{e.kind} {e.subject}: {e.data.get('reason', e.data.get('faulty', ''))}"
+                   for kind in ("FAULT", "RULE_FIRED") for e in robot.events(kind)]  # fmt: skip
+        faults = sum(r.startswith("FAULT") for r in repairs)
+        fired = len(repairs) - faults
+    first, last = samples[0], samples[-1]
+    count = max(1, last.goals - first.goals)
+    rows = [
+        ("executive RSS (KiB)", first.rss >> 10, last.rss >> 10),
+        ("planner worker RSS (KiB)", first.worker_rss >> 10, last.worker_rss >> 10),
+        ("threads", first.threads, last.threads),
+        ("open files", first.files, last.files),
+        ("knowledge base (KiB)", first.kb >> 10, last.kb >> 10),
+    ]
+    print(f"{count} goals after a warm-up of {args.warm_up}, time scale {args.time_scale:g}, "
+          f"{time.monotonic() - began:.0f} s")  # fmt: skip
+    print(f"{'what':<26} {'after warm-up':>14} {'at the end':>12} {'per goal':>10}")
+    for name, before, after in rows:
+        print(f"{name:<26} {before:>14} {after:>12} {(after - before) / count:>+10.2f}")
+    print(f"{'false repairs':<26} {'':>14} {faults + fired:>12}  ({faults} faults, "
+          f"{fired} rules fired)")  # fmt: skip
+    print(f"{'goals not achieved':<26} {'':>14} {missed:>12}")
+    for repair in repairs[:10]:
+        print(f"  {repair}")
+
+
+if __name__ == "__main__":
+    main()
