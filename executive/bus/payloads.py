@@ -43,6 +43,9 @@ class ComponentState:
     signal: int | None = None
     reason: str = ""
     stamp: float = 0.0
+    output: tuple[str, ...] = ()
+    """What its process wrote last when it last failed: the end of its Python traceback
+    (kept in its later states until it fails again)."""
 
     def to_payload(self) -> dict[str, Any]:
         return {
@@ -53,6 +56,7 @@ class ComponentState:
             "signal": self.signal,
             "reason": self.reason,
             "stamp": self.stamp,
+            "output": list(self.output),
         }
 
     @classmethod
@@ -66,6 +70,7 @@ class ComponentState:
             signal=payload.get("signal"),
             reason=str(payload.get("reason", "")),
             stamp=float(payload.get("stamp", 0.0)),
+            output=tuple(str(line) for line in payload.get("output") or ()),
         )
 
 

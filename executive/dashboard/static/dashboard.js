@@ -122,7 +122,9 @@ function showComponents(data) {
     el("td", null, badge(c.state), c.diagnosed ? " diagnosed" : ""),
     el("td", null, c.max_faults ? `${c.faults} / ${c.max_faults}` : c.faults || "0"),
     el("td", null, c.tasks.join(", ")),
-    el("td", { class: "reason" }, c.reason || ""),
+    el("td", { class: "reason" }, c.reason || "",
+      c.output.length && c.state !== "running"  // why it last failed, while that matters
+        ? el("pre", { class: "output" }, c.output.join("\n")) : null),
   ));
   fill(document.querySelector("#component-table tbody"), rows);
   showDiagnosis(data.diagnosis || {});
