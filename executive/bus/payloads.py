@@ -205,6 +205,10 @@ class GoalResult:
     Published by the behavior; the launcher stores it as a return value in the KB.
     When a behavior process ends with a goal still open, the launcher makes the result
     itself (FAILED, or CANCELLED if it was asked to stop).
+
+    ``fault``: a FAILED goal failed by a fault of the behavior (an exception, a crash, a
+    timeout), not in the world (the SDK's ``GoalFailed``: the planner plans again, the
+    behavior is not restarted).
     """
 
     component: str
@@ -213,6 +217,7 @@ class GoalResult:
     value: dict[str, Any]
     reason: str = ""
     stamp: float = 0.0
+    fault: bool = True
 
     def to_payload(self) -> dict[str, Any]:
         return {
@@ -222,6 +227,7 @@ class GoalResult:
             "value": self.value,
             "reason": self.reason,
             "stamp": self.stamp,
+            "fault": self.fault,
         }
 
     @classmethod
@@ -236,6 +242,7 @@ class GoalResult:
             value,
             str(payload.get("reason", "")),
             float(payload.get("stamp", 0.0)),
+            bool(payload.get("fault", True)),
         )
 
 
