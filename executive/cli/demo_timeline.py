@@ -1,4 +1,5 @@
-"""What ``dura demo`` shows while the robot works: a line for each event that matters
+"""What ``dura demo`` and ``dura run`` show while the robot works: a line for each event
+that matters
 (as :mod:`executive.bus.event_text` reads it) and each diagnosis, in the order they
 happened; each plan the robot executes as a compact timeline when it starts, with the
 plan it replaces and why; and, on a terminal only, a last line saying what the robot
@@ -6,7 +7,8 @@ does now, so that the demo is never silent.
 
 Events and diagnoses come on two bus subscriptions (two threads), so a rule that fired
 on a diagnosis may arrive before it: lines wait ``SETTLE`` seconds and are printed in
-the order of their stamps.
+the order of their stamps. The process's own warnings come as lines of the same kind
+(:class:`WarningLines`).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from __future__ import annotations
 import heapq
 import io
 import itertools
+import logging
 import queue
 import shutil
 import sys
@@ -315,3 +318,19 @@ class Timeline:
         if self._drawn:
             self.out.write("\r\x1b[K")
             self._drawn = ""
+
+
+class WarningLines(logging.Handler):
+    """Log records (warnings and worse) as lines of a timeline, in its format:
+    ``  12.3s  WARNING  dura.launcher: 'lidar' ignored SIGTERM ...``."""
+
+    def __init__(self, timeline: Timeline, level: int = logging.WARNING) -> None:
+        super().__init__(level)
+        self.timeline = timeline
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            text = record.getMessage()
+        except (TypeError, ValueError):  # a bad format: what it had
+            text = str(record.msg)
+        self.timeline.say(record.levelname, f"{record.name}: {text}")

@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import io
 import json
+import logging
+import re
 from typing import Any
 
 from executive.bus.schema import plain
 from executive.bus.session import Message
-from executive.cli.demo_timeline import Timeline, replans
+from executive.cli.demo_timeline import Timeline, WarningLines, replans
 from knowledge.records import Event
 
 T0 = 1_700_000_000.0
@@ -84,3 +86,21 @@ def test_the_timeline_shows_each_plan_as_it_starts_and_keeps_causes_before_effec
     assert kinds.count("COMPONENT_READY") == 1
     assert [p["id"] for p in timeline.plans] == [1, 2, 3]
     assert not any("[[" in line or "{'" in line for line in lines)
+
+
+def test_a_warning_is_a_line_of_the_timeline_in_its_format() -> None:
+    out = io.StringIO()
+    timeline = Timeline(quiet=False, everything=False, out=out)
+    logger = logging.getLogger("dura.test_timeline")
+    logger.propagate = False
+    logger.addHandler(WarningLines(timeline))
+    try:
+        logger.info("not shown")
+        logger.warning("'%s' ignored SIGTERM", "lidar")
+    finally:
+        logger.handlers.clear()
+        logger.propagate = True
+    timeline.close()
+    assert re.fullmatch(
+        r" +\d+\.\ds  WARNING +dura\.test_timeline: 'lidar' ignored SIGTERM\n", out.getvalue()
+    )
