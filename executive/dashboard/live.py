@@ -293,7 +293,7 @@ class LiveState:
             "plan": self.plan.id,
             "state": self.plan.state.value,
             "title": chart.title,
-            "svg": svg.inline(gantt.render(chart)),
+            "svg": svg.inline(gantt.render(chart, titled=False)),  # the page shows the title
             "steps": [
                 {"index": s.index, "label": s.label, "state": s.state, "details": s.details}
                 for s in chart.steps
