@@ -283,8 +283,9 @@ def demo_is_consistent(done: subprocess.CompletedProcess[str]) -> None:
     """``dura demo``: every plan it executed shown, replans and goals counted right."""
     lines = done.stdout.splitlines()
     plans = [line for line in lines if re.match(r"\s*[\d.]+s  PLAN\s", line)]
-    summary = next(line for line in lines if " executed, " in line)
-    count = re.search(r"(\d+) plans? executed, (\d+) replans?", summary)
+    summary = next(line for line in lines if " started" in line and " replan" in line)
+    count = re.search(r"(\d+) plans? started(?: \(\d+ replaced before its first step\))?, "
+                      r"(\d+) replans?", summary)  # fmt: skip
     assert count is not None, summary
     assert int(count.group(1)) == len(plans) >= 1, summary
     replaced = [p for p in plans if "replaces plan" in p or "the plan before failed" in p]

@@ -36,6 +36,13 @@ function el(tag, attrs, ...children) {
   return node;
 }
 
+// A number as every view of dura writes it (executive.bus.wording.number): whole numbers
+// as they are, others rounded to two decimals without trailing zeros (0.05118 -> 0.05).
+function number(value) {
+  const n = Number(value);
+  return Number.isInteger(n) ? String(n) : String(Number(n.toFixed(2)));
+}
+
 function badge(state) {
   return el("span", { class: "badge " + String(state).replace(/\s+/g, "-") }, state);
 }
@@ -202,7 +209,7 @@ function sparkline(points, name) {
   polyline.setAttribute("stroke", "#2f6fb0");
   polyline.setAttribute("stroke-width", "1.5");
   picture.append(polyline);
-  const label = `${name} from ${low.toPrecision(3)} to ${high.toPrecision(3)} in the last ${Math.round(seconds)} s`;
+  const label = `${name} from ${number(low)} to ${number(high)} in the last ${Math.round(seconds)} s`;
   return el("span", { class: "spark", title: label }, picture, name);
 }
 
@@ -214,7 +221,7 @@ function drawObservations() {
   }
   const rows = [...page.tracks.values()].sort((a, b) => a.key.localeCompare(b.key)).map((t) => {
     const failed = typeof t.observation === "number" && t.observation < 0;
-    const values = Object.entries(t.values).map(([k, v]) => `${k} ${Number(v).toPrecision(4)}`);
+    const values = Object.entries(t.values).map(([k, v]) => `${k} ${number(v)}`);
     const names = Object.keys(t.values);
     return el("tr", { "data-observer": t.observer, "data-failed": failed ? "yes" : "no" },
       el("td", null, t.observer, el("br"), el("small", null, t.type)),

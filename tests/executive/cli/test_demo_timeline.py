@@ -104,3 +104,30 @@ def test_a_warning_is_a_line_of_the_timeline_in_its_format() -> None:
     assert re.fullmatch(
         r" +\d+\.\ds  WARNING +dura\.test_timeline: 'lidar' ignored SIGTERM\n", out.getvalue()
     )
+
+
+def test_each_task_is_named_with_its_step_the_first_time_a_line_names_it() -> None:
+    out = io.StringIO()
+    timeline = Timeline(quiet=False, everything=False, out=out)
+    timeline.start = T0
+    log = Log()
+    log(0.1, "TASK_REQUESTED", "task 1 move_to(dock, lab)")
+    log(0.2, "CONFIGURATION", "lidar", start=["lidar"], stop=[], resume=[],
+        why="task 1 requested")  # fmt: skip
+    log(0.3, "TASK_STARTED", "task 1 move_to(dock, lab)")
+    log(0.4, "START", "move_to(dock, lab)", plan=1, step=0, undo=[])
+    log(1.0, "TASK_REQUESTED", "task 2 take_picture(lab)")
+    log(1.1, "TASK_STARTED", "task 2 take_picture(lab)")
+    log(1.2, "START", "take_picture(lab)", plan=1, step=1, undo=[])
+    log(1.5, "CONFIGURATION", "nothing", start=[], stop=["lidar"], resume=[],
+        why="task 2 succeeded")  # fmt: skip
+    for event in log.events:
+        timeline.on_event(message(plain(event)))
+    timeline.close()
+    texts = [line.split(None, 2)[2] for line in out.getvalue().splitlines()]
+    assert texts == [
+        "task 1 move_to(dock, lab) requested: start lidar",
+        "move_to(dock, lab) (plan 1, step 0, task 1)",
+        "take_picture(lab) (plan 1, step 1, task 2)",
+        "task 2 succeeded: stop lidar; nothing runs",
+    ]

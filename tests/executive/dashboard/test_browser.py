@@ -7,6 +7,7 @@ One robot runs for the whole module: it works on its goals while the tests look 
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import threading
 import time
@@ -196,3 +197,22 @@ def test_graph_with_diagnoses_draws_the_running_robots_state(
     assert set(states) == set(robot.robot.components)
     assert set(states.values()) <= {"running", "starting", "stopping", "paused", "stopped",
                                     "faulty", "permanently faulty"}  # fmt: skip
+
+
+def test_the_page_rounds_measured_values_and_draws_the_plan_s_title_once(
+    robot: RobotProcess, browser: Browser
+) -> None:
+    values = browser.wait_for(
+        "(() => { const v = [...document.querySelectorAll('#observation-table tbody tr')]"
+        ".map(r => r.cells[3] && r.cells[3].textContent).filter(t => t);"
+        " return v.length ? v : null; })()",
+        30,
+    )
+    shown = [pair for cell in values for pair in cell.split(", ")]
+    assert shown and all(re.fullmatch(r"\w+ -?\d+(\.\d{1,2})?", pair) for pair in shown), shown
+    browser.wait_for("document.querySelectorAll('#plan-chart g.step').length > 0", 60)
+    title = browser.evaluate("document.getElementById('plan-title').textContent")
+    drawn = browser.evaluate(
+        "[...document.querySelectorAll('#plan-chart text')].map(t => t.textContent)"
+    )
+    assert title.startswith("plan ") and title not in drawn
