@@ -17,6 +17,9 @@ from typing import Any
 from knowledge.errors import DuraError
 
 TEMPLATE = Path(__file__).with_name("new_robot")
+ROS2_TEMPLATE = Path(__file__).with_name("new_robot_ros2")
+ROS2_EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "ros2"
+ROS2_PARTS = ("nodes", "msgs")  # of the example: the stand-in nodes, nav2's interface files
 NAME = re.compile(r"[a-z][a-z0-9_]*")
 PLACEHOLDER = "ROBOT_NAME"
 
@@ -36,6 +39,12 @@ def register(sub: Any) -> None:
         help="the folder to make; its last part is the robot's name (lowercase letters, "
         "digits and _, starting with a letter)",
     )
+    p.add_argument(
+        "--ros2",
+        action="store_true",
+        help="a robot whose drivers are ROS 2 nodes (stand-ins that run without ROS), its "
+        "behaviors a ROS 2 action and a ROS 2 service",
+    )
     p.set_defaults(run=run)
 
 
@@ -49,22 +58,30 @@ def run(args: argparse.Namespace) -> int:
         )
     if folder.exists():
         raise DuraError(f"{folder}: already there (dura new makes a new folder)")
-    made = make(folder, name)
+    if args.ros2 and not all((ROS2_EXAMPLE / part).is_dir() for part in ROS2_PARTS):
+        raise DuraError(
+            f"dura new --ros2 copies the ROS 2 stand-in nodes of {ROS2_EXAMPLE}, which is "
+            "not here: run it from a dura checkout"
+        )
+    made = make(folder, name, ros2=args.ros2)
     print(f"made {folder}/ with the robot '{name}': {', '.join(made)}")
     print(f"next: cd {folder} && dura validate robot.yaml && pytest")
     return 0
 
 
-def make(folder: Path, name: str) -> list[str]:
+def make(folder: Path, name: str, *, ros2: bool = False) -> list[str]:
     """Write the template robot named ``name`` into the new ``folder``; the files made,
     relative to it."""
+    sources = [(ROS2_TEMPLATE if ros2 else TEMPLATE, "")]
+    sources += [(ROS2_EXAMPLE / part, part) for part in ROS2_PARTS] if ros2 else []
     made = []
-    for source in sorted(TEMPLATE.rglob("*")):
-        if not source.is_file() or "__pycache__" in source.parts:
-            continue
-        relative = source.relative_to(TEMPLATE)
-        target = folder / relative.with_name(relative.name.removesuffix(".tmpl"))
-        target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_text(source.read_text().replace(PLACEHOLDER, name))
-        made.append(target.relative_to(folder).as_posix())
-    return made
+    for root, into in sources:
+        for source in sorted(root.rglob("*")):
+            if not source.is_file() or "__pycache__" in source.parts:
+                continue
+            relative = Path(into) / source.relative_to(root)
+            target = folder / relative.with_name(relative.name.removesuffix(".tmpl"))
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_text(source.read_text().replace(PLACEHOLDER, name))
+            made.append(target.relative_to(folder).as_posix())
+    return sorted(made)

@@ -88,3 +88,26 @@ def test_a_copied_example_says_exactly_what_to_change_and_then_validates(
     )
     valid = dura("validate", "robot.yaml", cwd=copied)
     assert valid.returncode == 0, valid.stderr
+
+
+@pytest.mark.slow
+def test_a_new_ros2_robot_validates_and_passes_its_own_test_over_ros2(
+    dura: Dura, tmp_path: Path
+) -> None:
+    made = dura("new", "--ros2", "patroller", cwd=tmp_path)
+    assert made.returncode == 0, made.stderr
+    folder = tmp_path / "patroller"
+    assert (folder / "nodes" / "navigator.py").is_file()
+    assert (folder / "msgs" / "nav2_msgs" / "action" / "NavigateToPose.action").is_file()
+    assert "(:types room dock - place" in (folder / "domain.pddl").read_text()
+    valid = dura("validate", "robot.yaml", cwd=folder)
+    assert valid.returncode == 0, valid.stdout + valid.stderr
+    ran = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider"],
+        cwd=folder,
+        capture_output=True,
+        text=True,
+        timeout=240,
+        check=False,
+    )
+    assert ran.returncode == 0, ran.stdout + ran.stderr
