@@ -4,7 +4,8 @@ A page holds a marker, ``<!-- generated: NAME -->``; the hook puts in its place 
 :data:`GENERATORS` makes of the code now: the robot description's schema (from the
 reader's declarations, :func:`knowledge.field_plan.fields_of`), the command line (from
 its argparse parsers), the bus API (from the verbs of :mod:`executive.bus.api`) and the
-changelog. The tests call the generators too (``tests/test_docs.py``).
+changelog; and it adds the pictures that live elsewhere in the repository. The tests
+call the generators too (``tests/test_docs.py``).
 """
 
 from __future__ import annotations
@@ -237,6 +238,19 @@ GENERATORS: dict[str, Callable[[], str]] = {
     "bus-api": bus_api,
     "changelog": changelog,
 }
+
+
+PICTURES = {"assets/dashboard.png": ROOT / "examples" / "usecase" / "dashboard.png"}
+"""Pictures the pages show that live elsewhere in the repository (not copied into docs/)."""
+
+
+def on_files(files: Any, config: Any, **_: Any) -> Any:
+    """MkDocs: the pictures of :data:`PICTURES` among the site's files."""
+    from mkdocs.structure.files import File
+
+    for destination, source in PICTURES.items():
+        files.append(File.generated(config, destination, abs_src_path=str(source)))
+    return files
 
 
 def on_page_markdown(markdown: str, **_: Any) -> str:
