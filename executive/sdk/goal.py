@@ -133,7 +133,8 @@ class GoalRunner:
             reason, fault = str(e), isinstance(e, GoalTimedOut)
             behavior.log.warning("goal %s failed: %s", goal_id, reason)
         except Exception as e:
-            reason = f"{type(e).__name__}: {e}"
+            # the traceback is in the component's log: say where
+            reason = f"{type(e).__name__}: {e} (dura component logs {behavior.name})"
             behavior.log.exception("goal %s failed", goal_id)
         with self.framework.changed:
             self.goal_id = None

@@ -76,7 +76,10 @@ def test_goal_failed_is_the_world_s_failure_and_an_exception_is_a_fault(
         assert (world.reason, world.fault) == ("the cup is gone", False)
         bug = r.launcher.send_goal("brewer", {"bug": True}).wait(15)
         assert bug is not None and bug.status is GoalStatus.FAILED
-        assert (bug.reason, bug.fault) == ("KeyError: 'no such key'", True)
+        assert (bug.reason, bug.fault) == (
+            "KeyError: 'no such key' (dura component logs brewer)",
+            True,
+        )
 
 
 def test_a_message_reads_its_payload_and_a_missing_field_names_those_it_has() -> None:
