@@ -22,7 +22,6 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
-import os
 import re
 import types
 import typing
@@ -253,27 +252,12 @@ def _constrained(meta: tuple[Any, ...], found: Any, value: Any, place: Place) ->
             )
             return MISSING
         if isinstance(m, Exists) and not found.is_file():
-            place.entry.error(
-                place.key, f"'{place.key}' names no file: {value}{_moved(place, value, found)}"
-            )
+            place.entry.error(place.key, m.missing(place.key, value, found, place.source.folder))
         if isinstance(m, Check):
             found = m.function(found, place)
             if found is MISSING:
                 return MISSING
     return found
-
-
-def _moved(place: Place, value: Any, found: Path) -> str:
-    """What to do about a path that leaves its file's folder and finds nothing (a file
-    copied without what it names, ``cp -r examples/usecase myrobot``)."""
-    if not str(value).startswith(".."):
-        return ""
-    name = Path(str(value)).name
-    folder = place.source.folder or found.parent
-    return (
-        f" (that is {os.path.normpath(found)}); copied from elsewhere? copy {name} into"
-        f" {os.path.normpath(folder)} and write '{place.key}: {name}'"
-    )
 
 
 def _typed(base: Any, meta: tuple[Any, ...], value: Any, place: Place) -> Any:
