@@ -5,6 +5,7 @@ nothing but its first and last line."""
 from __future__ import annotations
 
 import os
+import pty
 import re
 import signal
 import subprocess
@@ -59,3 +60,40 @@ def test_dura_run_logs_plans_steps_and_goals_in_the_timeline_format_and_is_quiet
     (folder / ".dura").rename(tmp_path / "first-run")
     quiet = run_robot(folder)
     assert len(quiet) == 2 and quiet[1] == "dura: executive of robot 'rover' stopped", quiet
+
+
+def run_on_a_terminal(folder: Path, *flags: str) -> str:
+    """Run the robot of ``folder`` with its output on a pseudo-terminal until its goal is
+    achieved; what the terminal showed."""
+    endpoint = free_endpoint()
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "DURA_TIME_SCALE": "10"}
+    argv = [sys.executable, "-m", "executive.cli", "run", "robot.yaml", "--endpoint", endpoint]
+    leader, follower = pty.openpty()
+    shown = b""
+    with subprocess.Popen([*argv, *flags], cwd=folder, env=env, stdout=follower) as process:
+        os.close(follower)
+        try:
+            while b"Ctrl-C stops it" not in shown:
+                shown += os.read(leader, 4096)
+            added = run_dura("goal", "add", "(inspected kitchen)", "--wait", cwd=folder, env=env)
+            assert added.returncode == 0, added.stdout + added.stderr
+        finally:
+            process.send_signal(signal.SIGINT)
+        while b"stopped" not in shown:
+            try:
+                shown += os.read(leader, 4096)
+            except OSError:  # the terminal closed with the process
+                break
+        process.wait(timeout=60)
+    os.close(leader)
+    return shown.decode(errors="replace")
+
+
+def test_dura_run_shows_its_log_on_a_terminal_unless_quiet(tmp_path: Path) -> None:
+    assert run_dura("new", "rover", cwd=tmp_path).returncode == 0
+    folder = tmp_path / "rover"
+    shown = run_on_a_terminal(folder)
+    assert "GOAL_ACHIEVED" in shown and "PLAN " in shown, shown
+    (folder / ".dura").rename(tmp_path / "first-run")
+    quiet = run_on_a_terminal(folder, "--quiet")
+    assert "GOAL_ADDED" not in quiet and "stopped" in quiet, quiet
