@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from executive.testing import RobotProcess
 from tests.conftest import ROOT
 
 Dura = Callable[..., subprocess.CompletedProcess[str]]
@@ -111,3 +112,25 @@ def test_a_new_ros2_robot_validates_and_passes_its_own_test_over_ros2(
         check=False,
     )
     assert ran.returncode == 0, ran.stdout + ran.stderr
+
+
+@pytest.mark.slow
+def test_a_goal_failed_by_a_bug_says_the_exception_and_where_the_traceback_is(
+    dura: Dura, tmp_path: Path, dura_robot: Callable[..., RobotProcess]
+) -> None:
+    assert dura("new", "buggy", cwd=tmp_path).returncode == 0
+    drive = tmp_path / "buggy" / "components" / "drive.py"
+    code = drive.read_text()
+    drive.write_text(
+        code.replace('self.latest["odom"]["distance"] - start', 'self.latest["odom"]["celsius"]')
+    )
+    robot = dura_robot(tmp_path / "buggy" / "robot.yaml", time_scale=10,
+                       changes={"behaviors": {"drive": {"max_restarts": 0}}})  # fmt: skip
+    goal = robot.submit_goal("(inspected kitchen)")
+    failed = robot.wait_for(goal, "failed", timeout=120)
+    assert failed.reason.endswith("failed: KeyError: 'celsius' (dura component logs drive)")
+    shown = dura("goal", "show", str(goal), cwd=robot.folder)
+    assert "KeyError: 'celsius' (dura component logs drive)" in shown.stdout, shown.stdout
+    logs = dura("component", "logs", "drive", cwd=robot.folder)
+    assert "Traceback (most recent call last):" in logs.stdout
+    assert "KeyError: 'celsius'" in logs.stdout
