@@ -1,7 +1,8 @@
 """dura's executive: high level, task executor, runtime, bus and CLI.
 
-Its packages are layers: an upper one imports a lower one, never the reverse (the
-README's "Architecture" says which may import which; ``tests/test_layers.py`` checks).
+Its packages are layers: an upper one imports a lower one, never the reverse
+(``docs/explanation/architecture.md`` says which may import which;
+``tests/test_layers.py`` checks).
 
 - :mod:`.bus` — the bottom layer: the Zenoh session, keys, payloads, each service's API
   declared once;
