@@ -50,6 +50,14 @@ def _sections() -> list[tuple[str, type, str]]:
     ]
 
 
+# keys whose schema is another file's or another page's
+NOTES = {
+    "observers": "the observer schema: see [Watch components](../how-to/observers.md)",
+    "rules": "repair rules: see [Diagnose and repair](../how-to/diagnosis-and-repair.md)",
+    "integrity": "integrity rules: see [Goals and planning](../explanation/planning.md)",
+}
+
+
 def robot_description() -> str:
     """The schema of a robot description, one table per part."""
     from knowledge.field_plan import fields_of
@@ -66,7 +74,8 @@ def robot_description() -> str:
                 continue
             value = _shown_type(spec.annotation, anchors)
             default = "required" if spec.required else _shown_default(spec.default)
-            out.append(f"| `{spec.key}` | {value} | {default} | {comments.get(spec.name, '')} |")
+            note = comments.get(spec.name) or NOTES.get(spec.key, "")
+            out.append(f"| `{spec.key}` | {value} | {default} | {note} |")
         out.append("")
     return "\n".join(out)
 
