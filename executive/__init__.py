@@ -1,7 +1,8 @@
 """dura's executive: high level, task executor, runtime, bus and CLI.
 
-Its packages are layers: an upper one imports a lower one, never the reverse (the
-README's "Architecture" says which may import which; ``tests/test_layers.py`` checks).
+Its packages are layers: an upper one imports a lower one, never the reverse
+(``docs/explanation/architecture.md`` says which may import which;
+``tests/test_layers.py`` checks).
 
 - :mod:`.bus` — the bottom layer: the Zenoh session, keys, payloads, each service's API
   declared once;
@@ -21,11 +22,16 @@ README's "Architecture" says which may import which; ``tests/test_layers.py`` ch
 - :mod:`.cli` — the ``dura`` command;
 - :mod:`.lsp` — ``dura lsp``, the language server for PDDL, robot descriptions and rules;
 - :mod:`.fast_start` — every trick that makes dura's processes start fast, measured (it
-  imports nothing of dura: the command line and the planner worker both use it).
+  imports nothing of dura: the command line and the planner worker both use it);
+- :mod:`.moved` — the names of the documented API that moved, forwarded to their new
+  place with a DeprecationWarning: :mod:`.component` (now :mod:`executive.sdk`),
+  :mod:`.harness` (:mod:`executive.testing.harness`), :mod:`.launcher` and
+  :mod:`.translator` (in :mod:`executive.runtime`), ``executive.bus.Bus`` and
+  ``executive.bus.Message``.
 
 Beside it, :mod:`monitoring` sits on the bus and :mod:`knowledge` under everything.
 """
 
 from __future__ import annotations
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"

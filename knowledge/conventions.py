@@ -8,7 +8,9 @@ A schema field says more than its type with metadata, e.g.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -179,6 +181,20 @@ class Exists(Marker):
     """A path that names an existing file (else: ``'key' names no file: ...``)."""
 
     __slots__ = ()
+
+    @staticmethod
+    def missing(key: str, value: object, found: Path, folder: Path | None) -> str:
+        """Why ``value`` (``found`` once resolved) names no file, and, for a path that
+        leaves its file's folder (a file copied without what it names, ``cp -r
+        examples/usecase myrobot``), what to do."""
+        said = f"'{key}' names no file: {value}"
+        if not str(value).startswith(".."):
+            return said
+        name = Path(str(value)).name
+        return (
+            f"{said} (that is {os.path.normpath(found)}); copied from elsewhere? copy {name}"
+            f" into {os.path.normpath(folder or found.parent)} and write '{key}: {name}'"
+        )
 
 
 class Check(Marker):

@@ -252,7 +252,7 @@ def _constrained(meta: tuple[Any, ...], found: Any, value: Any, place: Place) ->
             )
             return MISSING
         if isinstance(m, Exists) and not found.is_file():
-            place.entry.error(place.key, f"'{place.key}' names no file: {value}")
+            place.entry.error(place.key, m.missing(place.key, value, found, place.source.folder))
         if isinstance(m, Check):
             found = m.function(found, place)
             if found is MISSING:

@@ -1,5 +1,6 @@
 """The architecture is visible in the imports: an upper layer may import a lower one,
-never the reverse (README.md, "Architecture"); every import counts, lazy ones included."""
+never the reverse (docs/explanation/architecture.md); every import counts, lazy ones
+included."""
 
 from __future__ import annotations
 

@@ -1,7 +1,9 @@
-"""The README's commands run as it shows them, and print what it shows.
+"""The README's commands run as it shows them, and print what it shows; so do those of
+the documentation's pages its sections moved to (``PAGES``, in the order the README had
+them: a reader who follows along runs them in that order).
 
 The runner finds its blocks by itself, so a new section is checked without changing
-this file. The rules:
+this file (a new page: add it to ``PAGES``). The rules:
 
 - **Blocks.** Every fenced block marked ``console`` is a session: a line ``$ CMD`` is a
   command (a trailing ``# note`` is the reader's, not the shell's), and the lines up to
@@ -69,6 +71,28 @@ from tests.conftest import ROOT, USECASE
 pytestmark = pytest.mark.slow
 
 README = ROOT / "README.md"
+# The README, then the pages its sections moved to, in the order the README had them.
+PAGES = [README, *(ROOT / "docs" / page for page in (
+    "explanation/architecture.md",
+    "how-to/robot-description.md",
+    "explanation/knowledge-base.md",
+    "explanation/bus.md",
+    "how-to/security.md",
+    "how-to/run.md",
+    "how-to/several-computers.md",
+    "how-to/components.md",
+    "how-to/observers.md",
+    "how-to/diagnosis-and-repair.md",
+    "how-to/ros2.md",
+    "how-to/bags.md",
+    "explanation/scheduling.md",
+    "explanation/planning.md",
+    "how-to/goals.md",
+    "how-to/dashboard.md",
+    "how-to/testing.md",
+    "reference/cli.md",
+    "development.md",
+))]  # fmt: skip
 FOLLOW = 2.0  # seconds a command that runs until Ctrl-C runs
 SETTLE = 60.0  # seconds a command that changes nothing is asked again until it matches
 IDLE = 90.0  # seconds the robot may take to finish what earlier blocks gave it
@@ -78,7 +102,7 @@ READ_ONLY = {"show", "list", "get", "status", "observe", "logs", "--dry-run"}
 
 @dataclass
 class Command:
-    line: int  # in the README
+    line: int  # in its page
     text: str  # as written, without the note
     argv: list[str]
     shown: list[str] = field(default_factory=list)  # the output the README shows
@@ -97,15 +121,16 @@ class Command:
 class Block:
     line: int
     commands: list[Command]
+    page: str = "README.md"  # where it is, from the repository's root
 
     @property
     def name(self) -> str:
         first = self.commands[0].text if self.commands else "-"
-        return f"README.md:{self.line} {first[:50]}"
+        return f"{self.page}:{self.line} {first[:50]}"
 
 
-def blocks(text: str) -> Iterator[Block]:
-    """The README's blocks that show commands, in order."""
+def blocks(text: str, page: str = "README.md") -> Iterator[Block]:
+    """A page's blocks that show commands, in order."""
     lines = text.splitlines()
     i = 0
     while i < len(lines):
@@ -117,9 +142,9 @@ def blocks(text: str) -> Iterator[Block]:
         end = next(j for j in range(start, len(lines)) if lines[j].startswith("```"))
         body = lines[start:end]
         if kind == "console":
-            yield Block(start, _session(body, start))
+            yield Block(start, _session(body, start), page)
         elif kind == "sh":
-            yield Block(start, _shell(body, start))
+            yield Block(start, _shell(body, start), page)
         i = end + 1
 
 
@@ -241,7 +266,7 @@ def broken_robot(folder: Path) -> None:
 def diagnosis_files(folder: Path) -> None:
     """model.yaml and obs.yaml from the README's two-column block (``# MODEL.yaml``): the
     right column starts after the first gap of three spaces or more on a line."""
-    lines = README.read_text(encoding="utf-8").splitlines()
+    lines = [line for page in PAGES for line in page.read_text(encoding="utf-8").splitlines()]
     start = next(i for i, line in enumerate(lines) if line.startswith("# MODEL.yaml"))
     end = next(i for i in range(start, len(lines)) if lines[i].startswith("```"))
     model, observations = [], []
@@ -296,8 +321,9 @@ def demo_is_consistent(done: subprocess.CompletedProcess[str]) -> None:
     """``dura demo``: every plan it executed shown, replans and goals counted right."""
     lines = done.stdout.splitlines()
     plans = [line for line in lines if re.match(r"\s*[\d.]+s  PLAN\s", line)]
-    summary = next(line for line in lines if " executed, " in line)
-    count = re.search(r"(\d+) plans? executed, (\d+) replans?", summary)
+    summary = next(line for line in lines if " started" in line and " replan" in line)
+    count = re.search(r"(\d+) plans? started(?: \(\d+ replaced before its first step\))?, "
+                      r"(\d+) replans?", summary)  # fmt: skip
     assert count is not None, summary
     assert int(count.group(1)) == len(plans) >= 1, summary
     replaced = [p for p in plans if "replaces plan" in p or "the plan before failed" in p]
@@ -397,7 +423,12 @@ def wait_until_idle(robot: RobotProcess) -> None:
 
 
 _ENDED = ("succeeded", "failed", "cancelled")
-BLOCKS = [b for b in blocks(README.read_text(encoding="utf-8")) if b.commands]
+BLOCKS = [
+    b
+    for page in PAGES
+    for b in blocks(page.read_text(encoding="utf-8"), page.relative_to(ROOT).as_posix())
+    if b.commands
+]
 
 
 @pytest.mark.parametrize("block", BLOCKS, ids=[b.name for b in BLOCKS])
@@ -419,7 +450,7 @@ def run_block(block: Block, robot: RobotProcess, tmp_path: Path) -> None:
     for command in block.commands:
         if command.argv[0] != "dura":
             continue
-        where = f"README.md:{command.line}: $ {command.text}"
+        where = f"{block.page}:{command.line}: $ {command.text}"
         if command.argv[1] == "run":
             ran = ROOT / command.argv[2] if len(command.argv) > 2 else None
             assert ran is not None and ran.resolve() == USECASE.resolve(), (

@@ -27,3 +27,11 @@ but :mod:`knowledge`.
   the followers of each process;
 - :mod:`.worker` — the one thread that touches an object's state.
 """
+
+from __future__ import annotations
+
+from executive.moved import forward_names
+
+# ``executive.bus.Bus`` and ``executive.bus.Message``, documented before the bus became a
+# package, keep working with a DeprecationWarning naming their new place.
+__getattr__ = forward_names(__name__)

@@ -2,8 +2,8 @@
 ``goal show``, ``kb show``, the demo, the dashboard); a diagnosis result likewise.
 
 :func:`describe` says what happened, starting with what it happened to: ``goal 1:
-(picture_taken lab)``, ``move_to(dock, lab) (plan 1, step 0); at start: not (robot_at
-dock)``, ``task 1 cancelled: stop robot_base, lidar_filter, lidar; nothing runs``.
+(picture_taken lab)``, ``move_to(dock, lab) (plan 1, step 0); as it starts: (robot_at
+dock) no longer holds``, ``task 1 cancelled: stop robot_base, lidar_filter, lidar; nothing runs``.
 Numbers are rounded, stamps are clocks, and no Python value shows through; a kind it
 does not know reads as ``subject: key value, key value``.
 """
@@ -15,7 +15,16 @@ from typing import Any
 
 from executive.bus.event_kinds import WIDTH
 from executive.bus.reports import DiagnosisInfo
-from executive.bus.wording import clock, listed, number, pairs, plural, seconds, value
+from executive.bus.wording import (
+    clock,
+    goals_named,
+    listed,
+    number,
+    pairs,
+    plural,
+    seconds,
+    value,
+)
 from knowledge.records import Event
 
 Data = Mapping[str, Any]
@@ -118,13 +127,6 @@ def _exoneration(subject: str, data: Data, kind: str) -> str:
 # --- goals and plans ------------------------------------------------------------------
 
 
-def _goals(ids: Any) -> str:
-    ids = list(ids or [])
-    if not ids:
-        return "no goal"
-    return f"goal {ids[0]}" if len(ids) == 1 else f"goals {listed(ids)}"
-
-
 def _goal_added(subject: str, data: Data, kind: str) -> str:
     return f"{subject}: {data['expression']}" + (", kept true" if data.get("keep") else "")
 
@@ -134,7 +136,7 @@ def _goal_state(subject: str, data: Data, kind: str) -> str:
 
 
 def _planning(subject: str, data: Data, kind: str) -> str:
-    text = f"for {_goals(data.get('goals'))}"
+    text = f"for {goals_named(data.get('goals'))}"
     text = _why(text, data.get("reason"))
     blocked = list(data.get("blocked") or [])
     return f"{text}; cannot run now: {listed(blocked)}" if blocked else text
@@ -149,7 +151,7 @@ def _plan_stored(subject: str, data: Data, kind: str) -> str:
 
 
 def _plan_start(subject: str, data: Data, kind: str) -> str:
-    return f"{subject}: {plural(int(data['steps']), 'step')} for {_goals(data.get('goals'))}"
+    return f"{subject}: {plural(int(data['steps']), 'step')} for {goals_named(data.get('goals'))}"
 
 
 def _replan(subject: str, data: Data, kind: str) -> str:
@@ -161,7 +163,9 @@ def _step(subject: str, data: Data, kind: str) -> str:
     if data.get("plan") is not None and data.get("step") is not None:
         text += f" (plan {data['plan']}, step {data['step']})"
     if kind == "START" and data.get("undo"):
-        text += "; at start: " + ", ".join(_effect(u) for u in data["undo"])
+        # the start's effects, said as changes ("at start: not (robot_at dock)" read as
+        # a condition the step broke)
+        text += "; as it starts: " + ", ".join(_effect(u) for u in data["undo"])
     if kind == "ADOPT" and data.get("from_plan") is not None:
         text += f" continues plan {data['from_plan']}'s step {data.get('from_step')}"
     if kind == "END" and isinstance(data.get("result"), Mapping) and data["result"]:
@@ -174,10 +178,10 @@ def _effect(undo: Any) -> str:
     name, args, before = undo
     fact = "(" + " ".join([str(name), *map(str, args)]) + ")"
     if before is True:
-        return f"not {fact}"
+        return f"{fact} no longer holds"
     if before is None or before is False:
-        return fact
-    return f"{fact} from {number(before)}"
+        return f"{fact} holds"
+    return f"{fact} changes from {number(before)}"
 
 
 def _recovered(subject: str, data: Data, kind: str) -> str:

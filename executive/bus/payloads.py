@@ -43,6 +43,9 @@ class ComponentState:
     signal: int | None = None
     reason: str = ""
     stamp: float = 0.0
+    output: tuple[str, ...] = ()
+    """What its process wrote last when it last failed: the end of its Python traceback
+    (kept in its later states until it fails again)."""
 
     def to_payload(self) -> dict[str, Any]:
         return {
@@ -53,6 +56,7 @@ class ComponentState:
             "signal": self.signal,
             "reason": self.reason,
             "stamp": self.stamp,
+            "output": list(self.output),
         }
 
     @classmethod
@@ -66,6 +70,7 @@ class ComponentState:
             signal=payload.get("signal"),
             reason=str(payload.get("reason", "")),
             stamp=float(payload.get("stamp", 0.0)),
+            output=tuple(str(line) for line in payload.get("output") or ()),
         )
 
 
@@ -200,6 +205,10 @@ class GoalResult:
     Published by the behavior; the launcher stores it as a return value in the KB.
     When a behavior process ends with a goal still open, the launcher makes the result
     itself (FAILED, or CANCELLED if it was asked to stop).
+
+    ``fault``: a FAILED goal failed by a fault of the behavior (an exception, a crash, a
+    timeout), not in the world (the SDK's ``GoalFailed``: the planner plans again, the
+    behavior is not restarted).
     """
 
     component: str
@@ -208,6 +217,7 @@ class GoalResult:
     value: dict[str, Any]
     reason: str = ""
     stamp: float = 0.0
+    fault: bool = True
 
     def to_payload(self) -> dict[str, Any]:
         return {
@@ -217,6 +227,7 @@ class GoalResult:
             "value": self.value,
             "reason": self.reason,
             "stamp": self.stamp,
+            "fault": self.fault,
         }
 
     @classmethod
@@ -231,6 +242,7 @@ class GoalResult:
             value,
             str(payload.get("reason", "")),
             float(payload.get("stamp", 0.0)),
+            bool(payload.get("fault", True)),
         )
 
 

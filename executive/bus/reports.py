@@ -138,6 +138,7 @@ class ComponentEntry(KeyAccess, Payload):
     reason: str
     stamp: float
     log: str | None = None
+    output: tuple[str, ...] = ()  # what it wrote last when it failed: its exception
 
 
 # --- the diagnosis engine --------------------------------------------------------------

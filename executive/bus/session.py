@@ -83,7 +83,12 @@ def decode(raw: bytes, key: str = "") -> dict[str, Any]:
 
 @dataclass
 class Message:
-    """One received message. ``payload`` is decoded on first use (hot paths skip it)."""
+    """One received message: what a ``subscribe`` handler gets.
+
+    ``payload`` is the published dict, decoded on first use (hot paths skip it);
+    ``message["celsius"]`` and ``message.get("celsius")`` read a field of it. ``key`` is
+    the key it came on, ``caller_id`` who sent it, ``stamp`` the payload's ``stamp``.
+    """
 
     key: str
     raw: bytes
@@ -97,6 +102,24 @@ class Message:
         if self._payload is None:
             self._payload = decode(self.raw, self.key)
         return self._payload
+
+    def __getitem__(self, field: str) -> Any:
+        """A field of the payload (``message["celsius"]``).
+
+        Raises:
+            KeyError: the payload has no such field (the message names those it has).
+        """
+        try:
+            return self.payload[field]
+        except KeyError:
+            has = ", ".join(sorted(self.payload)) or "none"
+            raise KeyError(
+                f"the message on {self.key} has no field {field!r} (it has: {has})"
+            ) from None
+
+    def get(self, field: str, default: Any = None) -> Any:
+        """A field of the payload, or ``default``."""
+        return self.payload.get(field, default)
 
     @property
     def stamp(self) -> float | None:

@@ -16,6 +16,14 @@ def plural(count: int, word: str, many: str = "") -> str:
     return f"{count} {word if count == 1 else (many or word + 's')}"
 
 
+def goals_named(ids: Any) -> str:
+    """Goals by their ids: ``goal 4``, ``goals 1, 3``, ``no goal``."""
+    ids = list(ids or [])
+    if not ids:
+        return "no goal"
+    return f"goal {ids[0]}" if len(ids) == 1 else f"goals {listed(ids)}"
+
+
 def number(value: float) -> str:
     """A number as a person reads it: whole numbers as they are, others rounded to
     ``DECIMALS`` decimals without trailing zeros (``0.05962`` → ``0.06``)."""

@@ -37,6 +37,7 @@ from knowledge.errors import DuraError
 # the solvers and the web stack that other commands need.
 COMMANDS = (
     "demo",
+    "new",
     "validate",
     "run",
     "host",

@@ -101,6 +101,10 @@ def run_list(args: argparse.Namespace) -> int:
             for c in reply.components
         ],
     )  # fmt: skip
+    for c in reply.components:
+        if c.output:  # what a failed component wrote last: its exception
+            print(f"\n{c.component} wrote last when it last failed:")
+            print("\n".join(f"  {line}" for line in c.output))
     return 0
 
 

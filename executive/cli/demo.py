@@ -193,9 +193,14 @@ def summary(goals: list[Goal], status: StatusReply, timeline: Timeline, elapsed:
     kinds = [e.kind for e in timeline.events]
     replanned = replans(timeline.events)
     which = f" (plan {', '.join(map(str, replanned))})" if replanned else ""
+    started = kinds.count("PLAN_START")
+    # a plan replaced before its first step started but ran nothing: counted apart
+    ran = len({e.data.get("plan") for e in timeline.events if e.kind == "DISPATCH"})
     section(
         f"{plural(len(timeline.events), 'event')}, "
-        f"{plural(kinds.count('PLAN_START'), 'plan')} executed, "
+        f"{plural(started, 'plan')} started"
+        + (f" ({started - ran} replaced before its first step)" if ran < started else "")
+        + ", "
         f"{plural(len(replanned), 'replan')}{which}, "
         f"{plural(kinds.count('DISPATCH'), 'step')} dispatched, "
         f"{plural(len(timeline.diagnoses), 'diagnosis result')}, in {elapsed:.1f} s"

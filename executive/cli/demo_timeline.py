@@ -1,4 +1,5 @@
-"""What ``dura demo`` shows while the robot works: a line for each event that matters
+"""What ``dura demo`` and ``dura run`` show while the robot works: a line for each event
+that matters
 (as :mod:`executive.bus.event_text` reads it) and each diagnosis, in the order they
 happened; each plan the robot executes as a compact timeline when it starts, with the
 plan it replaces and why; and, on a terminal only, a last line saying what the robot
@@ -6,7 +7,8 @@ does now, so that the demo is never silent.
 
 Events and diagnoses come on two bus subscriptions (two threads), so a rule that fired
 on a diagnosis may arrive before it: lines wait ``SETTLE`` seconds and are printed in
-the order of their stamps.
+the order of their stamps. The process's own warnings come as lines of the same kind
+(:class:`WarningLines`).
 """
 
 from __future__ import annotations
@@ -14,7 +16,9 @@ from __future__ import annotations
 import heapq
 import io
 import itertools
+import logging
 import queue
+import re
 import shutil
 import sys
 import threading
@@ -33,6 +37,8 @@ from executive.cli.output import bar, table
 from knowledge.errors import DuraError
 from knowledge.records import Event, Plan
 
+TASK = re.compile(r"\btask (\d+)\b")  # a task named by its number
+NAMED_TASK = re.compile(r"\btask (\d+) \w+\(")  # ... and by what it does
 SETTLE = 0.3  # seconds a line waits for what happened before it to arrive
 TICK = 0.1  # seconds between two looks of the printer
 INDENT = " " * 9  # under the time column
@@ -104,6 +110,9 @@ class Timeline:
         self._failed = ""  # why the last plan failed, until the next one starts
         self._running: dict[str, None] = {}  # steps under way, in order
         self._starting: dict[str, None] = {}  # components coming up
+        self._task_names: dict[str, str] = {}  # task number → its step, "move_to(dock, lab)"
+        self._task_of: dict[str, str] = {}  # a step → the number of its newest task
+        self._introduced: set[str] = set()  # tasks a line has named with their step
         self._drawn = ""  # the live line on the terminal
         self._stop = threading.Event()
         self._printer = threading.Thread(target=self._print_loop, name="demo-timeline")
@@ -175,6 +184,11 @@ class Timeline:
     def _follow(self, event: Event) -> None:
         """Keep up with what the robot does (in the log's order, under the lock)."""
         kind, subject, data = event.kind, event.subject, event.data
+        named = re.fullmatch(r"task (\d+) (.+)", subject) if kind.startswith("TASK_") else None
+        if named:
+            self._task_names[named.group(1)] = named.group(2)
+            if kind == "TASK_STARTED":
+                self._task_of[named.group(2)] = named.group(1)
         if kind.startswith("COMPONENT_"):
             if kind == "COMPONENT_READY" and self._states.get(subject) == "COMPONENT_PAUSED":
                 self._resumed.add(event.id)
@@ -234,7 +248,27 @@ class Timeline:
             return
         if not self.everything and (kind not in SHOWN or self._repeated(item)):
             return
-        self._line(stamp, kind, describe(item))
+        self._line(stamp, kind, self._introducing(item, describe(item)))
+
+    def _introducing(self, event: Event, text: str) -> str:
+        """A line that names each task with its step the first time (``task 4
+        take_picture(lab) succeeded``), and a step's start with its task."""
+        with self._lock:
+            if event.kind == "START" and event.subject in self._task_of:
+                number = self._task_of[event.subject]
+                with_task = re.sub(r"(\(plan \d+, step \d+)\)", rf"\1, task {number})", text)
+                text = with_task if with_task != text else f"{text} (task {number})"
+                self._introduced.add(number)
+            self._introduced.update(NAMED_TASK.findall(text))
+
+            def named(found: re.Match[str]) -> str:
+                number = found.group(1)
+                if number in self._introduced or number not in self._task_names:
+                    return found.group(0)
+                self._introduced.add(number)
+                return f"task {number} {self._task_names[number]}"
+
+            return TASK.sub(named, text)
 
     def _repeated(self, event: Event) -> bool:
         """A component ready again after a pause (the task's line says it resumed)."""
@@ -315,3 +349,19 @@ class Timeline:
         if self._drawn:
             self.out.write("\r\x1b[K")
             self._drawn = ""
+
+
+class WarningLines(logging.Handler):
+    """Log records (warnings and worse) as lines of a timeline, in its format:
+    ``  12.3s  WARNING  dura.launcher: 'lidar' ignored SIGTERM ...``."""
+
+    def __init__(self, timeline: Timeline, level: int = logging.WARNING) -> None:
+        super().__init__(level)
+        self.timeline = timeline
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            text = record.getMessage()
+        except (TypeError, ValueError):  # a bad format: what it had
+            text = str(record.msg)
+        self.timeline.say(record.levelname, f"{record.name}: {text}")

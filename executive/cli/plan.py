@@ -13,7 +13,7 @@ from typing import Any
 from executive.bus.api import planning as api
 from executive.bus.api import tasks
 from executive.bus.schema import plain
-from executive.bus.wording import plural
+from executive.bus.wording import goals_named, plural
 from executive.cli.arguments import seconds
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, bar, print_json, shown, table
@@ -168,8 +168,7 @@ def run_show(args: argparse.Namespace) -> int:
     states = reply.execution.states_of(plan)
     steps = plan.steps
     span = max((s.start + (s.duration or 0.0) for s in steps), default=0.0)
-    goals = ", ".join(str(g) for g in plan.goal_ids) or "-"
-    print(f"plan {plan.id}: {plan.state.value}, by {plan.engine}, for goals {goals}")
+    print(f"plan {plan.id}: {plan.state.value}, by {plan.engine}, for {goals_named(plan.goal_ids)}")
     rows = [
         [s.index, f"{s.start:.3f}", _duration(s.duration), f"{s.action}({', '.join(s.args)})",
          states.get(s.index, "-"), bar(s.start, s.duration, span)]
@@ -201,11 +200,11 @@ def run_dry_run(args: argparse.Namespace) -> int:
     if not ok:
         print(f"dura: dry run: no plan: {reply.reason}", file=sys.stderr)
         return 1
-    stored = [str(g) for g in reply.planned if g > 0]
+    stored = [g for g in reply.planned if g > 0]
     asked = [named(g) for g in reply.planned if g < 0]
-    goals = ", ".join((["goals " + ", ".join(stored)] if stored else []) + asked) or "no goal"
+    goals = ", ".join(([goals_named(stored)] if stored else []) + asked) or "no goal"
     print(
-        f"dry run: {len(reply.steps)} steps, makespan {reply.makespan or 0.0:g} s, by "
+        f"dry run: {plural(len(reply.steps), 'step')}, makespan {reply.makespan or 0.0:g} s, by "
         f"{reply.engine} in {reply.time:.2f} s, for {goals} (nothing executed)"
     )
     span = reply.makespan or 0.0

@@ -4,15 +4,19 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import logging
 import os
 import sys
 import threading
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from executive.bus.keys import DIAGNOSES, EVENTS
 from executive.cli.arguments import add_launcher_options, megabytes, seconds
 from executive.cli.client import remove_run_file, write_run_file
 from executive.cli.dashboard import add_dashboard_address, port
+from executive.cli.demo_timeline import Timeline, WarningLines
 from executive.cli.output import add_json_flag, print_json, shown
 from executive.cli.progress import LiveLine
 from executive.cli.stopping import stop_on_signals, wait
@@ -92,6 +96,19 @@ def register(sub: Any) -> None:
         help="run the executive without this group of services (another process runs them "
         "with --only GROUP); may be given more than once",
     )
+    shown = p.add_mutually_exclusive_group()
+    shown.add_argument(
+        "--quiet",
+        "-q",
+        action="store_true",
+        help="print no live log on a terminal (only the first and the last line)",
+    )
+    shown.add_argument(
+        "--log",
+        action="store_true",
+        help="print the live log (plans, steps, faults, repairs, goals and warnings, one "
+        "line each) also when the output is not a terminal",
+    )
     add_json_flag(p)
     p.set_defaults(run=run)
 
@@ -150,6 +167,8 @@ def run(args: argparse.Namespace) -> int:
             if url:
                 print(f"dura: dashboard on {url}")
         sys.stdout.flush()
+        if not args.json and not args.quiet and (args.log or sys.stdout.isatty()):
+            running.enter_context(live_log(executive, args.verbose))
         wait(stop)
     if failure:
         print(f"dura: {failure[0]}", file=sys.stderr)
@@ -157,6 +176,38 @@ def run(args: argparse.Namespace) -> int:
     if not args.json:
         print(f"dura: executive of robot '{robot.name}' stopped")
     return 0
+
+
+@contextlib.contextmanager
+def live_log(executive: Executive, verbose: int) -> Iterator[None]:
+    """Print what the robot does, as ``dura demo`` does, while the block runs: a line for
+    each event that matters and each diagnosis, a timeline for each plan, and the
+    process's warnings as lines of the same format (instead of Python's log lines)."""
+    timeline = Timeline(quiet=False, everything=False)
+    timeline.use(executive.kb_path)
+    root = logging.getLogger()
+    handlers = list(root.handlers)
+    if not verbose:  # -v keeps Python's log lines, for the detail they add
+        for handler in handlers:
+            root.removeHandler(handler)
+    warnings = WarningLines(timeline)
+    root.addHandler(warnings)
+    subscriptions = [
+        executive.bus.subscribe(EVENTS, timeline.on_event),
+        executive.bus.subscribe(DIAGNOSES, timeline.on_diagnoses),
+    ]
+    try:
+        timeline.doing("waiting for goals (dura goal add)")
+        yield
+    finally:
+        for subscription in subscriptions:
+            with contextlib.suppress(Exception):
+                subscription.undeclare()
+        timeline.close()
+        root.removeHandler(warnings)
+        for handler in handlers:
+            if handler not in root.handlers:
+                root.addHandler(handler)
 
 
 def run_only(args: argparse.Namespace, robot: RobotDescription, stop: threading.Event) -> int:

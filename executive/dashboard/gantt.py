@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from executive.bus.wording import goals_named
 from executive.dashboard import svg
 
 if TYPE_CHECKING:
@@ -144,9 +145,11 @@ def live_gantt(
         else:
             reason = event.data.get("reason", "")
             marks.append(Mark(at, "replan", f"replan: {reason}" if reason else "replan"))
-    goals = ", ".join(str(g) for g in plan.goal_ids) or "-"
-    title = f"plan {plan_id}: {plan.state.value}, by {plan.engine}, for goals {goals}"
-    return Gantt(title, tuple(steps), tuple(marks), now - origin)
+    title = (
+        f"plan {plan_id}: {plan.state.value}, by {plan.engine}, for {goals_named(plan.goal_ids)}"
+    )
+    # a plan that has ended is drawn on its own span, not on one that grows with the clock
+    return Gantt(title, tuple(steps), tuple(marks), now - origin if executing else None)
 
 
 def _number(value: str) -> float:
@@ -185,8 +188,9 @@ def ticks(low: float, high: float, count: int = 8) -> list[float]:
     return [round(first + i * step, 9) for i in range(int((high - first) / step + 1e-9) + 1)]
 
 
-def render(gantt: Gantt, width: float = WIDTH) -> str:
-    """The chart as an SVG document."""
+def render(gantt: Gantt, width: float = WIDTH, *, titled: bool = True) -> str:
+    """The chart as an SVG document (``titled``: with its title drawn on it; a page
+    that shows the title itself draws none)."""
     labels = [f"{s.index}  {s.label}" for s in gantt.steps]
     left = max(140.0, max((svg.text_width(t) for t in labels), default=0.0) + 24.0)
     right = width - 84.0  # room for the last step's state
@@ -202,7 +206,9 @@ def render(gantt: Gantt, width: float = WIDTH) -> str:
         return left + (t - low) * scale
 
     height = TOP + ROW * max(1, len(gantt.steps)) + BOTTOM
-    body: list[str] = [svg.label(12, 20, gantt.title, font_size=14, font_weight="600")]
+    body: list[str] = []
+    if titled:
+        body.append(svg.label(12, 20, gantt.title, font_size=14, font_weight="600"))
     axis_y = TOP + ROW * max(1, len(gantt.steps))
     for row in range(1, len(gantt.steps), 2):  # stripes under the grid, the marks and the bars
         body.append(svg.element("rect", x=0, y=TOP + row * ROW, width=width, height=ROW,

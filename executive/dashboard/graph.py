@@ -12,7 +12,7 @@ current diagnoses, fault counters, the failed topics and the active configuratio
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from executive.dashboard import svg
@@ -226,20 +226,79 @@ def _ink(fill: str) -> str:
     return svg.INK if 0.299 * r + 0.587 * g + 0.114 * b > 150 else "#ffffff"
 
 
-def _edge_path(a: Node, b: Node, bottom: float) -> str:
+Point = tuple[float, float]
+Curve = tuple[Point, Point, Point, Point]  # a cubic Bézier: start, two controls, end
+CLEARANCE = 6.0  # px an edge keeps from a box it passes
+
+
+def edge_curves(a: Node, b: Node, bottom: float, nodes: Iterable[Node] = ()) -> list[Curve]:
+    """The curves of the edge from ``a`` to ``b``: straight on if no box of ``nodes`` is in
+    the way, else over or under the boxes between them (whichever is nearer); backwards,
+    out to the right, under the graph and up in the gap before the target's column."""
+    placed = list(nodes)
+    x2, y2 = b.x, b.y + b.height / 2
     if b.x > a.x + a.width / 2:
         x1, y1 = a.x + a.width, a.y + a.height / 2
-        x2, y2 = b.x, b.y + b.height / 2
         bend = max(24.0, (x2 - x1) / 2)
-        return f"M{x1:.1f},{y1:.1f} C{x1 + bend:.1f},{y1:.1f} {x2 - bend:.1f},{y2:.1f} {x2:.1f},{y2:.1f}"
-    # backwards: leave below the source, loop under the graph, enter the target's left
-    x1, y1 = a.x + a.width / 2, a.y + a.height
-    x2, y2 = b.x, b.y + b.height / 2
+        direct = [((x1, y1), (x1 + bend, y1), (x2 - bend, y2), (x2, y2))]
+        between = [n for n in placed if n.x >= x1 - 1 and n.x + n.width <= x2 + 1]
+        between = [n for n in between if n not in (a, b)]
+        if not any(_hits(direct, n) for n in placed if n not in (a, b)) or not between:
+            return direct
+        above = min(n.y for n in between) - CLEARANCE * 2
+        below = max(n.y + n.height for n in between) + CLEARANCE * 2
+        lane = above if abs(above - (y1 + y2) / 2) <= abs(below - (y1 + y2) / 2) else below
+        left = min(n.x for n in between) - CLEARANCE
+        right = max(n.x + n.width for n in between) + CLEARANCE
+        return [
+            ((x1, y1), ((x1 + left) / 2, y1), ((x1 + left) / 2, lane), (left, lane)),
+            ((left, lane), (left, lane), (right, lane), (right, lane)),
+            ((right, lane), ((right + x2) / 2, lane), ((right + x2) / 2, y2), (x2, y2)),
+        ]
+    # backwards: out of the source's right side into the gap after its column, down
+    # below the graph, along it, and up in the gap before the target's column
+    x1, y1 = a.x + a.width, a.y + a.height / 2
+    column = [n for n in placed if n.x < x1 and n.x + n.width > a.x] or [a]
+    out = max(n.x + n.width for n in column) + 16.0
     turn = x2 - 16.0
-    return (
-        f"M{x1:.1f},{y1:.1f} C{x1:.1f},{bottom:.1f} {x1:.1f},{bottom:.1f} {(x1 + turn) / 2:.1f},{bottom:.1f} "
-        f"C{turn:.1f},{bottom:.1f} {turn:.1f},{y2:.1f} {x2:.1f},{y2:.1f}"
+    return [
+        ((x1, y1), (out, y1), (out, y1), (out, (y1 + bottom) / 2)),
+        ((out, (y1 + bottom) / 2), (out, bottom), (out, bottom), ((out + turn) / 2, bottom)),
+        (((out + turn) / 2, bottom), (turn, bottom), (turn, bottom), (turn, (y2 + bottom) / 2)),
+        ((turn, (y2 + bottom) / 2), (turn, y2), (turn, y2), (x2, y2)),
+    ]
+
+
+def sampled(curves: Sequence[Curve], steps: int = 24) -> list[Point]:
+    """Points along curves (for checking what they pass through)."""
+    points = []
+    for p0, p1, p2, p3 in curves:
+        for i in range(steps + 1):
+            t = i / steps
+            u = 1 - t
+            points.append(
+                (
+                    u**3 * p0[0] + 3 * u * u * t * p1[0] + 3 * u * t * t * p2[0] + t**3 * p3[0],
+                    u**3 * p0[1] + 3 * u * u * t * p1[1] + 3 * u * t * t * p2[1] + t**3 * p3[1],
+                )
+            )
+    return points
+
+
+def _hits(curves: Sequence[Curve], node: Node) -> bool:
+    return any(
+        node.x - CLEARANCE < x < node.x + node.width + CLEARANCE
+        and node.y - CLEARANCE < y < node.y + node.height + CLEARANCE
+        for x, y in sampled(curves)
     )
+
+
+def _edge_path(curves: Sequence[Curve]) -> str:
+    start = curves[0][0]
+    parts = [f"M{start[0]:.1f},{start[1]:.1f}"]
+    for _, c1, c2, end in curves:
+        parts.append(f"C{c1[0]:.1f},{c1[1]:.1f} {c2[0]:.1f},{c2[1]:.1f} {end[0]:.1f},{end[1]:.1f}")
+    return " ".join(parts)
 
 
 def render(graph: Layout, state: GraphState | None = None, caption: str = "") -> str:
@@ -280,7 +339,8 @@ def render(graph: Layout, state: GraphState | None = None, caption: str = "") ->
             failed = state is not None and topic in state.failed_topics
             attrs.update(stroke=svg.ALERT if failed else "#8a939e", stroke_width=2 if failed else 1.2,
                          marker_end=f"url(#dura-arrow-{'alert' if failed else 'flow'})")  # fmt: skip
-        body.append(svg.element("path", d=_edge_path(a, b, bottom), **attrs))
+        curves = edge_curves(a, b, bottom, graph.nodes.values())
+        body.append(svg.element("path", d=_edge_path(curves), **attrs))
     for node in graph.nodes.values():
         body.append(_node(node, graph.info.get(node.key, ()), state))
     x = MARGIN

@@ -293,7 +293,7 @@ class LiveState:
             "plan": self.plan.id,
             "state": self.plan.state.value,
             "title": chart.title,
-            "svg": svg.inline(gantt.render(chart)),
+            "svg": svg.inline(gantt.render(chart, titled=False)),  # the page shows the title
             "steps": [
                 {"index": s.index, "label": s.label, "state": s.state, "details": s.details}
                 for s in chart.steps
@@ -315,6 +315,8 @@ class LiveState:
                     "pid": lifecycle.pid if lifecycle else None,
                     "reason": (lifecycle.reason if lifecycle else "")
                     or (record.reason if record else ""),
+                    # what its process wrote last when it failed: its exception
+                    "output": list(lifecycle.output) if lifecycle else [],
                     "faults": record.fault_count if record else 0,
                     "max_faults": spec.max_faults if isinstance(spec, FunctionalitySpec) else None,
                     "permanent": state.states.get(name) == "permanently faulty",

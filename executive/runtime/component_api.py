@@ -128,6 +128,7 @@ def listed(launcher: Launcher, state: ComponentState) -> ComponentEntry:
         signal=state.signal,
         reason=state.reason,
         stamp=state.stamp,
+        output=state.output,
     )
 
 

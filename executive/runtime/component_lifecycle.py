@@ -350,16 +350,26 @@ class LifecycleControl:
         run = slot.run
         if run is None or run.process is not process:
             raise ComponentError(f"'{process.name}' (pid {process.pid}) was not started here")
+        lost = bool(how)  # its host was lost: its log went with it
         how = how or describe_exit(exit_code, signum)
+        output = process.output
+        failed = not run.stopping and not lost and (exit_code != 0 or signum is not None)
+        # a signal's victim did not say why: its last words are not its reason
+        said = output if signum is None else ()
+        told = explained(how, process.name, said) if failed else how
         with self._lock:
             if run.failure:
                 state, reason = Lifecycle.FAILED, run.failure
             elif run.stopping:
                 state, reason = Lifecycle.STOPPED, slot.state.reason or "stopped"
             elif not run.ready:
-                state, reason = Lifecycle.FAILED, f"{how} before it was ready"
+                early = f"{how} before it was ready"
+                state, reason = (
+                    Lifecycle.FAILED,
+                    (explained(early, process.name, said) if failed else early),
+                )
             else:
-                state, reason = Lifecycle.EXITED, how
+                state, reason = Lifecycle.EXITED, told
             process.finish(f"{state.value}: {how}")
             self._set(
                 slot,
@@ -368,11 +378,12 @@ class LifecycleControl:
                 exit_code=exit_code,
                 signum=signum,
                 reason=reason,
+                output=output if failed else None,
             )
             slot.run = None
             run.exited.set()
             run.woken.set()
-        self._on_process_end(process.name, run.stopping, how)
+        self._on_process_end(process.name, run.stopping, told)
 
     # --- commands ---------------------------------------------------------------------
 
@@ -438,11 +449,24 @@ class LifecycleControl:
         exit_code: int | None = None,
         signum: int | None = None,
         reason: str = "",
+        output: tuple[str, ...] | None = None,
     ) -> ComponentState:
-        """Record a new state (with ``self._lock`` held: keeps the order)."""
+        """Record a new state (with ``self._lock`` held: keeps the order). What its
+        process wrote last when it last failed stays with it (``output``) until it fails
+        again: a restarted component still tells why it had to be."""
+        if output is None:
+            output = slot.state.output
         new = ComponentState(
-            slot.spec.name, state, pid, exit_code, signum, reason, stamp=time.time()
+            slot.spec.name, state, pid, exit_code, signum, reason, time.time(), output
         )
         slot.state = new
         self.records.record(new)
         return new
+
+
+def explained(how: str, name: str, output: tuple[str, ...]) -> str:
+    """How a component's process ended, with the last line it wrote (its exception) and
+    where to read the rest: ``exited with code 1: TypeError: ... (dura component logs
+    barista)``."""
+    said = f": {output[-1].strip()}" if output else ""
+    return f"{how}{said} (dura component logs {name})"

@@ -290,7 +290,7 @@ class HostAgent:
         if self._tracker is not None and not again:
             self._tracker.untrack(process.name)
         end = api.ProcessExit(process.name, instance or "?", process.pid, exit_code, signum,
-                              stamp=time.time())  # fmt: skip
+                              stamp=time.time(), output=process.output)  # fmt: skip
         bus = self.bus
         if bus is not None:
             with contextlib.suppress(Exception):  # no executive: it learnt of the end anyway

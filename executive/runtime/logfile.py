@@ -52,6 +52,27 @@ class LogFile:
             self._fd = -1
 
 
+LAST_WORDS = 5  # lines of a process's output kept with its end
+NOTE = "--- dura: "  # a line of dura's own in a log (see ComponentProcess.note)
+
+
+def last_words(lines: list[str], keep: int = LAST_WORDS) -> tuple[str, ...]:
+    """What a process said last, to show with its end: the end of its last Python
+    traceback (the failing line and the exception) if it printed one, else its last
+    ``keep`` lines (dura's own notes left out)."""
+    own = [line for line in lines if line.strip() and not line.startswith(NOTE)]
+    starts = [
+        i for i, line in enumerate(own) if line.startswith("Traceback (most recent call last)")
+    ]
+    if not starts:
+        return tuple(own[-keep:])
+    traceback = own[starts[-1] + 1 :]
+    frames = [i for i, line in enumerate(traceback) if line.startswith("  File ")]
+    shown = traceback[frames[-1] :] if frames else traceback
+    # the exception's lines are those that follow the last frame's source
+    return tuple(shown[-keep:])
+
+
 def tail(path: Path, lines: int) -> list[str]:
     """The last lines of a log file (none if it does not exist)."""
     if lines <= 0 or not path.is_file():

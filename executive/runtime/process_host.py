@@ -35,6 +35,7 @@ class ProcessHandle(Protocol):
 
     name: str
     pid: int  # its supervisor's, on its host
+    output: tuple[str, ...]  # once it ended: what it said last (its exception)
 
     def program(self) -> int:
         """The component's own process (its supervisor's pid until it is known)."""

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
-from executive.runtime.logfile import LogFile
+from executive.runtime.logfile import LogFile, last_words, tail
 from executive.runtime.spawn import command, exit_status, signal_group, spawn
 from knowledge.errors import ComponentError
 
@@ -43,6 +43,7 @@ log = logging.getLogger("dura.launcher")
 
 T = TypeVar("T")
 
+LOG_LINES_READ = 60  # lines of its log read at a process's end for its last words
 SUPERVISOR = Path(__file__).with_name("supervisor.py")
 
 
@@ -59,6 +60,7 @@ class ComponentProcess:
     log: LogFile
     program_pid: int | None = None
     reaped: bool = False
+    output: tuple[str, ...] = ()  # what it said last (logfile.last_words), once reaped
 
     def program(self) -> int:
         """The component's own process, below its supervisor (the supervisor's pid
@@ -254,6 +256,7 @@ class ProcessThread:
         if process.pipe >= 0:
             self._pump(process)
             self._close_pipe(process)
+        process.output = last_words(tail(process.log.path, LOG_LINES_READ))
         try:
             self._on_exit(process, *exit_status(returncode))
         finally:

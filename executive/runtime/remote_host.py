@@ -59,6 +59,7 @@ class RemoteProcess:
     started: bool = False  # told to the lifecycle: its end may be told now
     ended: bool = False
     pending: tuple[int | None, int | None, str] | None = None  # an end that came first
+    output: tuple[str, ...] = ()  # what it said last, as its host agent read it
 
     def program(self) -> int:
         return self.program_pid or self.pid
@@ -185,6 +186,7 @@ class RemoteHost(ProcessHost):
         with self._lock:
             process = self._processes.get(end.instance)
         if process is not None:
+            process.output = end.output
             self._end(process, end.exit_code, end.signal, "")
 
     def _end(self, process: RemoteProcess, exit_code: int | None, signum: int | None,

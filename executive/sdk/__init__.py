@@ -12,7 +12,8 @@ An author subclasses :class:`Functionality` or :class:`Behavior` and overrides t
 - :mod:`.framework` — the framework side of a component process: lifecycle commands,
   the main loop (an author never calls it);
 - :mod:`.goal` — a behavior's goals, one at a time, each on a thread of its own
-  (:class:`GoalFailed`, :class:`GoalCancelled`);
+  (:class:`GoalFailed`: impossible in the world, the planner plans again;
+  :class:`GoalTimedOut`: a fault; :class:`GoalCancelled`);
 - :mod:`.fault_injection` — a component made to misbehave on purpose, for tests.
 """
 
@@ -22,7 +23,7 @@ from executive.bus.session import Message
 from executive.sdk.behavior import Behavior
 from executive.sdk.component import Functionality, Rate
 from executive.sdk.fault_injection import FaultMode
-from executive.sdk.goal import GoalCancelled, GoalFailed
+from executive.sdk.goal import GoalCancelled, GoalFailed, GoalTimedOut
 
 __all__ = [
     "Behavior",
@@ -30,6 +31,7 @@ __all__ = [
     "Functionality",
     "GoalCancelled",
     "GoalFailed",
+    "GoalTimedOut",
     "Message",
     "Rate",
 ]

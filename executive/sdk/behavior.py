@@ -17,10 +17,10 @@ from executive.bus import keys
 from executive.bus.payloads import GoalFeedback
 from executive.bus.session import Bus, Message
 from executive.sdk.component import Component
-from executive.sdk.goal import GoalCancelled, GoalFailed, GoalRunner
+from executive.sdk.goal import GoalCancelled, GoalFailed, GoalRunner, GoalTimedOut
 from knowledge.description import Kind
 
-__all__ = ["Behavior", "GoalCancelled", "GoalFailed"]
+__all__ = ["Behavior", "GoalCancelled", "GoalFailed", "GoalTimedOut"]
 
 WAIT_STEP = 0.05  # seconds between two looks of Behavior.wait_until
 
@@ -51,10 +51,13 @@ class Behavior(Component, ABC):
 
     @final
     def watch(self, *topics: str, timeout: float) -> None:
-        """Watch inputs a goal needs (call in :meth:`on_start`): :meth:`check_inputs`
-        fails the goal when one of them has been silent for ``timeout`` seconds, counted
-        from its last message, the goal's start and the last resume. The newest message
-        of each is in :attr:`latest`."""
+        """Watch inputs a goal needs (call in :meth:`on_start`). A goal waits for the
+        first message of each before :meth:`execute` begins, so :attr:`latest` holds the
+        newest payload of every watched topic from the first goal on (none within
+        ``timeout`` seconds of the goal's start: the goal times out). Then
+        :meth:`check_inputs` fails the goal when one of them has been silent for
+        ``timeout`` seconds, counted from its last message, the goal's start and the last
+        resume. Both are :class:`GoalTimedOut`: faults of the behavior."""
 
         def hearing(topic: str) -> Callable[[Message], None]:
             def heard(message: Message) -> None:
@@ -67,6 +70,23 @@ class Behavior(Component, ABC):
             self._input_timeout[topic] = timeout
             self.subscribe(topic, hearing(topic))
 
+    def _await_first_messages(self) -> None:
+        """Wait until every watched input has sent a message (the framework calls it
+        before :meth:`execute`).
+
+        Raises:
+            GoalTimedOut: an input sent none within its timeout of the goal's start.
+        """
+        waited = 0.0
+        while missing := [t for t in self._input_timeout if t not in self.latest]:
+            topic = missing[0]
+            if waited > self._input_timeout[topic]:
+                raise GoalTimedOut(
+                    f"no {topic} yet: none came within {self._input_timeout[topic]:g} s"
+                )
+            self.sleep(WAIT_STEP)
+            waited += WAIT_STEP
+
     @final
     def check_inputs(self) -> None:
         """Raise :class:`GoalFailed` if a watched input has gone silent."""
@@ -75,19 +95,19 @@ class Behavior(Component, ABC):
             wall = now - max(self._heard.get(topic, 0.0), self._goal_runner.fresh_since)
             silent = self.clock.robot(wall)  # the timeout is robot time
             if silent > timeout:
-                raise GoalFailed(f"no {topic} for {silent:.1f} s")
+                raise GoalTimedOut(f"no {topic} for {silent:.1f} s")
 
     @final
     def wait_until(self, condition: Callable[[], bool], timeout: float, what: str) -> None:
         """Wait (running time) until ``condition()`` holds, checking the watched inputs.
 
         Raises:
-            GoalFailed: not within ``timeout`` seconds ("no <what> within ... s").
+            GoalTimedOut: not within ``timeout`` seconds ("no <what> within ... s").
         """
         waited = 0.0
         while not condition():
             if waited > timeout:
-                raise GoalFailed(f"no {what} within {timeout:g} s")
+                raise GoalTimedOut(f"no {what} within {timeout:g} s")
             self.sleep(WAIT_STEP)
             self.check_inputs()
             waited += WAIT_STEP

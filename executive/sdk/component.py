@@ -178,8 +178,14 @@ class Component:
 
     @final
     def subscribe(self, topic: str, handler: Callable[[Message], None]) -> None:
-        """Call ``handler`` for each message on ``topic/<topic>`` while running (a topic
-        the description lists under ``subscribes``; the bus refuses the others)."""
+        """Call ``handler(message)`` for each message on ``topic/<topic>`` while running (a
+        topic the description lists under ``subscribes``; the bus refuses the others).
+
+        ``message`` is a :class:`~executive.bus.session.Message`: ``message.payload`` is
+        the dict that was published (``message["celsius"]`` reads one field of it),
+        ``message.stamp`` its ``stamp``. The handler runs on the bus's thread: keep it
+        short. An exception escaping it ends the process (exit code 1), a fault.
+        """
 
         def deliver(message: Message) -> None:
             if not self.running:

@@ -2,8 +2,18 @@
 
 A goal command starts :meth:`Behavior.execute <executive.sdk.behavior.Behavior.execute>`
 on a new thread; what it returns, raises or is cancelled with becomes the goal's
-result on ``component/<name>/result``. :class:`GoalFailed` and :class:`GoalCancelled`
-are what an author raises and meets.
+result on ``component/<name>/result``. :class:`GoalFailed`, :class:`GoalTimedOut` and
+:class:`GoalCancelled` are what an author raises and meets.
+
+A goal fails in one of two ways, and the executive treats them apart:
+
+- **in the world**: :class:`GoalFailed` says the goal cannot be done as the world is
+  (the door is locked, the object is not there). The plan's step fails and the planner
+  plans again; the behavior is not at fault: it is neither restarted nor counted faulty.
+- **as a fault**: any other exception escaping ``execute``, a crash of the process, and
+  :class:`GoalTimedOut` (an input gone silent, a condition never met in time). The
+  behavior is restarted up to its ``max_restarts``, its faults are counted, and beyond
+  them its task fails and the planner plans again without it.
 """
 
 from __future__ import annotations
@@ -24,7 +34,15 @@ if TYPE_CHECKING:
 
 
 class GoalFailed(Exception):
-    """Raise in :meth:`Behavior.execute` to fail the goal; the message is the reason."""
+    """Raise in :meth:`Behavior.execute` when the goal cannot be done in the world as it
+    is; the message is the reason. The step fails and the planner plans again: not a
+    fault of the behavior (no restart, no fault counted)."""
+
+
+class GoalTimedOut(GoalFailed):
+    """The goal waited too long: a watched input went silent, or
+    :meth:`Behavior.wait_until`'s condition did not come true in time. A fault, as an
+    exception or a crash is: the behavior is restarted and its faults are counted."""
 
 
 class GoalCancelled(Exception):
@@ -100,9 +118,10 @@ class GoalRunner:
 
     def _run(self, goal_id: str, goal: dict[str, Any]) -> None:
         behavior = self.behavior
-        status, value, reason = GoalStatus.FAILED, {}, ""
+        status, value, reason, fault = GoalStatus.FAILED, {}, "", True
         self.fresh_since = time.monotonic()
         try:
+            behavior._await_first_messages()
             returned = behavior.execute(goal)
             if returned is not None and not isinstance(returned, dict):
                 raise GoalFailed(f"execute returned a {type(returned).__name__}, not a dict")
@@ -111,12 +130,13 @@ class GoalRunner:
         except GoalCancelled as e:
             status, reason = GoalStatus.CANCELLED, str(e)
         except GoalFailed as e:
-            reason = str(e)
+            reason, fault = str(e), isinstance(e, GoalTimedOut)
             behavior.log.warning("goal %s failed: %s", goal_id, reason)
         except Exception as e:
-            reason = f"{type(e).__name__}: {e}"
+            # the traceback is in the component's log: say where
+            reason = f"{type(e).__name__}: {e} (dura component logs {behavior.name})"
             behavior.log.exception("goal %s failed", goal_id)
         with self.framework.changed:
             self.goal_id = None
-        result = GoalResult(behavior.name, goal_id, status, value, reason, time.time())
+        result = GoalResult(behavior.name, goal_id, status, value, reason, time.time(), fault)
         behavior.bus.publish(keys.component(behavior.name, "result"), result.to_payload())

@@ -50,7 +50,13 @@ REPLAN_GRACE = 3.0  # robot seconds a failed plan step's functionalities wait fo
 # as the step's failure) with its configuration still usable; a task the scheduler
 # cancelled had no place for its configuration
 REPLANNED = frozenset(
-    {TaskEnd.BEHAVIOR_FAILED, TaskEnd.BEHAVIOR_CANCELLED, TaskEnd.BEHAVIOR_FAULTY, TaskEnd.USER}
+    {
+        TaskEnd.BEHAVIOR_FAILED,
+        TaskEnd.GOAL_FAILED,
+        TaskEnd.BEHAVIOR_CANCELLED,
+        TaskEnd.BEHAVIOR_FAULTY,
+        TaskEnd.USER,
+    }
 )
 
 

@@ -186,5 +186,7 @@ class BehaviorSupervisor:
             self._end(
                 task, TaskEnd.BEHAVIOR_CANCELLED, result.reason or "the behavior cancelled it"
             )
+        elif not result.fault:  # impossible in the world: the planner plans again
+            self._end(task, TaskEnd.GOAL_FAILED, result.reason or "the goal failed")
         else:
             self.failed(task, result.reason or "the behavior failed")

@@ -52,6 +52,7 @@ class TaskEnd(enum.Enum):
 
     SUCCEEDED = "succeeded"  # its behavior achieved the goal
     BEHAVIOR_FAILED = "behavior_failed"  # its behavior failed beyond its restarts, or never ran
+    GOAL_FAILED = "goal_failed"  # its behavior found the goal impossible in the world (no fault)
     BEHAVIOR_CANCELLED = "behavior_cancelled"  # its behavior gave the goal up
     BEHAVIOR_FAULTY = "behavior_faulty"  # its behavior was marked permanently faulty
     UNSCHEDULABLE = "unschedulable"  # the scheduler found no place for it

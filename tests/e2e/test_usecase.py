@@ -135,7 +135,7 @@ def test_functionalities_needed_by_later_steps_keep_running_between_the_steps(
 
 
 def test_the_readme_example_waits_for_lidar_before_crashing_it(dura_robot: Start) -> None:
-    # the README's planner-in-the-loop test, as written there (with the use case robot)
+    # the planner-in-the-loop test of docs/how-to/testing.md, as written there (use case robot)
     robot: RobotProcess = dura_robot(USECASE, time_scale=10)
     goal = robot.submit_goal("(robot_at office)")
     robot.wait_for_component("lidar", "ready", timeout=60)  # started for the drive

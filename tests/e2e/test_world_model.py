@@ -130,7 +130,7 @@ def test_a_dry_run_shows_a_plan_for_the_open_goals_and_executes_nothing(
     robot.wait_for_event("START", "move_to", timeout=60)
     dry = run_dura("plan", "--dry-run", cwd=robot.folder)
     assert dry.returncode == 0, dry.stderr
-    assert f"for goals {goal} (nothing executed)" in dry.stdout, dry.stdout
+    assert f"for goal {goal} (nothing executed)" in dry.stdout, dry.stdout
     assert "take_picture(office)" in dry.stdout
     robot.wait_for(goal, "achieved", timeout=60)
     assert len(robot.events("PLAN_STORED")) == 1  # the dry run stored and ran nothing

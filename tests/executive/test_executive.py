@@ -220,6 +220,10 @@ def test_faults_are_injected_through_the_cli_and_a_bad_one_is_refused_in_one_lin
         crashed = dura("component", "inject", "lidar", "crash", "--option", "exit_code=3")
         assert crashed.returncode == 0, crashed.stderr
         assert wait_for(lambda: "exited with code 3" in dura("component", "logs", "lidar").stdout)
+        # restarted, the list still says why it ended, and where to read the rest
+        listed = dura("component", "list").stdout
+        assert "lidar wrote last when it last failed:\n  " in listed
+        assert "injected fault: crash" in listed.split("wrote last")[1]
 
 
 @pytest.mark.slow

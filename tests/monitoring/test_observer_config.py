@@ -211,8 +211,8 @@ def test_third_party_observer_types_come_from_the_entry_point_group(tmp_path: Pa
     assert observer_class("beacon") is None
 
 
-def test_the_readme_example_of_every_observer_type_is_valid(tmp_path: Path) -> None:
-    readme = (ROOT / "README.md").read_text()
+def test_the_documented_example_of_every_observer_type_is_valid(tmp_path: Path) -> None:
+    readme = (ROOT / "docs" / "how-to" / "observers.md").read_text()
     start = readme.index("```yaml\nobservers:\n") + len("```yaml\nobservers:\n")
     path = tmp_path / "observers.yaml"
     path.write_text(readme[start : readme.index("```", start)])

@@ -1,13 +1,14 @@
 """A simulated photographer: after ``duration`` seconds, returns the newest ``image``.
 
-The goal fails when no image newer than the goal came within ``image_timeout`` seconds.
+The goal times out (a fault) when no image newer than the goal came within
+``image_timeout`` seconds.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from executive.sdk import Behavior, GoalFailed, Message
+from executive.sdk import Behavior, GoalTimedOut, Message
 
 POLL = 0.05
 
@@ -29,7 +30,7 @@ class TakePicture(Behavior):
         self.sleep(self.duration)
         while self.latest is None or self.latest[0] < began:
             if self.clock.monotonic() - began > self.duration + self.image_timeout:
-                raise GoalFailed(f"no image within {self.image_timeout:g} s")
+                raise GoalTimedOut(f"no image within {self.image_timeout:g} s")
             self.sleep(POLL)
         image = self.latest[1]
         return {

@@ -72,7 +72,7 @@ def lifecycle(entry: ComponentEntry) -> ComponentState:
     """A listed component's state as ``component/<name>/state`` reports it."""
     return ComponentState(
         entry.component, entry.state, entry.pid, entry.exit_code, entry.signal, entry.reason,
-        entry.stamp,
+        entry.stamp, entry.output,
     )  # fmt: skip
 
 

@@ -65,6 +65,7 @@ class ProcessExit(Payload):
     exit_code: int | None = None
     signal: int | None = None
     stamp: float = 0.0
+    output: tuple[Text, ...] = ()  # what it said last: the end of its traceback
 
 
 def spawn(name: str) -> Verb[Spawn, Spawned]:

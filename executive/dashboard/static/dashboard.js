@@ -6,6 +6,8 @@
 const OPEN_GOALS = new Set(["pending", "planned", "executing"]);
 const SPARK_SECONDS = 300;
 const EVENTS_SHOWN = 400;
+const STALE_SECONDS = 10;  // an observation older than this no longer says how things are
+const VIEWS = ["status", "goals", "plan", "components"];  // "live" once each has come
 
 const page = {
   events: [],
@@ -16,6 +18,7 @@ const page = {
   selectedStep: null,
   selectedNode: null,
   clockSkew: 0,
+  loaded: new Set(),  // the views that came since the stream opened
 };
 
 function $(id) { return document.getElementById(id); }
@@ -34,6 +37,13 @@ function el(tag, attrs, ...children) {
     node.append(child instanceof Node ? child : document.createTextNode(String(child)));
   }
   return node;
+}
+
+// A number as every view of dura writes it (executive.bus.wording.number): whole numbers
+// as they are, others rounded to two decimals without trailing zeros (0.05118 -> 0.05).
+function number(value) {
+  const n = Number(value);
+  return Number.isInteger(n) ? String(n) : String(Number(n.toFixed(2)));
 }
 
 function badge(state) {
@@ -64,6 +74,9 @@ function showLink() {
   if (!page.connected) {
     link.className = "link connecting";
     link.textContent = "reconnecting…";
+  } else if (!VIEWS.every((v) => page.loaded.has(v))) {  // not "live" over an empty page
+    link.className = "link connecting";
+    link.textContent = "loading…";
   } else if (!page.alive || page.problem) {
     link.className = "link down";
     link.textContent = page.alive ? "executive: " + page.problem : "executive not running";
@@ -122,7 +135,9 @@ function showComponents(data) {
     el("td", null, badge(c.state), c.diagnosed ? " diagnosed" : ""),
     el("td", null, c.max_faults ? `${c.faults} / ${c.max_faults}` : c.faults || "0"),
     el("td", null, c.tasks.join(", ")),
-    el("td", { class: "reason" }, c.reason || ""),
+    el("td", { class: "reason" }, c.reason || "",
+      c.output.length && c.state !== "running"  // why it last failed, while that matters
+        ? el("pre", { class: "output" }, c.output.join("\n")) : null),
   ));
   fill(document.querySelector("#component-table tbody"), rows);
   showDiagnosis(data.diagnosis || {});
@@ -200,7 +215,7 @@ function sparkline(points, name) {
   polyline.setAttribute("stroke", "#2f6fb0");
   polyline.setAttribute("stroke-width", "1.5");
   picture.append(polyline);
-  const label = `${name} from ${low.toPrecision(3)} to ${high.toPrecision(3)} in the last ${Math.round(seconds)} s`;
+  const label = `${name} from ${number(low)} to ${number(high)} in the last ${Math.round(seconds)} s`;
   return el("span", { class: "spark", title: label }, picture, name);
 }
 
@@ -211,10 +226,13 @@ function drawObservations() {
     while (track.history.length && track.history[0][0] < cutoff) track.history.shift();
   }
   const rows = [...page.tracks.values()].sort((a, b) => a.key.localeCompare(b.key)).map((t) => {
-    const failed = typeof t.observation === "number" && t.observation < 0;
-    const values = Object.entries(t.values).map(([k, v]) => `${k} ${Number(v).toPrecision(4)}`);
+    // an old failure (its component stopped, say) is grey, not red: it is no longer news
+    const stale = now - t.stamp > STALE_SECONDS;
+    const failed = !stale && typeof t.observation === "number" && t.observation < 0;
+    const values = Object.entries(t.values).map(([k, v]) => `${k} ${number(v)}`);
     const names = Object.keys(t.values);
-    return el("tr", { "data-observer": t.observer, "data-failed": failed ? "yes" : "no" },
+    return el("tr", { "data-observer": t.observer, "data-failed": failed ? "yes" : "no",
+                      class: stale ? "stale" : null },
       el("td", null, t.observer, el("br"), el("small", null, t.type)),
       el("td", { class: "mono" }, t.resource.join(", ") +
         (t.callerids.length ? ` from ${t.callerids.join(", ")}` : "")),
@@ -354,6 +372,10 @@ function listen() {
   const source = new EventSource("/api/stream");
   const on = (name, handler) => source.addEventListener(name, (message) => {
     handler(JSON.parse(message.data));
+    if (!page.loaded.has(name)) {
+      page.loaded.add(name);
+      showLink();
+    }
   });
   on("status", showStatus);
   on("goals", showGoals);
@@ -363,7 +385,7 @@ function listen() {
   on("events", showEvents);
   on("event", addEvents);
   on("observation", addObservations);
-  source.addEventListener("open", () => { page.connected = true; showLink(); });
+  source.addEventListener("open", () => { page.connected = true; page.loaded.clear(); showLink(); });
   source.addEventListener("error", () => { page.connected = false; showLink(); });
 }
 

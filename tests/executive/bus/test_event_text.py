@@ -33,7 +33,7 @@ LOGGED = [
     (event("PLAN_START", "plan 3", steps=1, goals=[3, 4]), "plan 3: 1 step for goals 3, 4"),
     (event("START", "move_to(dock, lab)", plan=1, step=0, action="move_to",
            args=["dock", "lab"], undo=[["robot_at", ["dock"], True]]),
-     "move_to(dock, lab) (plan 1, step 0); at start: not (robot_at dock)"),
+     "move_to(dock, lab) (plan 1, step 0); as it starts: (robot_at dock) no longer holds"),
     (event("END", "take_picture(lab)", plan=2, step=3, action="take_picture", args=["lab"],
            result={"place": "lab", "brightness": 179.7912, "image_stamp": 1_700_000_001.3912249}),
      "take_picture(lab) (plan 2, step 3); result: place lab, brightness 179.79, "

@@ -118,7 +118,7 @@ def test_kb_show_finds_the_robots_knowledge_base_in_the_working_folder(
 
 def test_version_names_the_engines(dura: Dura) -> None:
     data = json.loads(dura("version", "--json").stdout)
-    assert data["dura"] == "0.1.0"
+    assert data["dura"] == "0.2.0"
     for name in ("unified-planning", "up-kairos", "clingo", "eclipse-zenoh"):
         assert data[name] != "not installed"
 

@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import io
 import json
+import logging
+import re
 from typing import Any
 
 from executive.bus.schema import plain
 from executive.bus.session import Message
-from executive.cli.demo_timeline import Timeline, replans
+from executive.cli.demo_timeline import Timeline, WarningLines, replans
 from knowledge.records import Event
 
 T0 = 1_700_000_000.0
@@ -84,3 +86,48 @@ def test_the_timeline_shows_each_plan_as_it_starts_and_keeps_causes_before_effec
     assert kinds.count("COMPONENT_READY") == 1
     assert [p["id"] for p in timeline.plans] == [1, 2, 3]
     assert not any("[[" in line or "{'" in line for line in lines)
+
+
+def test_a_warning_is_a_line_of_the_timeline_in_its_format() -> None:
+    out = io.StringIO()
+    timeline = Timeline(quiet=False, everything=False, out=out)
+    logger = logging.getLogger("dura.test_timeline")
+    logger.propagate = False
+    logger.addHandler(WarningLines(timeline))
+    try:
+        logger.info("not shown")
+        logger.warning("'%s' ignored SIGTERM", "lidar")
+    finally:
+        logger.handlers.clear()
+        logger.propagate = True
+    timeline.close()
+    assert re.fullmatch(
+        r" +\d+\.\ds  WARNING +dura\.test_timeline: 'lidar' ignored SIGTERM\n", out.getvalue()
+    )
+
+
+def test_each_task_is_named_with_its_step_the_first_time_a_line_names_it() -> None:
+    out = io.StringIO()
+    timeline = Timeline(quiet=False, everything=False, out=out)
+    timeline.start = T0
+    log = Log()
+    log(0.1, "TASK_REQUESTED", "task 1 move_to(dock, lab)")
+    log(0.2, "CONFIGURATION", "lidar", start=["lidar"], stop=[], resume=[],
+        why="task 1 requested")  # fmt: skip
+    log(0.3, "TASK_STARTED", "task 1 move_to(dock, lab)")
+    log(0.4, "START", "move_to(dock, lab)", plan=1, step=0, undo=[])
+    log(1.0, "TASK_REQUESTED", "task 2 take_picture(lab)")
+    log(1.1, "TASK_STARTED", "task 2 take_picture(lab)")
+    log(1.2, "START", "take_picture(lab)", plan=1, step=1, undo=[])
+    log(1.5, "CONFIGURATION", "nothing", start=[], stop=["lidar"], resume=[],
+        why="task 2 succeeded")  # fmt: skip
+    for event in log.events:
+        timeline.on_event(message(plain(event)))
+    timeline.close()
+    texts = [line.split(None, 2)[2] for line in out.getvalue().splitlines()]
+    assert texts == [
+        "task 1 move_to(dock, lab) requested: start lidar",
+        "move_to(dock, lab) (plan 1, step 0, task 1)",
+        "take_picture(lab) (plan 1, step 1, task 2)",
+        "task 2 succeeded: stop lidar; nothing runs",
+    ]

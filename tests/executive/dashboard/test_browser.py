@@ -7,6 +7,7 @@ One robot runs for the whole module: it works on its goals while the tests look 
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import threading
 import time
@@ -196,3 +197,47 @@ def test_graph_with_diagnoses_draws_the_running_robots_state(
     assert set(states) == set(robot.robot.components)
     assert set(states.values()) <= {"running", "starting", "stopping", "paused", "stopped",
                                     "faulty", "permanently faulty"}  # fmt: skip
+
+
+def test_the_page_rounds_measured_values_and_draws_the_plan_s_title_once(
+    robot: RobotProcess, browser: Browser
+) -> None:
+    values = browser.wait_for(
+        "(() => { const v = [...document.querySelectorAll('#observation-table tbody tr')]"
+        ".map(r => r.cells[3] && r.cells[3].textContent).filter(t => t);"
+        " return v.length ? v : null; })()",
+        30,
+    )
+    shown = [pair for cell in values for pair in cell.split(", ")]
+    assert shown and all(re.fullmatch(r"\w+ -?\d+(\.\d{1,2})?", pair) for pair in shown), shown
+    browser.wait_for("document.querySelectorAll('#plan-chart g.step').length > 0", 60)
+    title = browser.evaluate("document.getElementById('plan-title').textContent")
+    drawn = browser.evaluate(
+        "[...document.querySelectorAll('#plan-chart text')].map(t => t.textContent)"
+    )
+    assert title.startswith("plan ") and title not in drawn
+
+
+def test_the_badge_says_live_only_over_a_full_page_and_an_old_failure_is_grey(
+    browser: Browser,
+) -> None:
+    browser.wait_for("document.getElementById('link').textContent === 'live'", 30)
+    # a page that has not yet had its plan (the stream just opened) is not "live"
+    loading = browser.evaluate(
+        "(() => { page.loaded.delete('plan'); showLink();"
+        " const said = document.getElementById('link').textContent;"
+        " page.loaded.add('plan'); showLink(); return said; })()"
+    )
+    assert loading == "loading…"
+    assert browser.evaluate("document.getElementById('link').textContent") == "live"
+    row = (
+        "(() => { const now = Date.now() / 1000 - page.clockSkew;"
+        " page.tracks.set('probe', {key: 'probe', observer: 'probe', type: 'timeout',"
+        " resource: ['scan'], callerids: [], observation: -4, message: 'timeout', verbose: '',"
+        " values: {}, history: [], stamp: now - AGE}); drawObservations();"
+        " const r = document.querySelector('#observation-table tr[data-observer=\"probe\"]');"
+        " const seen = [r.dataset.failed, r.className];"
+        " page.tracks.delete('probe'); drawObservations(); return seen; })()"
+    )
+    assert browser.evaluate(row.replace("AGE", "1")) == ["yes", ""]
+    assert browser.evaluate(row.replace("AGE", "115")) == ["no", "stale"]  # no red row for it

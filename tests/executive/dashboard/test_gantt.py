@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 from typing import Any
 
 import pytest
@@ -11,7 +12,7 @@ from executive.bus.reports import ExecutionStatus, ExecutorTask
 from executive.bus.schema import read
 from executive.dashboard import gantt
 from executive.planning.partial_order import PartialOrderPlan, Precedence, Step, Timepoint
-from knowledge.records import Event, Plan
+from knowledge.records import Event, Plan, PlanState
 from tests.executive.dashboard.pictures import groups, parse, texts, tooltip
 
 PLAN: Plan = read(Plan, {
@@ -141,3 +142,18 @@ def test_a_step_adopted_from_the_plan_before_ran_since_that_plans_dispatch() -> 
     plan = dataclasses.replace(PLAN, steps=PLAN.steps[:1])
     (step,) = gantt.live_gantt(plan, execution, events, [], now=1004.0).steps
     assert step.ran == (-10.0, None)
+
+
+def test_a_finished_plan_is_drawn_on_its_own_span_and_one_goal_is_said_so() -> None:
+    done = dataclasses.replace(PLAN, state=PlanState.SUCCEEDED, goal_ids=(4,))
+    chart = gantt.live_gantt(done, ExecutionStatus(), EVENTS, TASKS, now=1100.0)
+    assert chart.now is None  # 100 s later: no axis that grows with the clock
+    assert chart.title == "plan 2: succeeded, by kairos, for goal 4"
+    drawn = texts(parse(gantt.render(chart)))
+    ticks = [float(t.removesuffix(" s")) for t in drawn if re.fullmatch(r"-?\d+ s", t)]
+    assert max(ticks) < 20 and "now" not in drawn  # its steps end at 12 s
+
+
+def test_the_page_s_chart_leaves_the_title_to_the_page() -> None:
+    assert live().title not in texts(parse(gantt.render(live(), titled=False)))
+    assert live().title in texts(parse(gantt.render(live())))

@@ -3,18 +3,24 @@ state (component states, diagnoses, fault counters, active configurations)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from executive.dashboard import graph
 from knowledge.description import RobotDescription
 from knowledge.robot import load_robot
-from tests.conftest import USECASE
+from tests.conftest import ROOT, USECASE
 from tests.executive.dashboard.pictures import groups, parse, texts, tooltip
 
 
 @pytest.fixture(scope="module")
 def robot() -> RobotDescription:
     return load_robot(USECASE)
+
+
+TRANSPORT = ROOT / "examples" / "transport" / "robot.yaml"
+ROS2 = ROOT / "examples" / "ros2" / "robot.yaml"
 
 
 def nodes(picture: str) -> dict[str, dict[str, str]]:
@@ -84,3 +90,22 @@ def test_the_robots_state_colours_the_components_and_marks_the_diagnosis(
     root = parse(picture)
     used = [p for p in root.iter("{http://www.w3.org/2000/svg}path") if p.get("data-used")]
     assert len(used) == 1 and "provides" in (used[0].get("class") or "")
+
+
+@pytest.mark.parametrize("description", [USECASE, TRANSPORT, ROS2])
+def test_no_edge_passes_through_a_box_it_does_not_join(description: Path) -> None:
+    layout = graph.layout(load_robot(description, domain=False))
+    bottom = layout.height - graph.LEGEND - 12.0
+    crossed = []
+    for edge in layout.edges:
+        a, b = layout.nodes[edge.source], layout.nodes[edge.target]
+        points = graph.sampled(graph.edge_curves(a, b, bottom, layout.nodes.values()))
+        for other in layout.nodes.values():
+            if other in (a, b):
+                continue
+            if any(
+                other.x < x < other.x + other.width and other.y < y < other.y + other.height
+                for x, y in points
+            ):
+                crossed.append(f"{a.name} -> {b.name} through {other.name}")
+    assert crossed == []

@@ -140,3 +140,16 @@ def test_without_a_plan_the_plan_view_says_so(state: LiveState) -> None:
 def test_an_event_reaches_the_page_with_its_readable_line(state: LiveState) -> None:
     state.add_event(event(9, "FAULT", "lidar", count=1, permanent=False, reason="crashed"))
     assert state.view("events")["events"][-1]["text"] == "lidar: fault 1: crashed"
+
+
+def test_a_failed_component_shows_what_it_wrote_last(state: LiveState) -> None:
+    output = ('  File "barista.py", line 7, in on_water', "TypeError: 'Message' object ...")
+    state.set_lifecycle(
+        ComponentState(
+            "lidar", Lifecycle.FAILED, exit_code=1, reason="exited ... (dura component logs lidar)",
+            output=output,
+        )
+    )  # fmt: skip
+    lidar = next(c for c in state.components_view()["components"] if c["name"] == "lidar")
+    assert lidar["reason"] == "exited ... (dura component logs lidar)"
+    assert lidar["output"] == list(output)

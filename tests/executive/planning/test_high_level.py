@@ -114,7 +114,7 @@ def test_the_plan_is_shown_as_a_timeline_with_the_state_of_each_step(robot: Robo
     shown = robot.dura("plan", "show")
     assert shown.returncode == 0, shown.stderr
     lines = shown.stdout.splitlines()
-    assert lines[0].startswith("plan 1: executing, by kairos, for goals 1")
+    assert lines[0].startswith("plan 1: executing, by kairos, for goal 1")
     assert lines[1].split()[:6] == ["#", "START", "DURATION", "STEP", "STATE", "TIMELINE"]
     assert "take_picture(office)" in shown.stdout and "running" in shown.stdout
     status = json.loads(robot.dura("status", "--json").stdout)
@@ -401,7 +401,8 @@ def test_a_dry_run_plans_on_the_live_state_and_changes_nothing(robot: Robot) -> 
     assert [(s["action"], s["args"]) for s in reply["steps"]] == [("take_picture", ["office"])]
     assert (len(robot.kb.plans()), len(robot.kb.events())) == (plans, events)
     shown = robot.dura("plan", "--dry-run")
-    assert f"for goals {goal['id']} (nothing executed)" in shown.stdout
+    assert f"for goal {goal['id']} (nothing executed)" in shown.stdout
+    assert "dry run: 1 step, makespan" in shown.stdout
     robot.runner.wait_for("take_picture(office)").end(None)
     assert wait_for(lambda: state_of(robot, goal["id"]) is GoalState.ACHIEVED, 30)
     assert "dry run: nothing to plan (no open goals)" in robot.dura("plan", "--dry-run").stdout

@@ -70,7 +70,11 @@ def test_a_killed_component_is_reported_exited_with_its_signal(
         os.kill(pid, signal.SIGKILL)
         assert r.states.wait(lambda p: p["state"] == "exited")
         state = ComponentState.from_payload(r.states.payloads[-1])
-        assert (state.signal, state.exit_code, state.reason) == (9, None, "killed by SIGKILL")
+        assert (state.signal, state.exit_code, state.reason) == (
+            9,
+            None,
+            "killed by SIGKILL (dura component logs lidar)",
+        )
         assert gone(pid)
         assert wait_for(lambda: r.kb.events(kind="COMPONENT_EXITED") != [])
         assert r.kb.events(kind="COMPONENT_EXITED")[0].data["signal"] == 9
@@ -82,7 +86,10 @@ def test_a_crash_fault_is_reported_with_its_exit_code(endpoint: str, tmp_path: P
         r.launcher.inject_fault("lidar", {"mode": "crash", "exit_code": 3})
         assert r.states.wait(lambda p: p["state"] == "exited")
         assert r.launcher.state("lidar").exit_code == 3
-        assert r.launcher.state("lidar").reason == "exited with code 3"
+        assert r.launcher.state("lidar").reason.startswith("exited with code 3: ")
+        assert r.launcher.state("lidar").reason.endswith(
+            "injected fault: crash (dura component logs lidar)"
+        )
 
 
 def test_a_component_that_never_gets_ready_fails_at_its_startup_timeout(
@@ -114,7 +121,25 @@ def test_a_component_that_exits_during_start_up_fails_with_its_exit_code(
     with rig(robot(quitter), endpoint, tmp_path) as r:
         state = r.launcher.start("lidar")
         assert (state.state, state.exit_code) == (Lifecycle.FAILED, 4)
-        assert state.reason == "exited with code 4 before it was ready"
+        assert state.reason == "exited with code 4 before it was ready (dura component logs lidar)"
+        assert state.output == ()  # it wrote nothing
+
+
+def test_a_component_that_raises_during_start_up_says_its_exception_and_where_to_read_more(
+    endpoint: str, tmp_path: Path
+) -> None:
+    raiser = usecase("lidar", command=("python", "-c", "{}['celsius']"))
+    with rig(robot(raiser), endpoint, tmp_path) as r:
+        state = r.launcher.start("lidar")
+        assert (state.state, state.exit_code) == (Lifecycle.FAILED, 1)
+        assert state.reason == (
+            "exited with code 1 before it was ready: KeyError: 'celsius' "
+            "(dura component logs lidar)"
+        )
+        assert state.output[-1] == "KeyError: 'celsius'"
+        assert state.output[0].startswith('  File "<string>", line 1')
+        assert wait_for(lambda: r.kb.events(kind="COMPONENT_FAILED") != [])
+        assert r.kb.events(kind="COMPONENT_FAILED")[-1].data["output"][-1] == "KeyError: 'celsius'"
 
 
 def test_a_bad_parameter_fails_the_start_with_the_components_message(
@@ -326,7 +351,8 @@ def test_a_restarted_move_to_warm_starts_from_its_achievements(
         r.launcher.inject_fault("move_to", "crash")
         result = handle.wait(10)
         assert result is not None and result.status is GoalStatus.FAILED
-        assert result.reason == "'move_to' exited with code 1"
+        assert result.reason.startswith("'move_to' exited with code 1: ")
+        assert result.reason.endswith("injected fault: crash (dura component logs move_to)")
         stored = r.kb.achievements("move_to")["progress"]
         assert stored["job"] == "move to dock" and stored["done"] > 0
         assert r.launcher.restart("move_to").state is Lifecycle.READY

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from executive.runtime.logfile import LogFile, tail
+from executive.runtime.logfile import LogFile, last_words, tail
 
 
 def test_a_log_file_rotates_before_it_grows_past_its_size(tmp_path: Path) -> None:
@@ -35,3 +35,33 @@ def test_the_tail_of_a_log_is_its_last_lines(tmp_path: Path) -> None:
     assert tail(path, 2) == ["b", "c"]
     assert tail(path, 0) == []
     assert tail(tmp_path / "missing.log", 5) == []
+
+
+TRACEBACK = """\
+--- dura: started barista (supervisor pid 42) 2026-11-27 10:00:00
+2026-11-27 10:00:01,000 barista INFO: ready
+2026-11-27 10:00:02,000 barista ERROR: unhandled exception in a handler: 'barista' ends
+Traceback (most recent call last):
+  File "/robot/sdk.py", line 10, in call
+    handler(message)
+  File "/robot/barista.py", line 7, in on_water
+    self.celsius = message["celsius"]
+                   ~~~~~~~^^^^^^^^^^^
+TypeError: 'Message' object is not subscriptable
+--- dura: exited: exited with code 1 2026-11-27 10:00:02
+"""
+
+
+def test_the_last_words_of_a_crash_are_its_failing_line_and_exception() -> None:
+    assert last_words(TRACEBACK.splitlines()) == (
+        '  File "/robot/barista.py", line 7, in on_water',
+        '    self.celsius = message["celsius"]',
+        "                   ~~~~~~~^^^^^^^^^^^",
+        "TypeError: 'Message' object is not subscriptable",
+    )
+
+
+def test_the_last_words_without_a_traceback_are_the_last_lines_of_the_program() -> None:
+    lines = ["--- dura: started x 10:00", "one", "", "two", "usage: x PORT", "--- dura: exited"]
+    assert last_words(lines, keep=2) == ("two", "usage: x PORT")
+    assert last_words(["--- dura: started x 10:00"]) == ()

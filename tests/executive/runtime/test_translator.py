@@ -59,7 +59,7 @@ def test_a_translated_program_that_dies_takes_its_host_along_the_same_way(
         program = program_of(r.launcher.start("driver").pid)
         program.send_signal(signal.SIGKILL)
         assert r.states.wait(lambda p: p["state"] == "exited")
-        assert r.launcher.state("driver").reason == "killed by SIGKILL"
+        assert r.launcher.state("driver").reason == "killed by SIGKILL (dura component logs driver)"
 
 
 def test_a_translated_behavior_returns_its_programs_exit_code_as_the_result(
@@ -97,7 +97,10 @@ def test_an_unknown_translator_fails_the_start_and_says_why(endpoint: str, tmp_p
     with rig(robot(bad), endpoint, tmp_path) as r:
         state = r.launcher.start("driver")
         assert state.state is Lifecycle.FAILED
-        assert state.reason == "exited with code 1 before it was ready"
+        assert state.reason == (
+            "exited with code 1 before it was ready: dura translator: no translator 'teleport' "
+            "(installed: process) (dura component logs driver)"
+        )
         assert "dura translator: no translator 'teleport' (installed: process)" in r.launcher.logs(
             "driver"
         )

@@ -280,3 +280,19 @@ def test_a_failed_task_of_no_plan_stops_its_functionalities_at_once(
         assert wait_for(lambda: all_stopped(r, BASE), 30)
         stops = base_stops(r)
         assert len(stops) == 1 and stops[0].data["why"] == f"task {failed.id} failed"
+
+
+def test_a_goal_the_world_makes_impossible_fails_its_task_without_a_fault_or_restart(
+    endpoint: str, tmp_path: Path
+) -> None:
+    with executor(USECASE_ROBOT, endpoint, tmp_path) as (tasks, r):
+        move = tasks.start_task("move_to", {})  # move_to raises GoalFailed: no 'target'
+        assert move.wait(60), move.reason
+        assert (move.phase, move.end, move.reason) == (
+            TaskPhase.FAILED,
+            TaskEnd.GOAL_FAILED,
+            "the goal has no 'target'",
+        )
+        assert r.kb.events(kind="FAULT") == []
+        assert r.kb.events(kind="TASK_RESTARTED") == []
+        assert r.kb.component("move_to").fault_count == 0
