@@ -24,9 +24,10 @@ from executive.planning.dry_run import planned_steps
 from executive.planning.expression import TRUE
 from executive.planning.goals import GoalSpec
 from executive.planning.partial_order import PartialOrderPlan, Step
-from executive.planning.planner import Planner, PlanningTask, PlanResult, engine_names
-from executive.planning.problem import read_world
-from knowledge.description import DEFAULT_ENGINE
+from executive.planning.planner import Planner, PlanningTask, PlanResult, choices
+from executive.planning.portfolio import Portfolio
+from executive.planning.problem import read_problem
+from knowledge.description import DEFAULT_ENGINE, PORTFOLIO
 from knowledge.errors import DuraError
 
 
@@ -68,8 +69,10 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--engine",
         default=DEFAULT_ENGINE,
-        choices=engine_names(),
-        help=f"the planning engine (default {DEFAULT_ENGINE})",
+        choices=choices(),
+        help=f"the planning engine (default {DEFAULT_ENGINE}: the first installed engine that "
+        f"supports the problem; {PORTFOLIO}: every installed engine at once, the first plan, "
+        "or the shortest by the timeout when the problem minimises the makespan)",
     )
     p.add_argument(
         "--timeout",
@@ -101,16 +104,20 @@ def run(args: argparse.Namespace) -> int:
     use_reader_environment()  # this process reads the PDDL; its planner worker plans
     with LiveLine(shown=not args.json) as line:
         line.doing(f"reading {shown(domain)} and {shown(problem)}")
-        world, goal = read_world(domain, problem)
+        world, goal, metric = read_problem(domain, problem)
         line.clear()
         if goal == TRUE and not args.json:
             print(f"dura: warning: {shown(problem)} has an empty goal, so any plan is empty: "
                   "write one in its (:goal ...)", file=sys.stderr)  # fmt: skip
-        task = PlanningTask(domain.resolve(), world, (GoalSpec(0, goal),))
+        task = PlanningTask(domain.resolve(), world, (GoalSpec(0, goal),), metric=metric)
         line.doing(f"starting the planner ({args.engine}) and reading the domain")
-        with Planner(args.engine, args.timeout or 30.0) as planner:
+        timeout = args.timeout or 30.0
+        chosen = (
+            Portfolio((), timeout) if args.engine == PORTFOLIO else Planner(args.engine, timeout)
+        )
+        with chosen as planner:
             planner.start(domain.resolve())
-            line.doing(f"planning with {args.engine} (at most {args.timeout or 30.0:g} s)")
+            line.doing(f"planning with {args.engine} (at most {timeout:g} s)")
             result = planner.solve(task)
             line.doing("stopping the planner")
     if args.svg is not None and result.plan is not None:
@@ -123,6 +130,8 @@ def run(args: argparse.Namespace) -> int:
     if not result.ok or result.plan is None:
         print(f"dura: {shown(problem)}: no plan: {result.reason}", file=sys.stderr)
         return 1
+    for note in result.notes:
+        print(f"dura: note: {note}", file=sys.stderr)
     print(
         f"{shown(problem)}: {plural(len(result.plan.steps), 'step')}, makespan {result.plan.makespan:g} s, "
         f"by {result.engine} in {result.time:.2f} s, validated by {result.validator}"
@@ -244,4 +253,5 @@ def as_json(result: PlanResult) -> dict[str, Any]:
         "makespan": plan.makespan if plan is not None else None,
         "steps": plain(planned_steps(plan)),
         "log": list(result.log),
+        "notes": list(result.notes),
     }

@@ -16,8 +16,11 @@ it never imports the task executor (steps run through the
 - :mod:`.oversubscription` — the best subset of goals by priority, and why the others
   are unreachable (:mod:`.reachability`: what no action can make true);
 - :mod:`.planner` (client), :mod:`.planner_worker` (process) and :mod:`.planner_jobs`
-  (its jobs, with unified-planning) — the engines;
-- :mod:`.problem` — unified-planning problems from the domain and the knowledge base;
+  (its jobs, with unified-planning) — the engines; :mod:`.engine_choice` — which
+  engine supports a problem (``auto``), or why none does; :mod:`.portfolio` — several
+  engines at once;
+- :mod:`.problem` — unified-planning problems from the domain and the knowledge base
+  (with timed facts); :mod:`.metric` — what a plan optimises;
 - :mod:`.expression` — ground PDDL expressions: nodes, evaluation, reading; names and
   fact patterns;
 - :mod:`.stn`, :mod:`.partial_order` — plans as partial orders of steps;

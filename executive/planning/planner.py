@@ -10,9 +10,12 @@ grace period (TAMER ignores timeouts), the whole group is killed (the Aries and 
 Downward binaries with it) and a new worker is started for the next job. The worker's
 temp dir is private (Aries leaves files behind) and removed with it.
 
-Engines: ``kairos`` (default, up-kairos), ``aries``, ``fast-downward`` (classical
-domains), ``tamer`` (the optional ``tamer`` extra), and plugins: a UP engine class
-registered under the entry-point group ``dura.planners`` (``name = "pkg.mod:Engine"``).
+Engines: ``auto`` (the default: the first installed engine that supports the problem,
+:mod:`executive.planning.engine_choice`), ``kairos`` (up-kairos), ``aries``,
+``fast-downward`` (classical domains), ``tamer`` (the optional ``tamer`` extra), and
+plugins: a UP engine class registered under the entry-point group ``dura.planners``
+(``name = "pkg.mod:Engine"``). ``portfolio`` runs several at once
+(:mod:`executive.planning.portfolio`).
 """
 
 from __future__ import annotations
@@ -39,9 +42,10 @@ from typing import IO, TYPE_CHECKING, Any
 import psutil
 
 from executive.planning.goals import GoalSpec
+from executive.planning.metric import Metric
 from executive.planning.partial_order import PartialOrderPlan
 from executive.planning.problem import World
-from knowledge.description import DEFAULT_ENGINE
+from knowledge.description import AUTO, DEFAULT_ENGINE, PORTFOLIO
 from knowledge.errors import DuraError, PlanningError
 
 if TYPE_CHECKING:
@@ -49,7 +53,7 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("dura.planner")
 
-BUILTIN_ENGINES = ("kairos", "aries", "fast-downward", "tamer")
+BUILTIN_ENGINES = ("kairos", "aries", "fast-downward", "tamer")  # auto tries them in this order
 PLUGIN_GROUP = "dura.planners"
 TMP_PREFIX = "dura-planner-"  # the worker's temporary folder (engines write there)
 WORKER_PID = "worker.pid"  # in that folder: whose it is
@@ -77,12 +81,13 @@ class PlanStatus(enum.Enum):
 @dataclass(frozen=True)
 class PlanningTask:
     """What to plan: a domain file, a world to start from and the goals to reach,
-    without the ``blocked`` actions (the robot cannot do them now)."""
+    without the ``blocked`` actions (the robot cannot do them now), optimising ``metric``."""
 
     domain: Path
     world: World
     goals: tuple[GoalSpec, ...]
     blocked: frozenset[str] = frozenset()
+    metric: Metric | None = None
 
 
 @dataclass(frozen=True)
@@ -96,6 +101,7 @@ class PlanResult:
     time: float = 0.0  # seconds, from sending the job to receiving the answer
     validator: str = ""  # the UP validator that accepted the plan
     missing: tuple[str, ...] = ()  # without a plan: goal atoms no action can make true
+    notes: tuple[str, ...] = ()  # what the user should know about a plan (not optimised)
 
     @property
     def ok(self) -> bool:
@@ -107,6 +113,8 @@ class PlanResult:
         if self.ok:
             return ""
         last = next((line for line in reversed(self.log) if line.strip()), "")
+        if last and self.status is PlanStatus.UNSUPPORTED:
+            return last  # the refusal names the engine, what it lacks and who has it
         text = _REASONS[self.status].format(engine=self.engine)
         return f"{text}: {last}" if last and self.status not in _QUIET else text
 
@@ -128,8 +136,13 @@ def plugins() -> dict[str, metadata.EntryPoint]:
 
 
 def engine_names() -> list[str]:
-    """Every engine name a robot description may choose."""
+    """Every engine dura knows (built in, then plugins), in the order ``auto`` tries them."""
     return [*BUILTIN_ENGINES, *sorted(set(plugins()) - set(BUILTIN_ENGINES))]
+
+
+def choices() -> list[str]:
+    """Every engine name a robot description or the CLI may choose."""
+    return [AUTO, PORTFOLIO, *engine_names()]
 
 
 def hard_timeout(timeout: float) -> float:
@@ -141,19 +154,23 @@ class Planner:
     """One engine in a warm worker process; :meth:`solve` is safe to call from any thread.
 
     Args:
-        engine: an engine name (see :func:`engine_names`).
+        engine: an engine name (see :func:`engine_names`), or ``auto``.
         timeout: seconds the engine may search; the job is killed a little later.
+        metric: what plans optimise, unless a task says (a robot description's).
     """
 
-    def __init__(self, engine: str = DEFAULT_ENGINE, timeout: float = 30.0) -> None:
-        if engine not in engine_names():
+    def __init__(
+        self, engine: str = DEFAULT_ENGINE, timeout: float = 30.0, metric: Metric | None = None
+    ) -> None:
+        if engine not in [AUTO, *engine_names()]:
             raise PlanningError(
-                f"unknown planner engine '{engine}' (choose from {', '.join(engine_names())})"
+                f"unknown planner engine '{engine}' (choose from {', '.join(choices())})"
             )
         if timeout <= 0:
             raise PlanningError(f"the planner timeout must be positive, not {timeout:g}")
         self.engine = engine
         self.timeout = timeout
+        self.metric = metric
         self._lock = threading.Lock()
         self._process: subprocess.Popen[bytes] | None = None
         self._tmp: Path | None = None
@@ -184,6 +201,11 @@ class Planner:
         """
         info: DomainInfo = self._job(("describe", self.engine, Path(domain)))
         return info
+
+    def installed(self) -> list[str]:
+        """The engines installed with the worker, in dura's order."""
+        names: list[str] = self._job(("installed", self.engine))
+        return names
 
     def read_world(self, domain: Path, problem: Path) -> World:
         """The objects and facts of a problem file, read in the worker.
@@ -312,6 +334,8 @@ class Planner:
     def solve(self, task: PlanningTask, timeout: float | None = None) -> PlanResult:
         """Plan for a task; never raises for what an engine does (see the result's status)."""
         timeout = self.timeout if timeout is None else timeout
+        if task.metric is None and self.metric is not None:
+            task = replace(task, metric=self.metric)
         with self._lock:
             began = time.monotonic()
             try:
