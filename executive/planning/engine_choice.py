@@ -105,25 +105,23 @@ def choose(wanted: Sequence[str], installed: Mapping[str, Any], features: Iterab
 
 
 def refusal(wanted: Sequence[str], installed: Mapping[str, Any], needed: set[str]) -> str:
-    """One line: what the wanted engines lack, and which installed engines have it."""
-    absent = [n for n in wanted if n not in installed]
+    """One line: what each wanted engine lacks, and which installed engines plan with the
+    whole problem (or, if none, which support what the first one lacks)."""
+    plain = needed - METRIC_FEATURES
+    whole = _supporters(installed, sorted(plain))
     parts = []
     for name in wanted:
         if name not in installed:
             continue
         missing = [f for f in lacking(installed[name], needed) if f not in METRIC_FEATURES]
-        supporters = _supporters(installed, missing)
-        which = (
-            f"installed engines that do: {', '.join(supporters)}"
-            if supporters
-            else "no installed engine does"
-        )
-        parts.append(
-            f"{name} does not support {', '.join(feature_words(f) for f in missing)} ({which})"
-        )
+        parts.append(f"{name} does not support {', '.join(feature_words(f) for f in missing)}")
+    absent = [n for n in wanted if n not in installed]
     if absent:
         parts.append(f"not installed: {', '.join(absent)}")
-    return "; ".join(parts) or "no engine is installed"
+    text = "; ".join(parts) or "no engine is installed"
+    if whole:
+        return f"{text} (installed engines that do: {', '.join(whole)})"
+    return f"{text} (no installed engine supports all of this problem)"
 
 
 def _supporters(installed: Mapping[str, Any], features: Sequence[str]) -> list[str]:

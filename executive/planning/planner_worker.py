@@ -67,6 +67,12 @@ def serve() -> None:
                         if kind == "solve"
                         else e
                     )
+                except Exception as e:  # unified-planning's own failure: a result, the
+                    # worker stays (else the next job waits for a new one to start)
+                    if kind != "solve":
+                        raise
+                    reason = f"{type(e).__name__}: {e}".splitlines()[0]
+                    answer = PlanResult(PlanStatus.ERROR, None, engine, (reason,))
                 send_frame(protocol_out, answer)
     finally:
         # the input closed or the output broke: dura is done with this worker, or died
