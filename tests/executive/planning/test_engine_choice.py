@@ -206,3 +206,16 @@ def test_the_default_planner_is_auto() -> None:
     assert spec.engine == "auto"
     planner = planner_for(spec)
     assert type(planner) is Planner and planner.engine == "auto" and planner.metric is None
+
+
+def test_the_readme_says_which_pddl_features_each_installed_engine_supports(
+    installed: dict[str, Any],
+) -> None:
+    from tests.engine_features import FEATURES, readme_table, rows
+
+    names, cells = readme_table()
+    assert list(cells) == list(FEATURES)
+    assert set(installed) <= set(names)
+    for feature, *computed in rows(installed):
+        for engine, value in zip(installed, computed, strict=True):
+            assert cells[feature][names.index(engine)] == value, (feature, engine)
