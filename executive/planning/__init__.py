@@ -31,6 +31,7 @@ it never imports the task executor (steps run through the
   planning``);
 - :mod:`.integrity` — goals that keep the robot going;
 - :mod:`.sensing` — facts and values kept in step with topics (the ``sensing:`` rules);
+  :mod:`.timed_facts` — facts that take effect later, applied when their time comes;
 - :mod:`.dry_run` — what the planner would do now; :mod:`.domain_check` — diagnostics
   for domain authors; :mod:`.domain_description` — the domain as ``dura domain show``
   gives it.

@@ -16,12 +16,14 @@ The goal must also hold at the end, like every goal.
 from __future__ import annotations
 
 import functools
-from collections.abc import Collection, Mapping, Sequence
+import time
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from executive.bus.clock import Clock
 from executive.planning.expression import (
     FALSE,
     TRUE,
@@ -41,7 +43,7 @@ from executive.planning.metric import TOTAL_COST, Metric
 from knowledge.domain import parse, parse_problem, type_name
 from knowledge.errors import DomainError, located
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.records import Fact
+from knowledge.records import Fact, TimedFact
 
 if TYPE_CHECKING:
     from unified_planning.model import FNode, Problem
@@ -53,9 +55,11 @@ REACH_GOAL = "dura_reach_goal_"
 
 
 @dataclass(frozen=True)
-class TimedFact:
+class TimedLiteral:
     """A fact that becomes true (or false, or takes a value) at a time: PDDL's timed
-    initial literal, ``(at 10 (door_open d1))``; ``at`` in seconds after the plan starts."""
+    initial literal, ``(at 10 (door_open d1))``; ``at`` in seconds after the plan starts
+    (the knowledge base keeps a :class:`~knowledge.records.TimedFact` at a wall-clock
+    time: :func:`literals`)."""
 
     at: float
     fact: Fact
@@ -71,7 +75,20 @@ class World:
 
     objects: Mapping[str, str] = field(default_factory=dict)
     facts: tuple[Fact, ...] = ()
-    timed: tuple[TimedFact, ...] = ()
+    timed: tuple[TimedLiteral, ...] = ()
+
+
+def literals(timed: Iterable[TimedFact], now: float, clock: Clock) -> tuple[TimedLiteral, ...]:
+    """The knowledge base's timed facts still to come at ``now`` (wall clock), as timed
+    literals of a plan that starts now (in robot seconds)."""
+    return tuple(TimedLiteral(clock.robot(t.at - now), t.fact) for t in timed if t.at > now)
+
+
+def live_world(
+    objects: Mapping[str, str], facts: Iterable[Fact], kb: KnowledgeBase, clock: Clock
+) -> World:
+    """The world to plan from now: objects, facts, and the knowledge base's timed facts."""
+    return World(objects, tuple(facts), literals(kb.timed_facts(), time.time(), clock))
 
 
 # --- dura expressions -> UP ----------------------------------------------------------
@@ -372,7 +389,7 @@ def world_of(problem: Problem, domain: Problem | None = None) -> World:
         else:
             facts.append(Fact(atom.fluent().name, args, float(value.constant_value())))
     timed = [
-        TimedFact(float(timing.delay), _fact_of(effect))
+        TimedLiteral(float(timing.delay), _fact_of(effect))
         for timing, effects in problem.timed_effects.items()
         for effect in effects
         if timing.is_from_start()
