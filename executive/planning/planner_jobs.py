@@ -23,8 +23,9 @@ from typing import Any
 
 import up_kairos
 from unified_planning.engines import ValidationResultStatus
+from unified_planning.engines.mixins import AnytimePlannerMixin
 from unified_planning.environment import get_environment
-from unified_planning.shortcuts import OneshotPlanner, PlanValidator
+from unified_planning.shortcuts import AnytimePlanner, OneshotPlanner, PlanValidator
 
 from executive.planning.engine_choice import choose
 from executive.planning.metric import TOTAL_COST, costs_problem
@@ -88,6 +89,7 @@ class PlannerJobs:
         self.output = output
         self.engines: dict[str, Any] = {}
         self.validators: dict[str, Any] = {}
+        self.anytime: dict[str, Any] = {}  # engines in anytime mode, for problems with a metric
         self.domains: dict[tuple[Path, bool], tuple[float, Any]] = {}
         warnings.simplefilter("ignore")  # UP warns about what it cannot establish; we check
         self.env = get_environment()
@@ -138,6 +140,19 @@ class PlannerJobs:
     def installed(self, engine: str) -> list[str]:
         """The names of :meth:`available`."""
         return list(self.available())
+
+    def best(self, name: str, problem: Any, timeout: float) -> Any:
+        """The last (best) plan an anytime engine finds by the timeout, as its result;
+        without one, its last answer."""
+        if name not in self.anytime:
+            self.anytime[name] = AnytimePlanner(name=name)
+        last = None
+        for answer in self.anytime[name].get_solutions(problem, timeout=timeout):
+            if answer.plan is not None or last is None or last.plan is None:
+                last = answer
+        if last is None:
+            raise PlanningError(f"{name} gave no answer")
+        return last
 
     def validator(self, name: str) -> Any:
         """A plan validator by name, kept (UP's factory looks up credits on every call)."""
@@ -192,11 +207,16 @@ class PlannerJobs:
             notes.append(choice.unoptimised)
             problem = frozen(build(domain, task.world, task.goals, task.blocked))
         try:
-            answer = engine.solve(problem, timeout=timeout)
+            if problem.quality_metrics and issubclass(type(engine), AnytimePlannerMixin):
+                answer = self.best(engine_name, problem, timeout)
+            else:
+                answer = engine.solve(problem, timeout=timeout)
         except Exception as e:  # an engine's own failure is a result, not a crash
             return result(PlanStatus.ERROR, f"{type(e).__name__}: {e}")
         lines = [str(m.message).splitlines()[0] for m in answer.log_messages or () if m.message]
         status = _status(answer.status.name)
+        if answer.plan is not None and status is PlanStatus.TIMEOUT:
+            status = PlanStatus.SOLVED  # the best plan found by the timeout
         if answer.plan is None or status is not PlanStatus.SOLVED:
             why = _missing(problem, task) if status in _EXPLAINED else ()
             status = PlanStatus.ERROR if status is PlanStatus.SOLVED else status

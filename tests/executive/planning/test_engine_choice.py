@@ -133,11 +133,11 @@ def test_a_portfolio_minimising_the_makespan_takes_the_shortest_plan_of_its_engi
     task = transport_task("(crate_at parcel lab)", read_metric("minimize makespan"))
     spans = {}
     for engine in ("kairos", "aries"):
-        with Planner(engine, timeout=20) as alone:
+        with Planner(engine, timeout=6) as alone:
             result = alone.solve(task)
         assert result.ok and result.plan is not None, result.log
         spans[engine] = result.plan.makespan
-    with Portfolio(["kairos", "aries"], timeout=20) as portfolio:
+    with Portfolio(["kairos", "aries"], timeout=6) as portfolio:
         result = portfolio.solve(task)
     assert result.ok and result.plan is not None, result.log
     assert result.plan.makespan == min(spans.values())
@@ -219,3 +219,16 @@ def test_the_readme_says_which_pddl_features_each_installed_engine_supports(
     for feature, *computed in rows(installed):
         for engine, value in zip(installed, computed, strict=True):
             assert cells[feature][names.index(engine)] == value, (feature, engine)
+
+
+def test_an_anytime_engine_gives_its_best_plan_at_the_timeout() -> None:
+    first_found = transport_task("(and (crate_at parcel lab) (robot_at dock))")
+    best = transport_task(
+        "(and (crate_at parcel lab) (robot_at dock))", read_metric("minimize makespan")
+    )
+    with Planner("aries", timeout=15) as aries:
+        first = aries.solve(first_found)
+        result = aries.solve(best)
+    assert first.ok and first.plan is not None, first.log
+    assert result.ok and result.plan is not None, result.log
+    assert result.plan.makespan <= first.plan.makespan
