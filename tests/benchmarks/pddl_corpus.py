@@ -29,7 +29,7 @@ import statistics
 import subprocess
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -221,6 +221,7 @@ def main() -> None:
     parser.add_argument("--engine", default="kairos", help="the engine (default kairos)")
     parser.add_argument("--timeout", type=float, default=20.0, help="seconds per search")
     parser.add_argument("--limit", type=int, default=2, help="problems per domain (default 2)")
+    parser.add_argument("--rows", type=Path, help="also append each row to FILE (JSON lines)")
     parser.add_argument("--direct", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.direct:  # one direct run, in its own process: the folder is the domain file
@@ -233,6 +234,11 @@ def main() -> None:
         rows.append((name, problem.stem, ours, theirs))
         print(f"{name}/{problem.stem}: dura {ours.status} {ours.time:.1f} s, direct "
               f"{theirs.status} {theirs.time:.1f} s", file=sys.stderr, flush=True)  # fmt: skip
+        if args.rows is not None:
+            line = {"domain": name, "problem": problem.stem, "dura": asdict(ours),
+                    "direct": asdict(theirs)}  # fmt: skip
+            with args.rows.open("a", encoding="utf-8") as out:
+                out.write(json.dumps(line) + "\n")
     report(rows, args.engine, args.timeout)
 
 
