@@ -102,7 +102,11 @@ def run(args: argparse.Namespace) -> int:
         return run_dry_run(args)
     domain, problem = args.offline
     use_reader_environment()  # this process reads the PDDL; its planner worker plans
-    with LiveLine(shown=not args.json) as line:
+    timeout = args.timeout or 30.0
+    chosen = Portfolio((), timeout) if args.engine == PORTFOLIO else Planner(args.engine, timeout)
+    with LiveLine(shown=not args.json) as line, chosen as planner:
+        if not isinstance(planner, Portfolio):
+            planner.start()  # the worker loads unified-planning while this process reads
         line.doing(f"reading {shown(domain)} and {shown(problem)}")
         world, goal, metric = read_problem(domain, problem)
         line.clear()
@@ -111,15 +115,10 @@ def run(args: argparse.Namespace) -> int:
                   "write one in its (:goal ...)", file=sys.stderr)  # fmt: skip
         task = PlanningTask(domain.resolve(), world, (GoalSpec(0, goal),), metric=metric)
         line.doing(f"starting the planner ({args.engine}) and reading the domain")
-        timeout = args.timeout or 30.0
-        chosen = (
-            Portfolio((), timeout) if args.engine == PORTFOLIO else Planner(args.engine, timeout)
-        )
-        with chosen as planner:
-            planner.start(domain.resolve())
-            line.doing(f"planning with {args.engine} (at most {timeout:g} s)")
-            result = planner.solve(task)
-            line.doing("stopping the planner")
+        planner.start(domain.resolve())
+        line.doing(f"planning with {args.engine} (at most {timeout:g} s)")
+        result = planner.solve(task)
+        line.doing("stopping the planner")
     if args.svg is not None and result.plan is not None:
         title = f"{problem.name}: {plural(len(result.plan.steps), 'step')}, makespan {result.plan.makespan:g} s, by {result.engine}"
         if write_svg(args.svg, gantt.render(gantt.offline_gantt(result.plan, title))):

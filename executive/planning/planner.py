@@ -60,6 +60,8 @@ WORKER_PID = "worker.pid"  # in that folder: whose it is
 WORKER_MODULE = "executive.planning.planner_worker"  # run as python -m
 ABANDONED = 3600.0  # seconds after which a folder without a worker pid is left over
 STARTUP_TIMEOUT = 120.0  # seconds for a worker to import unified-planning and the engines
+BUILDING = 60.0  # seconds at least to build a problem, or to validate and convert a plan
+SEARCHING, SEARCHED = "searching", "searched"  # the phases of a solve job
 _HEADER = struct.Struct("!Q")
 
 
@@ -76,6 +78,13 @@ class PlanStatus(enum.Enum):
     def no_plan(self) -> bool:
         """The engine answered that it has no plan (not: it could not answer)."""
         return self in (PlanStatus.UNSOLVABLE, PlanStatus.NOT_FOUND)
+
+
+@dataclass(frozen=True)
+class Progress:
+    """A frame the worker sends before its answer: the job is now in ``phase``."""
+
+    phase: str
 
 
 @dataclass(frozen=True)
@@ -146,7 +155,8 @@ def choices() -> list[str]:
 
 
 def hard_timeout(timeout: float) -> float:
-    """When a job is killed: the engine's timeout plus time to build, validate and convert."""
+    """When a search is killed: the engine's timeout plus a grace period (the problem's
+    building before it and the plan's validation after it have allowances of their own)."""
     return timeout + max(2.0, timeout / 4)
 
 
@@ -175,6 +185,7 @@ class Planner:
         self._process: subprocess.Popen[bytes] | None = None
         self._tmp: Path | None = None
         self._ready = False
+        self.phase = ""  # where the job under way is: "", SEARCHING or SEARCHED
 
     def __enter__(self) -> Planner:
         return self
@@ -307,8 +318,15 @@ class Planner:
             raise PlanningError(f"the planner worker did not start: {reason}") from e
         self._ready = True
 
-    def _call(self, message: tuple[Any, ...], timeout: float) -> Any:
+    def _call(
+        self,
+        message: tuple[Any, ...],
+        timeout: float,
+        phases: dict[str, float] | None = None,
+    ) -> Any:
         """Send a message and wait for the answer; kill the worker when it takes too long.
+        A :class:`Progress` frame of the worker starts a new allowance, ``phases[phase]``
+        seconds (the search gets the engine's timeout, whatever building the problem took).
 
         Raises:
             TimeoutError: no answer in time (the worker was killed).
@@ -317,10 +335,17 @@ class Planner:
         process = self._process
         if process is None or process.stdin is None or process.stdout is None:
             raise PlanningError("the planner worker is not running")
+        self.phase = ""
         try:
             self._wait_ready(process.stdout)
             send_frame(process.stdin, message)
-            return receive_frame(process.stdout, time.monotonic() + timeout)
+            deadline = time.monotonic() + timeout
+            while True:
+                answer = receive_frame(process.stdout, deadline)
+                if not isinstance(answer, Progress):
+                    return answer
+                self.phase = answer.phase
+                deadline = time.monotonic() + (phases or {}).get(answer.phase, timeout)
         except TimeoutError:
             self._reap()
             raise
@@ -343,16 +368,18 @@ class Planner:
                 if self._process is not None and self._process.stdout is not None:
                     self._wait_ready(self._process.stdout)
                 began = time.monotonic()  # a worker's start-up is not planning time
+                phases = {SEARCHING: hard_timeout(timeout), SEARCHED: max(BUILDING, timeout)}
                 result: PlanResult = self._call(
-                    ("solve", self.engine, task, timeout), hard_timeout(timeout)
+                    ("solve", self.engine, task, timeout), max(BUILDING, timeout), phases
                 )
             except TimeoutError:
-                result = PlanResult(
-                    PlanStatus.TIMEOUT,
-                    None,
-                    self.engine,
-                    (f"killed after {hard_timeout(timeout):g} s (the engine ignored its timeout)",),
-                )
+                why = {
+                    "": f"building the problem took more than {max(BUILDING, timeout):g} s",
+                    SEARCHING: f"the engine ignored its timeout: killed after "
+                    f"{hard_timeout(timeout):g} s of search",
+                    SEARCHED: f"validating the plan took more than {max(BUILDING, timeout):g} s",
+                }[self.phase]
+                result = PlanResult(PlanStatus.TIMEOUT, None, self.engine, (why,))
             except PlanningError as e:
                 result = PlanResult(PlanStatus.ERROR, None, self.engine, (str(e),))
         return replace(result, time=time.monotonic() - began)

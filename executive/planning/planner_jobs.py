@@ -30,6 +30,8 @@ from unified_planning.shortcuts import AnytimePlanner, OneshotPlanner, PlanValid
 from executive.planning.engine_choice import choose
 from executive.planning.metric import TOTAL_COST, costs_problem
 from executive.planning.planner import (
+    SEARCHED,
+    SEARCHING,
     PlanningTask,
     PlanResult,
     PlanStatus,
@@ -90,6 +92,7 @@ class PlannerJobs:
         self.engines: dict[str, Any] = {}
         self.validators: dict[str, Any] = {}
         self.anytime: dict[str, Any] = {}  # engines in anytime mode, for problems with a metric
+        self.progress: Callable[[str], None] = lambda phase: None  # told of a solve's phases
         self.domains: dict[tuple[Path, bool], tuple[float, Any]] = {}
         warnings.simplefilter("ignore")  # UP warns about what it cannot establish; we check
         self.env = get_environment()
@@ -206,6 +209,7 @@ class PlannerJobs:
         if choice.unoptimised:
             notes.append(choice.unoptimised)
             problem = frozen(build(domain, task.world, task.goals, task.blocked))
+        self.progress(SEARCHING)  # the hard timeout counts from here
         try:
             if problem.quality_metrics and issubclass(type(engine), AnytimePlannerMixin):
                 answer = self.best(engine_name, problem, timeout)
@@ -213,6 +217,7 @@ class PlannerJobs:
                 answer = engine.solve(problem, timeout=timeout)
         except Exception as e:  # an engine's own failure is a result, not a crash
             return result(PlanStatus.ERROR, f"{type(e).__name__}: {e}")
+        self.progress(SEARCHED)
         lines = [str(m.message).splitlines()[0] for m in answer.log_messages or () if m.message]
         status = _status(answer.status.name)
         if answer.plan is not None and status is PlanStatus.TIMEOUT:
