@@ -63,13 +63,13 @@ def _number(path: Path) -> int:
     return int(found.group(1)) if found else 0
 
 
-def problems(folder: Path, limit: int) -> list[tuple[str, Path, Path]]:
+def problems(folder: Path, limit: int, skip: int = 0) -> list[tuple[str, Path, Path]]:
     """(domain folder name, domain file, problem file) for the first ``limit`` instances of
-    every domain folder under ``folder``."""
+    every domain folder under ``folder``, after the first ``skip``."""
     out: list[tuple[str, Path, Path]] = []
     for instances in sorted(folder.rglob("instances")):
         home = instances.parent
-        for problem in sorted(instances.glob("*.pddl"), key=_number)[:limit]:
+        for problem in sorted(instances.glob("*.pddl"), key=_number)[skip : skip + limit]:
             own = home / "domains" / f"domain-{_number(problem)}.pddl"
             domain = own if own.exists() else home / "domain.pddl"
             if domain.exists():
@@ -221,6 +221,9 @@ def main() -> None:
     parser.add_argument("--engine", default="kairos", help="the engine (default kairos)")
     parser.add_argument("--timeout", type=float, default=20.0, help="seconds per search")
     parser.add_argument("--limit", type=int, default=2, help="problems per domain (default 2)")
+    parser.add_argument(
+        "--skip", type=int, default=0, help="problems per domain to leave out first"
+    )
     parser.add_argument("--rows", type=Path, help="also append each row to FILE (JSON lines)")
     parser.add_argument("--direct", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -228,7 +231,7 @@ def main() -> None:
         print(json.dumps(direct(args.folder, args.problem, args.engine, args.timeout)))
         return
     rows: list[tuple[str, str, Outcome, Outcome]] = []
-    for name, domain, problem in problems(args.folder, args.limit):
+    for name, domain, problem in problems(args.folder, args.limit, args.skip):
         ours = run_dura(domain, problem, args.engine, args.timeout)
         theirs = run_direct(domain, problem, args.engine, args.timeout)
         rows.append((name, problem.stem, ours, theirs))
