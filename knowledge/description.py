@@ -62,8 +62,11 @@ SAFE_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_-]{0,63}")
 SAFE_NAME_RULE = "must be a letter, then up to 63 letters, digits, '_' or '-'"
 SAFE_TOPIC = re.compile(r"/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*")
 SAFE_TOPIC_RULE = "must be names of letters, digits and '_' joined by '/' (a ROS topic name)"
-DEFAULT_ENGINE = "kairos"
-ENGINES = ("kairos", "aries", "fast-downward", "tamer")
+AUTO = "auto"  # the first installed engine that supports the problem
+PORTFOLIO = "portfolio"  # several engines at once, the first (or best) plan
+DEFAULT_ENGINE = AUTO
+ENGINES = (AUTO, PORTFOLIO, "kairos", "aries", "fast-downward", "tamer")
+METRIC = re.compile(r"(minimize|maximize)\s+(makespan|\(.*\))", re.DOTALL)
 PYTHONS = ("python", "python3")  # in a command: the executive's own interpreter
 
 
@@ -245,10 +248,35 @@ def _engine(engine: str, place: Place) -> str:
     return engine
 
 
+def _engines(engines: tuple[str, ...], place: Place) -> tuple[str, ...]:
+    """Report a portfolio engine that is unknown, or a portfolio in a portfolio."""
+    for engine in engines:
+        if engine in (AUTO, PORTFOLIO):
+            place.entry.error(place.key, f"a portfolio runs engines, not '{engine}'")
+        _engine(engine, place)
+    return engines
+
+
+def _metric(metric: str, place: Place) -> str:
+    """Report a metric that is not ``minimize|maximize makespan|(expression)``."""
+    if not METRIC.fullmatch(metric.strip()):
+        place.entry.error(
+            place.key,
+            f"metric '{metric}' must be 'minimize makespan', 'minimize (total-cost)' or "
+            "'minimize|maximize (function objects...)'",
+        )
+    return metric.strip()
+
+
 @dataclass(frozen=True)
 class PlannerSpec:
+    """``planner:``: the engine (``auto``, ``portfolio`` or a name), the engines of the
+    portfolio (all installed ones if none), the search timeout and what plans optimise."""
+
     engine: Annotated[str, OrDefault(), Check(_engine)] = DEFAULT_ENGINE
     timeout: Annotated[float, AtLeast(0.1)] = 30.0
+    portfolio: Annotated[tuple[str, ...], OneOrMore(), Check(_engines)] = ()
+    metric: Annotated[str | None, Check(_metric)] = None
 
 
 @dataclass(frozen=True)

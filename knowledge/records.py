@@ -164,6 +164,19 @@ class Fact:
 
 
 @record
+class TimedFact:
+    """A fact that takes effect at a time (wall clock, seconds since the epoch): "the
+    door opens at 14:00". Until then the planner plans with it as a timed initial
+    literal; at ``at`` it becomes a fact of the world."""
+
+    fact: Fact
+    at: float
+
+    def __str__(self) -> str:
+        return f"{self.fact} at {self.at:.3f}"
+
+
+@record
 class ComponentRecord:
     """What the robot remembers about a component across restarts."""
 

@@ -114,6 +114,17 @@ MIGRATIONS: tuple[tuple[str, ...], ...] = (
     """),
     # 3: what happened to each step of a plan (written by the plan executor)
     ("ALTER TABLE plan_steps ADD COLUMN state TEXT NOT NULL DEFAULT 'pending'",),
+    # 4: facts that take effect later ("the door opens at 14:00"), a wall-clock time each
+    _statements("""
+    CREATE TABLE timed_facts (
+        name TEXT NOT NULL,
+        args TEXT NOT NULL,
+        value TEXT NOT NULL,
+        at REAL NOT NULL,
+        PRIMARY KEY (name, args, at)
+    );
+    CREATE INDEX timed_facts_at ON timed_facts(at)
+    """),
 )
 
 VERSION = len(MIGRATIONS)

@@ -18,7 +18,7 @@ NAMED = frozenset(
     {
         # the executive and the world
         "EXECUTIVE_STARTED", "EXECUTIVE_STOPPED", "WORLD_SEEDED", "STATE_SET",
-        "STATE_UNSET", "OBJECT_ADDED", "OBJECT_REMOVED", "PARAMETER",
+        "STATE_UNSET", "STATE_TIMED", "OBJECT_ADDED", "OBJECT_REMOVED", "PARAMETER",
         # goals, plans and their steps
         "GOAL_ADDED", "PLANNING", "PLAN_STORED", "PLAN_START", "DISPATCH", "START", "END",
         "FAIL", "CANCEL", "ADOPT", "RECOVERED", "REPLAN", "INTEGRITY_GOAL",

@@ -108,6 +108,15 @@ def _fact(subject: str, data: Data, kind: str) -> str:
     return f"{subject} (by {source})" if source else subject
 
 
+def _timed(subject: str, data: Data, kind: str) -> str:
+    """A fact that takes effect later: when (local time), and who said so."""
+    import time  # only to show a timed fact
+
+    when = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(float(data.get("at") or 0.0)))
+    source = data.get("source")
+    return f"{subject} from {when} on" + (f" (by {source})" if source else "")
+
+
 def _object(subject: str, data: Data, kind: str) -> str:
     text = f"{subject} ({data['type']})"
     facts = list(data.get("facts") or [])
@@ -311,6 +320,7 @@ Text = Callable[[str, Data, str], str]
 _TEXTS: Mapping[str, Text] = {
     "EXECUTIVE_STARTED": _executive, "EXECUTIVE_STOPPED": _executive,
     "WORLD_SEEDED": _world, "STATE_SET": _fact, "STATE_UNSET": _fact,
+    "STATE_TIMED": _timed,
     "OBJECT_ADDED": _object, "OBJECT_REMOVED": _object, "PARAMETER": _parameter,
     "EXONERATION": _exoneration,
     "GOAL_ADDED": _goal_added, "PLANNING": _planning, "PLAN_STORED": _plan_stored,

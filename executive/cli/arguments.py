@@ -43,6 +43,32 @@ def seconds(*, zero: bool = False) -> Callable[[str], float]:
     return read
 
 
+def moment(text: str) -> float:
+    """A time to come, as seconds since the epoch: ``14:00`` or ``14:00:30`` (today, local
+    time), ``+90`` (seconds from now) or ``2026-11-27T14:00`` (local time)."""
+    import datetime  # only for --at: not on a quick path
+    import time
+
+    now = time.time()
+    if text.startswith("+"):
+        return now + seconds()(text[1:])
+    try:
+        if "T" in text or "-" in text:
+            when = datetime.datetime.fromisoformat(text)
+        else:
+            clock = datetime.time.fromisoformat(text)
+            when = datetime.datetime.combine(datetime.date.today(), clock)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"'{text}' is not a time: write 14:00, 14:00:30, +90 (seconds from now) or "
+            "2026-11-27T14:00"
+        ) from None
+    at = when.timestamp()
+    if at <= now:
+        raise argparse.ArgumentTypeError(f"{text} has passed: give a time to come")
+    return at
+
+
 def count(text: str) -> int:
     """A whole number from 0 to ``LIMIT``."""
     value = _whole(text)

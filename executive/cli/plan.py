@@ -24,9 +24,11 @@ from executive.planning.dry_run import planned_steps
 from executive.planning.expression import TRUE, Expression
 from executive.planning.goals import GoalSpec
 from executive.planning.partial_order import PartialOrderPlan, Step
-from executive.planning.planner import Planner, PlanningTask, PlanResult, engine_names
-from executive.planning.problem import World, build, read_world
-from knowledge.description import DEFAULT_ENGINE
+from executive.planning.planner import Planner, PlanningTask, PlanResult, choices
+from executive.planning.portfolio import Portfolio
+from executive.planning.metric import Metric
+from executive.planning.problem import World, build, read_problem
+from knowledge.description import DEFAULT_ENGINE, PORTFOLIO
 from knowledge.domain import parse
 from knowledge.errors import DomainError, DuraError
 
@@ -69,8 +71,10 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--engine",
         default=DEFAULT_ENGINE,
-        choices=engine_names(),
-        help=f"the planning engine (default {DEFAULT_ENGINE})",
+        choices=choices(),
+        help=f"the planning engine (default {DEFAULT_ENGINE}: the first installed engine that "
+        f"supports the problem; {PORTFOLIO}: every installed engine at once, the first plan, "
+        "or the shortest by the timeout when the problem minimises the makespan)",
     )
     p.add_argument(
         "--timeout",
@@ -100,20 +104,23 @@ def run(args: argparse.Namespace) -> int:
         return run_dry_run(args)
     domain, problem = args.offline
     use_reader_environment()  # this process reads the PDDL; its planner worker plans
-    with LiveLine(shown=not args.json) as line:
+    timeout = args.timeout or 30.0
+    chosen = Portfolio((), timeout) if args.engine == PORTFOLIO else Planner(args.engine, timeout)
+    with LiveLine(shown=not args.json) as line, chosen as planner:
+        if not isinstance(planner, Portfolio):
+            planner.start()  # the worker loads unified-planning while this process reads
         line.doing(f"reading {shown(domain)} and {shown(problem)}")
-        world, goal = fitting_world(domain, problem)
+        world, goal, metric = fitting_world(domain, problem)
         line.clear()
         if goal == TRUE and not args.json:
             print(f"dura: warning: {shown(problem)} has an empty goal, so any plan is empty: "
                   "write one in its (:goal ...)", file=sys.stderr)  # fmt: skip
-        task = PlanningTask(domain.resolve(), world, (GoalSpec(0, goal),))
+        task = PlanningTask(domain.resolve(), world, (GoalSpec(0, goal),), metric=metric)
         line.doing(f"starting the planner ({args.engine}) and reading the domain")
-        with Planner(args.engine, args.timeout or 30.0) as planner:
-            planner.start(domain.resolve())
-            line.doing(f"planning with {args.engine} (at most {args.timeout or 30.0:g} s)")
-            result = planner.solve(task)
-            line.doing("stopping the planner")
+        planner.start(domain.resolve())
+        line.doing(f"planning with {args.engine} (at most {timeout:g} s)")
+        result = planner.solve(task)
+        line.doing("stopping the planner")
     if args.svg is not None and result.plan is not None:
         title = f"{problem.name}: {plural(len(result.plan.steps), 'step')}, makespan {result.plan.makespan:g} s, by {result.engine}"
         if write_svg(args.svg, gantt.render(gantt.offline_gantt(result.plan, title))):
@@ -124,6 +131,8 @@ def run(args: argparse.Namespace) -> int:
     if not result.ok or result.plan is None:
         print(f"dura: {shown(problem)}: no plan: {result.reason}", file=sys.stderr)
         return 1
+    for note in result.notes:
+        print(f"dura: note: {note}", file=sys.stderr)
     print(
         f"{shown(problem)}: {plural(len(result.plan.steps), 'step')}, makespan {result.plan.makespan:g} s, "
         f"by {result.engine} in {result.time:.2f} s, validated by {result.validator}"
@@ -132,20 +141,20 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def fitting_world(domain: Path, problem: Path) -> tuple[World, Expression]:
-    """The world and goal of a problem file, checked to fit the domain before any engine
+def fitting_world(domain: Path, problem: Path) -> tuple[World, Expression, Metric | None]:
+    """The world, goal and metric of a problem file, checked to fit the domain before any engine
     runs: a problem that does not fit is the user's error, not an engine's failure.
 
     Raises:
         DomainError: the domain or the problem is invalid, or they do not fit.
     """
     lifted = parse(domain)
-    world, goal = read_world(domain, problem, lifted)
+    world, goal, metric = read_problem(domain, problem, lifted)
     try:
-        build(lifted, world, (GoalSpec(0, goal),))
+        build(lifted, world, (GoalSpec(0, goal),), metric=metric)
     except DomainError as e:
         raise DomainError(f"{shown(problem)}: does not fit {shown(domain)}: {e}") from e
-    return world, goal
+    return world, goal, metric
 
 
 def run_show(args: argparse.Namespace) -> int:
@@ -260,4 +269,5 @@ def as_json(result: PlanResult) -> dict[str, Any]:
         "makespan": plan.makespan if plan is not None else None,
         "steps": plain(planned_steps(plan)),
         "log": list(result.log),
+        "notes": list(result.notes),
     }

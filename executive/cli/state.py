@@ -4,11 +4,13 @@ knowledge base."""
 from __future__ import annotations
 
 import argparse
+import time
 from typing import Any
 
 from executive.bus.api import planning as api
 from executive.bus.schema import plain
 from executive.cli import exits_at_once
+from executive.cli.arguments import moment
 from executive.cli.client import add_client_options, ask
 from executive.cli.output import add_json_flag, print_json, table
 from knowledge.records import Fact
@@ -37,6 +39,14 @@ def register(sub: Any) -> None:
         cmd.add_argument(
             "fact", metavar="FACT", help="a fact in PDDL: '(robot_at lab)' or '(= (battery) 80)'"
         )
+        cmd.add_argument(
+            "--at",
+            type=moment,
+            metavar="TIME",
+            help="not now but at TIME (14:00, 14:00:30, +90 for seconds from now, or "
+            "2026-11-27T14:00): the planner plans with it from now on, and it takes effect "
+            "then ('the door opens at 14:00')",
+        )
         cmd.set_defaults(run=run_change, verb=verb)
     for cmd in ssub.choices.values():
         add_client_options(cmd)
@@ -44,7 +54,9 @@ def register(sub: Any) -> None:
 
 
 def _value(fact: Fact) -> str:
-    return "true" if fact.value is True else f"{fact.value:g}"
+    if isinstance(fact.value, bool):
+        return str(fact.value).lower()
+    return f"{fact.value:g}"
 
 
 def run_get(args: argparse.Namespace) -> int:
@@ -56,14 +68,28 @@ def run_get(args: argparse.Namespace) -> int:
         ["fact", "value"],
         [[f"({' '.join([f.name, *f.args])})", _value(f)] for f in reply.facts],
     )
+    if reply.timed:
+        print()
+        table(
+            ["later", "fact", "value"],
+            [[_when(t.at), f"({' '.join([t.fact.name, *t.fact.args])})", _value(t.fact)]
+             for t in reply.timed],
+        )  # fmt: skip
     return 0
+
+
+def _when(at: float) -> str:
+    return time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(at))
 
 
 def run_change(args: argparse.Namespace) -> int:
     verb = api.STATE_UNSET if args.verb == "unset" else api.STATE_SET
-    fact = ask(args, verb, api.FactChange(args.fact)).fact
+    reply = ask(args, verb, api.FactChange(args.fact, at=args.at))
+    fact = reply.fact
     if args.json:
-        print_json(plain(fact))
+        print_json(plain(fact) if reply.at is None else plain(reply))
+    elif reply.at is not None:
+        print(f"{fact.text} from {_when(reply.at)} on")
     else:
         print(f"{fact.text} {'unset' if args.verb == 'unset' else 'set'}")
     return 0

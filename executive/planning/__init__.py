@@ -16,8 +16,11 @@ it never imports the task executor (steps run through the
 - :mod:`.oversubscription` — the best subset of goals by priority, and why the others
   are unreachable (:mod:`.reachability`: what no action can make true);
 - :mod:`.planner` (client), :mod:`.planner_worker` (process) and :mod:`.planner_jobs`
-  (its jobs, with unified-planning) — the engines;
-- :mod:`.problem` — unified-planning problems from the domain and the knowledge base;
+  (its jobs, with unified-planning) — the engines; :mod:`.engine_choice` — which
+  engine supports a problem (``auto``), or why none does; :mod:`.portfolio` — several
+  engines at once;
+- :mod:`.problem` — unified-planning problems from the domain and the knowledge base
+  (with timed facts); :mod:`.metric` — what a plan optimises;
 - :mod:`.expression` — ground PDDL expressions: nodes, evaluation, reading; names and
   fact patterns;
 - :mod:`.stn`, :mod:`.partial_order` — plans as partial orders of steps;
@@ -28,6 +31,7 @@ it never imports the task executor (steps run through the
   planning``);
 - :mod:`.integrity` — goals that keep the robot going;
 - :mod:`.sensing` — facts and values kept in step with topics (the ``sensing:`` rules);
+  :mod:`.timed_facts` — facts that take effect later, applied when their time comes;
 - :mod:`.dry_run` — what the planner would do now; :mod:`.domain_check` — diagnostics
   for domain authors; :mod:`.domain_description` — the domain as ``dura domain show``
   gives it.

@@ -24,11 +24,14 @@ from executive.planning.integrity_loop import IntegrityLoop
 from executive.planning.plan_executor import ExecutionLimits, PlanExecutor, TaskRunner
 from executive.planning.planner import Planner
 from executive.planning.sensing import Sensing, Subscribe
+from executive.planning.timed_facts import TimedFacts
 from executive.planning.warm_up import Warm
 from knowledge.records import Fact
 
 # events of the world changing outside the plan, and of the plan's own steps changing facts
-OUTSIDE_CHANGES = ("STATE_SET", "STATE_UNSET", "OBJECT_ADDED", "COMPONENT_RESET", "REPAIR")
+OUTSIDE_CHANGES = (
+    "STATE_SET", "STATE_UNSET", "STATE_TIMED", "OBJECT_ADDED", "COMPONENT_RESET", "REPAIR",
+)  # fmt: skip
 PLAN_CHANGES = ("START", "END", "FAIL", "CANCEL")
 
 
@@ -78,14 +81,17 @@ class Deliberation:
         self.sensing = Sensing(
             kb, self.domain, robot.sensing, subscribe=subscribe, changed=self._sensed, clock=clock
         )
+        self.timed = TimedFacts(kb, self._sensed)
 
     def start(self) -> None:
         self.integrity_loop.start()
         self.executor.start()
         self.goals.start()
         self.sensing.start()
+        self.timed.start()
 
     def stop(self) -> None:
+        self.timed.stop()
         self.integrity_loop.stop()
         self.sensing.stop()
         self.goals.stop()
@@ -110,6 +116,7 @@ class Deliberation:
         self.goals.replan(reason)
 
     def _sensed(self, facts: list[Fact], reason: str) -> None:
-        """A sensing rule changed facts: as a user's ``dura state set`` does."""
+        """A sensing rule (or a timed fact) changed facts: as a user's ``dura state set``
+        does."""
         self.executor.facts_changed([(f.name, f.args) for f in facts])
         self.goals.wake(reason)

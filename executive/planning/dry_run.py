@@ -19,7 +19,7 @@ from executive.planning.goals import normalized, specs
 from executive.planning.oversubscription import blocked_note, plan_goals
 from executive.planning.partial_order import PartialOrderPlan
 from executive.planning.planner import Planner, PlanningTask
-from executive.planning.problem import World
+from executive.planning.problem import live_world
 from knowledge.domain import DomainInfo
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Fact, Goal
@@ -61,7 +61,8 @@ def dry_run(
         why = "no open goal needs a plan" if ids else "no open goals"
         return DryRunReply("nothing_to_do", planner.engine, 0.0, why, ids, [], achieved,
                            unreachable, [], None, asked)  # fmt: skip
-    task = PlanningTask(domain.path, World(objects, tuple(facts)), todo, frozenset(blocked))
+    world = live_world(objects, facts, kb, clock)
+    task = PlanningTask(domain.path, world, todo, frozenset(blocked))
     outcome = plan_goals(planner, task, timeout)
     note = blocked_note(blocked)
     unreachable.update({str(i): why + note for i, why in outcome.unreachable.items()})

@@ -29,7 +29,7 @@ from executive.planning.goal_watch import GoalWatch
 from executive.planning.goals import GoalSpec, specs
 from executive.planning.oversubscription import blocked_note, unreachable_reason
 from executive.planning.planner import Planner, PlanningTask, PlanResult
-from executive.planning.problem import World
+from executive.planning.problem import live_world
 from knowledge.domain import DomainInfo
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Fact, GoalState
@@ -193,7 +193,7 @@ class GoalKeeper:
             blocked = dict(self.links.blocked())
             timeout = min(self.planner.timeout, LOOK_TIMEOUT)
             for goal in goals:
-                world = World(objects, facts)
+                world = live_world(objects, facts, self.kb, self.clock)
                 task = PlanningTask(self.domain.path, world, (goal,), frozenset(blocked))
                 results[goal.id] = (goal, self.planner.solve(task, timeout=timeout))
         except Exception:

@@ -45,7 +45,7 @@ from executive.planning.goals import GoalSpec, RefusalCause, specs
 from executive.planning.oversubscription import GoalPlan, blocked_note, plan_goals
 from executive.planning.plan_executor import PlanExecutor
 from executive.planning.planner import Planner, PlanningTask, PlanResult
-from executive.planning.problem import World
+from executive.planning.problem import live_world
 from executive.planning.state_change import Change, apply_change
 from knowledge.domain import DomainInfo
 from knowledge.errors import DuraError, KnowledgeError
@@ -298,7 +298,7 @@ class GoalPlanner:
         if not todo:
             self._conclude(round_, None, ())
             return
-        world = World(objects, tuple(facts))
+        world = live_world(objects, facts, self.kb, self.executor.clock)
         task = PlanningTask(self.domain.path, world, tuple(todo), frozenset(round_.blocked))
         round_.phase = RoundPhase.SEARCHING
         self._search.post(self._step(round_, lambda: self._solve(round_, task)))

@@ -42,7 +42,7 @@ from executive.bus.session import Message
 from executive.planning.deliberation import Deliberation
 from executive.planning.goal_api import GoalApi
 from executive.planning.plan_executor import ExecutionLimits, TaskRunner
-from executive.planning.planner import Planner
+from executive.planning.portfolio import planner_for
 from executive.planning.recovery import recover
 from executive.planning.sensing import Subscribe
 from executive.planning.warm_up import Warm, WarmUp, WarmUpState
@@ -89,7 +89,7 @@ class HighLevel(Service):
         self.limits = limits
         self.clock = clock or system_clock()
         self.subscribe: Subscribe = subscribe or context.bus.subscribe
-        self.planner = Planner(robot.planner.engine, robot.planner.timeout)
+        self.planner = planner_for(robot.planner)
         self.warm_up = WarmUp(robot, context.kb, self.planner, on_failure=self.fail)
         self.goal_api = GoalApi(
             context,

@@ -10,9 +10,12 @@ grace period (TAMER ignores timeouts), the whole group is killed (the Aries and 
 Downward binaries with it) and a new worker is started for the next job. The worker's
 temp dir is private (Aries leaves files behind) and removed with it.
 
-Engines: ``kairos`` (default, up-kairos), ``aries``, ``fast-downward`` (classical
-domains), ``tamer`` (the optional ``tamer`` extra), and plugins: a UP engine class
-registered under the entry-point group ``dura.planners`` (``name = "pkg.mod:Engine"``).
+Engines: ``auto`` (the default: the first installed engine that supports the problem,
+:mod:`executive.planning.engine_choice`), ``kairos`` (up-kairos), ``aries``,
+``fast-downward`` (classical domains), ``tamer`` (the optional ``tamer`` extra), and
+plugins: a UP engine class registered under the entry-point group ``dura.planners``
+(``name = "pkg.mod:Engine"``). ``portfolio`` runs several at once
+(:mod:`executive.planning.portfolio`).
 """
 
 from __future__ import annotations
@@ -39,9 +42,10 @@ from typing import IO, TYPE_CHECKING, Any
 import psutil
 
 from executive.planning.goals import GoalSpec
+from executive.planning.metric import Metric
 from executive.planning.partial_order import PartialOrderPlan
 from executive.planning.problem import World
-from knowledge.description import DEFAULT_ENGINE
+from knowledge.description import AUTO, DEFAULT_ENGINE, PORTFOLIO
 from knowledge.errors import DuraError, PlanningError
 
 if TYPE_CHECKING:
@@ -49,13 +53,15 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("dura.planner")
 
-BUILTIN_ENGINES = ("kairos", "aries", "fast-downward", "tamer")
+BUILTIN_ENGINES = ("kairos", "aries", "fast-downward", "tamer")  # auto tries them in this order
 PLUGIN_GROUP = "dura.planners"
 TMP_PREFIX = "dura-planner-"  # the worker's temporary folder (engines write there)
 WORKER_PID = "worker.pid"  # in that folder: whose it is
 WORKER_MODULE = "executive.planning.planner_worker"  # run as python -m
 ABANDONED = 3600.0  # seconds after which a folder without a worker pid is left over
 STARTUP_TIMEOUT = 120.0  # seconds for a worker to import unified-planning and the engines
+BUILDING = 60.0  # seconds at least to build a problem, or to validate and convert a plan
+SEARCHING, SEARCHED = "searching", "searched"  # the phases of a solve job
 _HEADER = struct.Struct("!Q")
 
 
@@ -75,14 +81,22 @@ class PlanStatus(enum.Enum):
 
 
 @dataclass(frozen=True)
+class Progress:
+    """A frame the worker sends before its answer: the job is now in ``phase``."""
+
+    phase: str
+
+
+@dataclass(frozen=True)
 class PlanningTask:
     """What to plan: a domain file, a world to start from and the goals to reach,
-    without the ``blocked`` actions (the robot cannot do them now)."""
+    without the ``blocked`` actions (the robot cannot do them now), optimising ``metric``."""
 
     domain: Path
     world: World
     goals: tuple[GoalSpec, ...]
     blocked: frozenset[str] = frozenset()
+    metric: Metric | None = None
 
 
 @dataclass(frozen=True)
@@ -96,6 +110,7 @@ class PlanResult:
     time: float = 0.0  # seconds, from sending the job to receiving the answer
     validator: str = ""  # the UP validator that accepted the plan
     missing: tuple[str, ...] = ()  # without a plan: goal atoms no action can make true
+    notes: tuple[str, ...] = ()  # what the user should know about a plan (not optimised)
 
     @property
     def ok(self) -> bool:
@@ -107,6 +122,8 @@ class PlanResult:
         if self.ok:
             return ""
         last = next((line for line in reversed(self.log) if line.strip()), "")
+        if last and self.status is PlanStatus.UNSUPPORTED:
+            return last  # the refusal names the engine, what it lacks and who has it
         text = _REASONS[self.status].format(engine=self.engine)
         return f"{text}: {last}" if last and self.status not in _QUIET else text
 
@@ -128,12 +145,18 @@ def plugins() -> dict[str, metadata.EntryPoint]:
 
 
 def engine_names() -> list[str]:
-    """Every engine name a robot description may choose."""
+    """Every engine dura knows (built in, then plugins), in the order ``auto`` tries them."""
     return [*BUILTIN_ENGINES, *sorted(set(plugins()) - set(BUILTIN_ENGINES))]
 
 
+def choices() -> list[str]:
+    """Every engine name a robot description or the CLI may choose."""
+    return [AUTO, PORTFOLIO, *engine_names()]
+
+
 def hard_timeout(timeout: float) -> float:
-    """When a job is killed: the engine's timeout plus time to build, validate and convert."""
+    """When a search is killed: the engine's timeout plus a grace period (the problem's
+    building before it and the plan's validation after it have allowances of their own)."""
     return timeout + max(2.0, timeout / 4)
 
 
@@ -141,23 +164,28 @@ class Planner:
     """One engine in a warm worker process; :meth:`solve` is safe to call from any thread.
 
     Args:
-        engine: an engine name (see :func:`engine_names`).
+        engine: an engine name (see :func:`engine_names`), or ``auto``.
         timeout: seconds the engine may search; the job is killed a little later.
+        metric: what plans optimise, unless a task says (a robot description's).
     """
 
-    def __init__(self, engine: str = DEFAULT_ENGINE, timeout: float = 30.0) -> None:
-        if engine not in engine_names():
+    def __init__(
+        self, engine: str = DEFAULT_ENGINE, timeout: float = 30.0, metric: Metric | None = None
+    ) -> None:
+        if engine not in [AUTO, *engine_names()]:
             raise PlanningError(
-                f"unknown planner engine '{engine}' (choose from {', '.join(engine_names())})"
+                f"unknown planner engine '{engine}' (choose from {', '.join(choices())})"
             )
         if timeout <= 0:
             raise PlanningError(f"the planner timeout must be positive, not {timeout:g}")
         self.engine = engine
         self.timeout = timeout
+        self.metric = metric
         self._lock = threading.Lock()
         self._process: subprocess.Popen[bytes] | None = None
         self._tmp: Path | None = None
         self._ready = False
+        self.phase = ""  # where the job under way is: "", SEARCHING or SEARCHED
 
     def __enter__(self) -> Planner:
         return self
@@ -184,6 +212,11 @@ class Planner:
         """
         info: DomainInfo = self._job(("describe", self.engine, Path(domain)))
         return info
+
+    def installed(self) -> list[str]:
+        """The engines installed with the worker, in dura's order."""
+        names: list[str] = self._job(("installed", self.engine))
+        return names
 
     def read_world(self, domain: Path, problem: Path) -> World:
         """The objects and facts of a problem file, read in the worker.
@@ -285,8 +318,15 @@ class Planner:
             raise PlanningError(f"the planner worker did not start: {reason}") from e
         self._ready = True
 
-    def _call(self, message: tuple[Any, ...], timeout: float) -> Any:
+    def _call(
+        self,
+        message: tuple[Any, ...],
+        timeout: float,
+        phases: dict[str, float] | None = None,
+    ) -> Any:
         """Send a message and wait for the answer; kill the worker when it takes too long.
+        A :class:`Progress` frame of the worker starts a new allowance, ``phases[phase]``
+        seconds (the search gets the engine's timeout, whatever building the problem took).
 
         Raises:
             TimeoutError: no answer in time (the worker was killed).
@@ -295,10 +335,17 @@ class Planner:
         process = self._process
         if process is None or process.stdin is None or process.stdout is None:
             raise PlanningError("the planner worker is not running")
+        self.phase = ""
         try:
             self._wait_ready(process.stdout)
             send_frame(process.stdin, message)
-            return receive_frame(process.stdout, time.monotonic() + timeout)
+            deadline = time.monotonic() + timeout
+            while True:
+                answer = receive_frame(process.stdout, deadline)
+                if not isinstance(answer, Progress):
+                    return answer
+                self.phase = answer.phase
+                deadline = time.monotonic() + (phases or {}).get(answer.phase, timeout)
         except TimeoutError:
             self._reap()
             raise
@@ -312,6 +359,8 @@ class Planner:
     def solve(self, task: PlanningTask, timeout: float | None = None) -> PlanResult:
         """Plan for a task; never raises for what an engine does (see the result's status)."""
         timeout = self.timeout if timeout is None else timeout
+        if task.metric is None and self.metric is not None:
+            task = replace(task, metric=self.metric)
         with self._lock:
             began = time.monotonic()
             try:
@@ -319,16 +368,18 @@ class Planner:
                 if self._process is not None and self._process.stdout is not None:
                     self._wait_ready(self._process.stdout)
                 began = time.monotonic()  # a worker's start-up is not planning time
+                phases = {SEARCHING: hard_timeout(timeout), SEARCHED: max(BUILDING, timeout)}
                 result: PlanResult = self._call(
-                    ("solve", self.engine, task, timeout), hard_timeout(timeout)
+                    ("solve", self.engine, task, timeout), max(BUILDING, timeout), phases
                 )
             except TimeoutError:
-                result = PlanResult(
-                    PlanStatus.TIMEOUT,
-                    None,
-                    self.engine,
-                    (f"killed after {hard_timeout(timeout):g} s (the engine ignored its timeout)",),
-                )
+                why = {
+                    "": f"building the problem took more than {max(BUILDING, timeout):g} s",
+                    SEARCHING: f"the engine ignored its timeout: killed after "
+                    f"{hard_timeout(timeout):g} s of search",
+                    SEARCHED: f"validating the plan took more than {max(BUILDING, timeout):g} s",
+                }[self.phase]
+                result = PlanResult(PlanStatus.TIMEOUT, None, self.engine, (why,))
             except PlanningError as e:
                 result = PlanResult(PlanStatus.ERROR, None, self.engine, (str(e),))
         return replace(result, time=time.monotonic() - began)

@@ -23,15 +23,27 @@ from typing import Any
 
 import up_kairos
 from unified_planning.engines import ValidationResultStatus
+from unified_planning.engines.mixins import AnytimePlannerMixin
 from unified_planning.environment import get_environment
-from unified_planning.shortcuts import OneshotPlanner, PlanValidator
+from unified_planning.shortcuts import AnytimePlanner, OneshotPlanner, PlanValidator
 
-from executive.planning.planner import PlanningTask, PlanResult, PlanStatus, plugins
+from executive.planning.engine_choice import choose
+from executive.planning.metric import TOTAL_COST, costs_problem
+from executive.planning.planner import (
+    SEARCHED,
+    SEARCHING,
+    PlanningTask,
+    PlanResult,
+    PlanStatus,
+    engine_names,
+    plugins,
+)
 from executive.planning.problem import World, build, frozen, read_world
 from executive.planning.reachability import missing_atoms
 from executive.planning.stn import partial_order
-from knowledge.domain import DomainInfo, describe, parse
-from knowledge.errors import DuraError, PlanningError
+from knowledge.description import AUTO
+from knowledge.domain import DomainInfo, describe, parse, parse_problem
+from knowledge.errors import DomainError, DuraError, PlanningError
 
 _LOG_TAIL = 40  # lines of engine output kept in a result
 
@@ -79,7 +91,9 @@ class PlannerJobs:
         self.output = output
         self.engines: dict[str, Any] = {}
         self.validators: dict[str, Any] = {}
-        self.domains: dict[Path, tuple[float, Any]] = {}
+        self.anytime: dict[str, Any] = {}  # engines in anytime mode, for problems with a metric
+        self.progress: Callable[[str], None] = lambda phase: None  # told of a solve's phases
+        self.domains: dict[tuple[Path, bool], tuple[float, Any]] = {}
         warnings.simplefilter("ignore")  # UP warns about what it cannot establish; we check
         self.env = get_environment()
         self.env.credits_stream = None
@@ -93,12 +107,24 @@ class PlannerJobs:
             except Exception as e:
                 print(f"planner plugin '{name}' ({ep.value}) failed to load: {e}", file=sys.stderr)
 
-    def domain(self, path: Path) -> Any:
+    def domain(self, path: Path, costs: bool = False) -> Any:
+        """A parsed domain, kept while its file is unchanged; with ``costs``, with its
+        ``total-cost`` increases compiled into action costs (as UP's reader does for a
+        problem whose metric is ``(total-cost)``).
+
+        Raises:
+            DomainError: the file is not a valid domain, or has no action costs.
+        """
         mtime = path.stat().st_mtime
-        cached = self.domains.get(path)
+        cached = self.domains.get((path, costs))
         if cached is None or cached[0] != mtime:
-            cached = (mtime, parse(path))
-            self.domains[path] = cached
+            parsed = self.domain(path) if costs else parse(path)
+            if costs:
+                if not parsed.has_fluent(TOTAL_COST.name):
+                    raise DomainError(f"{path}: the metric needs the function (total-cost)")
+                parsed = parse_problem(path, costs_problem(parsed.name), domain_checked=True)
+            cached = (mtime, parsed)
+            self.domains[(path, costs)] = cached
         return cached[1]
 
     def engine(self, name: str) -> Any:
@@ -109,6 +135,28 @@ class PlannerJobs:
             self.engines[name] = OneshotPlanner(name=name)
         return self.engines[name]
 
+    def available(self) -> dict[str, Any]:
+        """Every installed engine dura may choose, in dura's order, by name → its class."""
+        known = self.env.factory.engines
+        return {n: self.env.factory.engine(n) for n in engine_names() if n in known}
+
+    def installed(self, engine: str) -> list[str]:
+        """The names of :meth:`available`."""
+        return list(self.available())
+
+    def best(self, name: str, problem: Any, timeout: float) -> Any:
+        """The last (best) plan an anytime engine finds by the timeout, as its result;
+        without one, its last answer."""
+        if name not in self.anytime:
+            self.anytime[name] = AnytimePlanner(name=name)
+        last = None
+        for answer in self.anytime[name].get_solutions(problem, timeout=timeout):
+            if answer.plan is not None or last is None or last.plan is None:
+                last = answer
+        if last is None:
+            raise PlanningError(f"{name} gave no answer")
+        return last
+
     def validator(self, name: str) -> Any:
         """A plan validator by name, kept (UP's factory looks up credits on every call)."""
         if name not in self.validators:
@@ -117,7 +165,8 @@ class PlannerJobs:
 
     def prepare(self, engine: str, domain: Path) -> bool:
         self.domain(domain)
-        self.engine(engine)
+        if engine != AUTO:
+            self.engine(engine)
         return True
 
     def describe(self, engine: str, domain: Path) -> DomainInfo:
@@ -132,24 +181,47 @@ class PlannerJobs:
 
     @_capturing_output
     def solve(self, engine_name: str, task: PlanningTask, timeout: float) -> PlanResult:
-        def result(status: PlanStatus, *lines: str, **more: Any) -> PlanResult:
-            return PlanResult(status, more.get("plan"), engine_name, tuple(lines), 0.0,
-                              more.get("validator", ""), more.get("missing", ()))  # fmt: skip
+        """Plan with an engine (``auto``: the first installed one that supports the
+        problem), validate the plan and make it a partial order."""
+        notes: list[str] = []
 
+        def result(status: PlanStatus, *lines: str, **more: Any) -> PlanResult:
+            return PlanResult(status, more.get("plan"), engine_name, lines, 0.0,
+                              more.get("validator", ""), more.get("missing", ()),
+                              tuple(notes))  # fmt: skip
+
+        metric = task.metric
         try:
-            problem = frozen(build(self.domain(task.domain), task.world, task.goals, task.blocked))
-            engine = self.engine(engine_name)
+            costs = metric is not None and metric.expression == TOTAL_COST
+            domain = self.domain(task.domain, costs)
+            problem = frozen(build(domain, task.world, task.goals, task.blocked, metric))
+            if engine_name != AUTO:
+                self.engine(engine_name)  # not installed: say how to install it
         except DuraError as e:
             return result(PlanStatus.ERROR, str(e))
-        unsupported = _missing_features(engine, problem)
-        if unsupported:
-            return result(PlanStatus.UNSUPPORTED, f"unsupported features: {unsupported}")
+        available = self.available()
+        wanted = list(available) if engine_name == AUTO else [engine_name]
+        choice = choose(wanted, available, problem.kind.features)
+        if choice.refusal:
+            return result(PlanStatus.UNSUPPORTED, choice.refusal)
+        engine_name = choice.engine
+        engine = self.engine(engine_name)
+        if choice.unoptimised:
+            notes.append(choice.unoptimised)
+            problem = frozen(build(domain, task.world, task.goals, task.blocked))
+        self.progress(SEARCHING)  # the hard timeout counts from here
         try:
-            answer = engine.solve(problem, timeout=timeout)
+            if problem.quality_metrics and issubclass(type(engine), AnytimePlannerMixin):
+                answer = self.best(engine_name, problem, timeout)
+            else:
+                answer = engine.solve(problem, timeout=timeout)
         except Exception as e:  # an engine's own failure is a result, not a crash
             return result(PlanStatus.ERROR, f"{type(e).__name__}: {e}")
+        self.progress(SEARCHED)
         lines = [str(m.message).splitlines()[0] for m in answer.log_messages or () if m.message]
         status = _status(answer.status.name)
+        if answer.plan is not None and status is PlanStatus.TIMEOUT:
+            status = PlanStatus.SOLVED  # the best plan found by the timeout
         if answer.plan is None or status is not PlanStatus.SOLVED:
             why = _missing(problem, task) if status in _EXPLAINED else ()
             status = PlanStatus.ERROR if status is PlanStatus.SOLVED else status
@@ -187,13 +259,6 @@ def _status(name: str) -> PlanStatus:
     }.get(name, PlanStatus.ERROR)
 
 
-def _missing_features(engine: Any, problem: Any) -> str:
-    """The features of a problem an engine declares it does not support ('' if none)."""
-    supported = engine.supported_kind().features
-    missing = sorted(f.lower() for f in problem.kind.features if f not in supported)
-    return ", ".join(missing)
-
-
 _VALIDATORS = {
     "TimeTriggeredPlan": ("up_time_triggered_validator", "kairos-val"),
     "SequentialPlan": ("sequential_plan_validator", "kairos-val"),
@@ -210,7 +275,13 @@ def _validate(problem: Any, plan: Any, validator: Callable[[str], Any]) -> tuple
     if not names:
         return False, "", f"no validator for a {type(plan).__name__}"
     chosen = next((n for n in names if validator(n).supports(problem.kind)), names[0])
-    answer = validator(chosen).validate(problem, plan)
+    try:
+        answer = validator(chosen).validate(problem, plan)
+    except NotImplementedError:  # UP's simulator cannot evaluate some metrics (makespan of
+        # a sequential plan): the plan's validity does not depend on its metric
+        plain = problem.clone()
+        plain.clear_quality_metrics()
+        answer = validator(chosen).validate(plain, plan)
     if answer.status == ValidationResultStatus.VALID:
         return True, chosen, ""
     messages = [str(m.message).splitlines()[0] for m in answer.log_messages or ()]

@@ -19,7 +19,14 @@ from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 from executive import fast_start
-from executive.planning.planner import TMP_PREFIX, PlanResult, PlanStatus, receive_frame, send_frame
+from executive.planning.planner import (
+    TMP_PREFIX,
+    PlanResult,
+    PlanStatus,
+    Progress,
+    receive_frame,
+    send_frame,
+)
 from knowledge.errors import DuraError
 
 if TYPE_CHECKING:
@@ -55,6 +62,7 @@ def serve() -> None:
     os.dup2(2, 1)  # stray prints go to the worker log, never into the protocol
     try:
         jobs = warm_up(Path(tempfile.gettempdir()) / "engine-output.txt")
+        jobs.progress = lambda phase: send_frame(protocol_out, Progress(phase))
         with contextlib.suppress(BrokenPipeError):  # dura died while the worker worked
             send_frame(protocol_out, "ready")
             for message in _frames(protocol_in):
@@ -67,6 +75,12 @@ def serve() -> None:
                         if kind == "solve"
                         else e
                     )
+                except Exception as e:  # unified-planning's own failure: a result, the
+                    # worker stays (else the next job waits for a new one to start)
+                    if kind != "solve":
+                        raise
+                    reason = f"{type(e).__name__}: {e}".splitlines()[0]
+                    answer = PlanResult(PlanStatus.ERROR, None, engine, (reason,))
                 send_frame(protocol_out, answer)
     finally:
         # the input closed or the output broke: dura is done with this worker, or died

@@ -16,12 +16,14 @@ The goal must also hold at the end, like every goal.
 from __future__ import annotations
 
 import functools
-from collections.abc import Collection, Mapping, Sequence
+import time
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from executive.bus.clock import Clock
 from executive.planning.expression import (
     FALSE,
     TRUE,
@@ -37,10 +39,11 @@ from executive.planning.expression import (
     conjunction,
 )
 from executive.planning.goals import GoalSpec
+from executive.planning.metric import TOTAL_COST, Metric
 from knowledge.domain import parse, parse_problem, type_name
 from knowledge.errors import DomainError, located
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.records import Fact
+from knowledge.records import Fact, TimedFact
 from knowledge.sources import read_text
 
 if TYPE_CHECKING:
@@ -53,11 +56,40 @@ REACH_GOAL = "dura_reach_goal_"
 
 
 @dataclass(frozen=True)
+class TimedLiteral:
+    """A fact that becomes true (or false, or takes a value) at a time: PDDL's timed
+    initial literal, ``(at 10 (door_open d1))``; ``at`` in seconds after the plan starts
+    (the knowledge base keeps a :class:`~knowledge.records.TimedFact` at a wall-clock
+    time: :func:`literals`)."""
+
+    at: float
+    fact: Fact
+
+    def __str__(self) -> str:
+        return f"(at {self.at:g} {self.fact})"
+
+
+@dataclass(frozen=True)
 class World:
-    """The objects (name → type) and facts a problem starts from."""
+    """The objects (name → type) and facts a problem starts from, and the facts that
+    change on their own later (``timed``)."""
 
     objects: Mapping[str, str] = field(default_factory=dict)
     facts: tuple[Fact, ...] = ()
+    timed: tuple[TimedLiteral, ...] = ()
+
+
+def literals(timed: Iterable[TimedFact], now: float, clock: Clock) -> tuple[TimedLiteral, ...]:
+    """The knowledge base's timed facts still to come at ``now`` (wall clock), as timed
+    literals of a plan that starts now (in robot seconds)."""
+    return tuple(TimedLiteral(clock.robot(t.at - now), t.fact) for t in timed if t.at > now)
+
+
+def live_world(
+    objects: Mapping[str, str], facts: Iterable[Fact], kb: KnowledgeBase, clock: Clock
+) -> World:
+    """The world to plan from now: objects, facts, and the knowledge base's timed facts."""
+    return World(objects, tuple(facts), literals(kb.timed_facts(), time.time(), clock))
 
 
 # --- dura expressions -> UP ----------------------------------------------------------
@@ -181,9 +213,11 @@ def build(
     world: World,
     goals: Sequence[GoalSpec],
     blocked: Collection[str] = (),
+    metric: Metric | None = None,
 ) -> Problem:
-    """A problem: the domain (a UP problem without objects), a world and goals, without
-    the ``blocked`` actions.
+    """A problem: the domain (a UP problem without objects), a world (with its timed
+    facts) and goals, without the ``blocked`` actions, optimising ``metric``. For PDDL's
+    action costs the domain must be parsed with them (:func:`costs_problem`).
 
     Raises:
         DomainError: an object, fact or goal does not fit the domain.
@@ -197,26 +231,28 @@ def build(
         kept = [a for a in problem.actions if a.name not in blocked]
         problem.clear_actions()
         problem.add_actions(kept)
-    em = problem.environment.expression_manager
     for name, kind in world.objects.items():
         if problem.has_object(name):
             continue
         if not problem.has_type(kind):
             raise DomainError(f"object '{name}' has unknown type '{kind}'")
         problem.add_object(Object(name, problem.user_type(kind)))
+    costs = _has_action_costs(problem)
     for fact in world.facts:
-        if not problem.has_fluent(fact.name):
-            raise DomainError(f"fact {fact}: unknown predicate or function '{fact.name}'")
+        if costs and fact.name == TOTAL_COST.name:
+            continue  # compiled into the actions' costs, as UP's reader does
+        atom, value = _assignment(fact, problem)
         try:
-            atom = to_fnode(Atom(fact.name, fact.args), problem)
-            value = (
-                em.Bool(fact.value)
-                if isinstance(fact.value, bool)
-                else em.Real(Fraction(str(fact.value)))
-            )
             problem.set_initial_value(atom, value)
         except Exception as e:  # UP raises its own errors for unknown objects and types
             raise DomainError(f"fact {fact}: {e}") from e
+    for timed in world.timed:
+        atom, value = _assignment(timed.fact, problem)
+        try:
+            problem.add_timed_effect(GlobalStartTiming(_time(timed.at)), atom, value)
+        except Exception as e:
+            raise DomainError(f"timed fact {timed}: {e}") from e
+    _set_metric(problem, metric, costs)
     for goal in goals:
         target = to_fnode(goal.expression, problem)
         problem.add_goal(target)
@@ -227,9 +263,7 @@ def build(
         problem.add_fluent(window, default_initial_value=False)
         problem.add_fluent(reached, default_initial_value=False)
         problem.set_initial_value(window(), True)
-        problem.add_timed_effect(
-            GlobalStartTiming(Fraction(str(round(goal.deadline, 3)))), window(), False
-        )
+        problem.add_timed_effect(GlobalStartTiming(_time(goal.deadline)), window(), False)
         reach = InstantaneousAction(f"{REACH_GOAL}{goal.id}", _env=problem.environment)
         reach.add_precondition(target)
         reach.add_precondition(window())
@@ -237,6 +271,70 @@ def build(
         problem.add_action(reach)
         problem.add_goal(reached())
     return problem
+
+
+def _time(seconds: float) -> Fraction:
+    return Fraction(str(round(seconds, 3)))
+
+
+def _assignment(fact: Fact, problem: Problem) -> tuple[FNode, FNode]:
+    """A fact as UP's (fluent expression, value)."""
+    if not problem.has_fluent(fact.name):
+        raise DomainError(f"fact {fact}: unknown predicate or function '{fact.name}'")
+    em = problem.environment.expression_manager
+    try:
+        atom = to_fnode(Atom(fact.name, fact.args), problem)
+    except Exception as e:  # UP raises its own errors for unknown objects
+        raise DomainError(f"fact {fact}: {e}") from e
+    if isinstance(fact.value, bool):
+        return atom, em.Bool(fact.value)
+    return atom, em.Real(Fraction(str(fact.value)))
+
+
+def _has_action_costs(problem: Problem) -> bool:
+    return any(type(m).__name__ == "MinimizeActionCosts" for m in problem.quality_metrics)
+
+
+def _set_metric(problem: Problem, metric: Metric | None, costs: bool) -> None:
+    """Give the problem ``metric`` (the domain's action costs stay only for it)."""
+    from unified_planning.model import metrics  # here: as in build()
+
+    if metric is not None and metric.expression == TOTAL_COST and costs:
+        return
+    problem.clear_quality_metrics()
+    if metric is None:
+        return
+    if metric.expression is None:
+        problem.add_quality_metric(metrics.MinimizeMakespan(environment=problem.environment))
+        return
+    try:
+        target = to_fnode(metric.expression, problem)
+    except Exception as e:
+        raise DomainError(f"metric '{metric}': {e}") from e
+    kind = (
+        metrics.MinimizeExpressionOnFinalState
+        if metric.minimize
+        else metrics.MaximizeExpressionOnFinalState
+    )
+    problem.add_quality_metric(kind(target, environment=problem.environment))
+
+
+def metric_of(problem: Problem) -> Metric | None:
+    """The metric of a parsed problem (PDDL's ``:metric``), if it has one.
+
+    Raises:
+        DomainError: a metric dura cannot carry to the engine.
+    """
+    for m in problem.quality_metrics:
+        name = type(m).__name__
+        if name == "MinimizeMakespan":
+            return Metric()
+        if name == "MinimizeActionCosts":
+            return Metric(True, TOTAL_COST)
+        if name in ("MinimizeExpressionOnFinalState", "MaximizeExpressionOnFinalState"):
+            return Metric(name.startswith("Minimize"), from_fnode(m.expression, problem))
+        raise DomainError(f"dura cannot carry the metric '{m}' to an engine")
+    return None
 
 
 def frozen(problem: Problem) -> Problem:
@@ -275,7 +373,12 @@ def _keep_kinds() -> None:
 
 
 def world_of(problem: Problem, domain: Problem | None = None) -> World:
-    """The objects and explicit initial facts of a parsed problem (domain constants left out)."""
+    """The objects, explicit initial facts and timed facts of a parsed problem (domain
+    constants left out).
+
+    Raises:
+        DomainError: a timed fact that is not a fact at a time after the start.
+    """
     constants = {o.name for o in domain.all_objects} if domain is not None else set()
     objects = {o.name: type_name(o.type) for o in problem.all_objects if o.name not in constants}
     facts: list[Fact] = []
@@ -286,14 +389,37 @@ def world_of(problem: Problem, domain: Problem | None = None) -> World:
                 facts.append(Fact(atom.fluent().name, args, True))
         else:
             facts.append(Fact(atom.fluent().name, args, float(value.constant_value())))
-    return World(objects, tuple(sorted(facts, key=lambda f: (f.name, f.args))))
+    timed = [
+        TimedLiteral(float(timing.delay), _fact_of(effect))
+        for timing, effects in problem.timed_effects.items()
+        for effect in effects
+        if timing.is_from_start()
+    ]
+    if len(timed) != sum(len(e) for e in problem.timed_effects.values()):
+        raise DomainError("dura plans only with timed facts counted from the start")
+    return World(
+        objects,
+        tuple(sorted(facts, key=lambda f: (f.name, f.args))),
+        tuple(sorted(timed, key=lambda t: (t.at, t.fact.name, t.fact.args))),
+    )
 
 
-def read_world(
+def _fact_of(effect: Any) -> Fact:
+    """A timed initial literal's effect as a fact."""
+    if not effect.is_assignment() or effect.is_conditional():
+        raise DomainError(f"dura plans only with timed facts, not with '{effect}'")
+    args = tuple(str(a.object().name) for a in effect.fluent.args)
+    value = effect.value
+    if value.is_bool_constant():
+        return Fact(effect.fluent.fluent().name, args, bool(value.bool_constant_value()))
+    return Fact(effect.fluent.fluent().name, args, float(value.constant_value()))
+
+
+def read_problem(
     domain: Path, problem_file: Path, parsed: Problem | None = None
-) -> tuple[World, Expression]:
-    """The world and the goal of a PDDL problem file (``parsed``: the domain, parsed
-    already).
+) -> tuple[World, Expression, Metric | None]:
+    """The world, the goal and the metric of a PDDL problem file (``parsed``: the domain,
+    parsed already).
 
     Raises:
         DomainError: the file cannot be read or does not fit the domain (``file:line``).
@@ -303,8 +429,20 @@ def read_world(
     except (OSError, UnicodeDecodeError) as e:
         raise DomainError(located(problem_file, None, f"cannot read: {e}")) from e
     problem = parse_problem(domain, text, str(problem_file), domain_checked=parsed is not None)
-    goal = conjunction(from_fnode(g, problem) for g in problem.goals)
-    return world_of(problem, parsed if parsed is not None else parse(domain)), goal
+    try:
+        goal = conjunction(from_fnode(g, problem) for g in problem.goals)
+        world = world_of(problem, parsed if parsed is not None else parse(domain))
+        return world, goal, metric_of(problem)
+    except DomainError as e:
+        raise DomainError(located(problem_file, None, str(e))) from e
+
+
+def read_world(
+    domain: Path, problem_file: Path, parsed: Problem | None = None
+) -> tuple[World, Expression]:
+    """The world and the goal of a PDDL problem file (see :func:`read_problem`)."""
+    world, goal, _ = read_problem(domain, problem_file, parsed)
+    return world, goal
 
 
 def seed_world(kb: KnowledgeBase, robot: RobotDescription) -> bool:

@@ -11,6 +11,7 @@ the domain); a change waits for the high level to plan, and reaches the plan exe
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -27,6 +28,7 @@ from executive.planning.expression import (
 from executive.planning.integrity import Trigger
 from executive.planning.warm_up import WarmUp
 from knowledge.errors import DuraError, KnowledgeError, did_you_mean
+from knowledge.records import Fact, TimedFact
 from knowledge.transitions import PlanState
 
 WORLD_WAIT = 25.0  # seconds state/get waits for a new robot's world (callers wait 30)
@@ -68,12 +70,16 @@ class WorldApi:
         if warm is not None:
             pattern.check(Signature.of(warm.domain, kb.objects()))
         facts = [f for f in kb.facts() if pattern.matches(f)]
-        return api.StateReply(facts, kb.objects())
+        timed = [t for t in kb.timed_facts() if pattern.matches(t.fact)]
+        return api.StateReply(facts, kb.objects(), timed or None)
 
     def _state_change(self, request: api.FactChange, *, unset: bool) -> api.FactReply:
         planning = self.planning()
         kb = self.context.kb
         fact = parse_fact(request.fact, Signature.of(planning.domain, kb.objects()))
+        if request.at is not None and request.at > time.time():
+            later = Fact(fact.name, fact.args, False) if unset else fact  # it stops holding
+            return self._timed(planning, TimedFact(later, request.at), request.source)
         with kb.transaction():
             if unset or fact.value is False:
                 kb.update_facts(remove=[fact])
@@ -85,6 +91,18 @@ class WorldApi:
         by = "the user" if request.source == "user" else request.source
         planning.goals.wake(f"{fact} {'unset' if unset else 'set'} by {by}")
         return api.FactReply(fact)
+
+    def _timed(self, planning: Deliberation, timed: TimedFact, source: str) -> api.FactReply:
+        """Keep a fact that takes effect later; the goal planner plans with it now."""
+        kb = self.context.kb
+        with kb.transaction():
+            kb.add_timed_fact(timed)
+            kb.log_event("STATE_TIMED", str(timed.fact), {"source": source, "at": timed.at})
+        planning.timed.added()
+        by = "the user" if source == "user" else source
+        when = time.strftime("%H:%M:%S", time.localtime(timed.at))
+        planning.goals.wake(f"{timed.fact} from {when} on, by {by}")
+        return api.FactReply(timed.fact, timed.at)
 
     def _object_add(self, request: api.ObjectAdd) -> api.ObjectAdd:
         domain = self.planning().domain

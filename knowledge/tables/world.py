@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from collections.abc import Iterable
 
-from knowledge.records import Fact
+from knowledge.records import Fact, TimedFact
 from knowledge.tables.database import Database, dump
 
 
@@ -72,8 +72,43 @@ class WorldTables(Database):
             for r in rows
         ]
 
+    def add_timed_fact(self, timed: TimedFact) -> None:
+        """Keep a fact that takes effect later (false: it stops holding then)."""
+        f = timed.fact
+        with self.transaction() as db:
+            db.execute(
+                "INSERT OR REPLACE INTO timed_facts(name, args, value, at) VALUES (?, ?, ?, ?)",
+                (f.name, " ".join(f.args), dump(f.value), timed.at),
+            )
+
+    def timed_facts(self) -> list[TimedFact]:
+        """The facts that take effect later, soonest first."""
+        rows = self._query("SELECT * FROM timed_facts ORDER BY at, name, args")
+        return [
+            TimedFact(
+                Fact(
+                    r["name"],
+                    tuple(r["args"].split()) if r["args"] else (),
+                    _fact_value(r["value"]),
+                ),
+                r["at"],
+            )
+            for r in rows
+        ]
+
+    def apply_due_facts(self, now: float) -> list[TimedFact]:
+        """Make the timed facts due by ``now`` facts of the world, in their order, in one
+        transaction; the ones applied."""
+        with self.transaction() as db:
+            due = [t for t in self.timed_facts() if t.at <= now]
+            for t in due:
+                self.update_facts(add=[t.fact])
+            db.execute("DELETE FROM timed_facts WHERE at <= ?", (now,))
+        return due
+
     def clear_world(self) -> None:
         """Forget every object and fact (before loading a new initial state)."""
         with self.transaction() as db:
             db.execute("DELETE FROM facts")
+            db.execute("DELETE FROM timed_facts")
             db.execute("DELETE FROM objects")

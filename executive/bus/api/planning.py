@@ -27,7 +27,7 @@ from executive.bus.schema import Between, Payload, Text
 from executive.bus.verb import Empty, Verb
 from knowledge.conventions import Above, AtMost
 from knowledge.record_class import record
-from knowledge.records import ComponentRecord, Event, Fact, Goal, KeyAccess, Plan
+from knowledge.records import ComponentRecord, Event, Fact, Goal, KeyAccess, Plan, TimedFact
 from knowledge.transitions import GoalState
 
 Count = Annotated[int, Between(0, 2**63 - 1)]
@@ -192,26 +192,31 @@ class StateQuery(Payload):
 
 @record
 class StateReply(Payload):
-    """Facts and objects (name -> type)."""
+    """Facts and objects (name -> type), and the facts that take effect later (not sent
+    when there are none)."""
 
     facts: list[Fact]
     objects: dict[str, str]
+    timed: list[TimedFact] | None = None
 
 
 @record
 class FactChange(Payload):
     """A fact to set or unset: ``(robot_at lab)``, ``(= (battery) 80)``; ``source`` names
-    who changes it (a component's name, or ``user``), as the event log records it."""
+    who changes it (a component's name, or ``user``), as the event log records it;
+    ``at``: when it takes effect (wall clock, seconds since the epoch; now if not set)."""
 
     fact: Text
     source: Text = "user"
+    at: float | None = None
 
 
 @record
 class FactReply(Payload):
-    """The fact as it was set or unset."""
+    """The fact as it was set or unset (``at``: when it takes effect, if later)."""
 
     fact: Fact
+    at: float | None = None
 
 
 @record

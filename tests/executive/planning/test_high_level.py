@@ -428,3 +428,54 @@ def test_a_dry_run_plans_for_a_goal_asked_about_without_adding_it(robot: Robot) 
     assert (robot.kb.goals(), len(robot.kb.plans()), len(robot.kb.events())) == stored
     alone = robot.dura("plan", "show", "--goal", asked[0])
     assert alone.returncode == 2 and "--goal goes with --dry-run" in alone.stderr
+
+
+def test_a_timed_fact_is_planned_with_before_its_time_and_takes_effect_at_it(
+    robot: Robot,
+) -> None:
+    asked = ("plan", "--dry-run", "--goal", "(picture_taken dock)", "--json")
+    before = json.loads(robot.dura(*asked).stdout)
+    assert before["status"] != "solved"  # nothing at the dock to photograph
+    done = robot.dura("state", "set", "(photographable dock)", "--at", "+60")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("(photographable dock) from ") and " on" in done.stdout
+    (timed,) = robot.kb.timed_facts()
+    assert timed.fact == Fact("photographable", ("dock",))
+    assert Fact("photographable", ("dock",)) not in robot.kb.facts()
+    later = robot.dura("state", "get", "photographable").stdout.split("LATER")[1]
+    assert "(photographable dock)" in later and "true" in later
+    reply = json.loads(robot.dura(*asked).stdout)
+    assert reply["status"] == "solved", reply
+    (picture,) = [s for s in reply["steps"] if s["action"] == "take_picture"]
+    assert picture["start"] >= 30.0  # once the dock has something to photograph (in 60 s)
+    kinds = [(e.kind, e.subject) for e in robot.kb.events()]
+    assert ("STATE_TIMED", "(photographable dock)") in kinds
+
+
+def test_timed_facts_become_facts_of_the_world_when_their_time_comes(robot: Robot) -> None:
+    # a few seconds ahead: each must still be to come when the executive hears of it
+    assert robot.dura("state", "set", "(= (travel_time dock lab) 9)", "--at", "+6").returncode == 0
+    assert robot.dura("state", "unset", "(photographable lab)", "--at", "+6").returncode == 0
+    assert wait_for(lambda: not robot.kb.timed_facts(), 30)
+    facts = robot.kb.facts()
+    assert Fact("travel_time", ("dock", "lab"), 9.0) in facts
+    assert Fact("photographable", ("lab",)) not in facts
+    by_timed = [e for e in robot.kb.events() if e.data.get("source") == "timed"]
+    assert {(e.kind, e.subject) for e in by_timed} == {
+        ("STATE_SET", "(= (travel_time dock lab) 9)"),
+        ("STATE_UNSET", "(not (photographable lab))"),
+    }
+
+
+@pytest.mark.parametrize(
+    ("at", "error"),
+    [
+        ("2000-01-01T00:00", "2000-01-01T00:00 has passed: give a time to come"),
+        ("soon", "'soon' is not a time: write 14:00, 14:00:30, +90"),
+    ],
+)
+def test_a_time_that_is_not_to_come_is_a_usage_error(robot: Robot, at: str, error: str) -> None:
+    done = robot.dura("state", "set", "(photographable dock)", "--at", at)
+    assert done.returncode == 2
+    assert error in done.stderr.splitlines()[-1]
+    assert not robot.kb.timed_facts()

@@ -93,7 +93,10 @@ def test_aries_says_it_cannot_plan_with_real_numbers() -> None:
     with Planner("aries", timeout=5) as aries:
         result = aries.solve(usecase_task("(picture_taken lab)"))
     assert result.status is PlanStatus.UNSUPPORTED
-    assert "real_type_durations" in result.reason
+    assert result.reason.startswith(
+        "aries does not support real type durations (REAL_TYPE_DURATIONS)"
+    )
+    assert "installed engines that do: kairos" in result.reason
 
 
 def test_fast_downward_plans_a_classical_domain(tmp_path: Path) -> None:

@@ -1,0 +1,5 @@
+(define (problem cheap) (:domain costs)
+  (:objects a b c d - place)
+  (:init (at a) (highway a d) (road a b) (road b c) (road c d) (= (total-cost) 0))
+  (:goal (at d))
+  (:metric minimize (total-cost)))

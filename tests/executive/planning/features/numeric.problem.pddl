@@ -1,0 +1,5 @@
+(define (problem scan_c) (:domain numeric)
+  (:objects a b c - place)
+  (:init (at a) (road a b) (road b c) (= (distance a b) 10) (= (distance b c) 6)
+         (= (speed) 2) (= (battery) 20))
+  (:goal (and (scanned c) (at c))))
