@@ -23,10 +23,10 @@ from executive.fast_start import use_reader_environment
 from executive.planning.dry_run import planned_steps
 from executive.planning.expression import TRUE, Expression
 from executive.planning.goals import GoalSpec
+from executive.planning.metric import Metric
 from executive.planning.partial_order import PartialOrderPlan, Step
 from executive.planning.planner import Planner, PlanningTask, PlanResult, choices
 from executive.planning.portfolio import Portfolio
-from executive.planning.metric import Metric
 from executive.planning.problem import World, build, read_problem
 from knowledge.description import DEFAULT_ENGINE, PORTFOLIO
 from knowledge.domain import parse
