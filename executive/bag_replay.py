@@ -17,7 +17,7 @@ from typing import Any
 from executive.bags.bag import Bag, Route, routes
 from executive.bags.reader import open_bag, read_types
 from executive.bus.keys import OBSERVATIONS
-from executive.bus.session import Message
+from executive.bus.message import Message
 from knowledge.description import RobotDescription
 from knowledge.errors import BagError, BusError
 from knowledge.robot import load_robot

@@ -30,8 +30,8 @@ from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from typing import Annotated, Any, ClassVar
 
+from executive.bus.message import Message
 from executive.bus.payloads import ObservationInfo
-from executive.bus.session import Message
 from knowledge.conventions import Above, AtLeast
 from knowledge.errors import ConfigError, did_you_mean
 from monitoring.state import Verdict

@@ -30,9 +30,9 @@ from typing import Any
 from executive.bus.api.monitoring import ObserverStatus
 from executive.bus.clock import Clock, system_clock
 from executive.bus.keys import OBSERVATIONS, component
+from executive.bus.message import Message
 from executive.bus.payloads import ComponentState
 from executive.bus.service import Context, Service
-from executive.bus.session import Message
 from executive.bus.states import Lifecycle
 from executive.bus.topic_source import TopicSource
 from knowledge.description import ObserverSpec

@@ -41,8 +41,8 @@ from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from executive.bus.keys import DIAGNOSES, EVENTS
+from executive.bus.message import Message
 from executive.bus.payloads import ComponentState
-from executive.bus.session import Message
 from executive.bus.states import Lifecycle
 from knowledge.description import RobotDescription
 from knowledge.errors import BusError

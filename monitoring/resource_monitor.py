@@ -23,9 +23,10 @@ from typing import Any
 import psutil
 
 from executive.bus.keys import RESOURCES, component, host
+from executive.bus.message import Message
 from executive.bus.payloads import ComponentState, NodeInfo, ResourceInfo
 from executive.bus.service import Context, Service
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from knowledge.errors import ConfigError, DuraError
 
 log = logging.getLogger("dura.resources")

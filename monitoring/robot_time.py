@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from executive.bus.clock import Clock
-from executive.bus.session import Message
+from executive.bus.message import Message
 
 
 @dataclass

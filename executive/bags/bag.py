@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from executive.bus.keys import DIAGNOSES, EVENTS, RESOURCES, topic
-from executive.bus.session import Message
+from executive.bus.message import Message
 from knowledge.description import RobotDescription
 from knowledge.errors import BagError, did_you_mean
 

@@ -33,7 +33,7 @@ from mcap.stream_reader import StreamReader, breakup_chunk
 from executive.bags.bag import DURA_PROFILE, Bag, BagTopic, Route
 from executive.bags.ros_messages import Definition, RosTypes
 from executive.bags.rosbag2_bag import reason, unpack_files, unpack_message
-from executive.bus.session import Message
+from executive.bus.message import Message
 from executive.ros2.message import RosMessage
 from knowledge.errors import BagError
 

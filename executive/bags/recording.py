@@ -42,8 +42,9 @@ from executive.bags.bag import DURA_PROFILE
 from executive.bags.mcap_bag import read_contents
 from executive.bags.schemas import schema_bytes, schema_name
 from executive.bus.keys import DIAGNOSES, EVENTS, OBSERVATIONS, RESOURCES, component
+from executive.bus.message import Message, encode
 from executive.bus.service import Context, Service
-from executive.bus.session import Bus, Message, encode
+from executive.bus.session import Bus
 from executive.bus.topic_source import TopicSource
 from executive.ros2.message import RosMessage
 from knowledge.errors import BagError, DuraError

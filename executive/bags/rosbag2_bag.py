@@ -28,7 +28,7 @@ from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
 
 from executive.bags.bag import Bag, BagTopic, Route
 from executive.bags.ros_messages import Definition, RosTypes
-from executive.bus.session import Message
+from executive.bus.message import Message
 from executive.ros2.message import RosMessage
 from knowledge.errors import BagError
 

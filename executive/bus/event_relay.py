@@ -15,8 +15,8 @@ from collections.abc import Callable
 from typing import Any
 
 from executive.bus.keys import EVENTS
+from executive.bus.message import Message
 from executive.bus.service import Context, Service
-from executive.bus.session import Message
 from knowledge.records import Event, to_plain
 
 log = logging.getLogger("dura.events")

@@ -29,9 +29,9 @@ from typing import Any, TextIO
 
 from executive.bus.event_kinds import WIDTH
 from executive.bus.event_text import describe, diagnosis
+from executive.bus.message import Message
 from executive.bus.payloads import read_event
 from executive.bus.schema import plain
-from executive.bus.session import Message
 from executive.bus.wording import listed, plural, seconds
 from executive.cli.output import bar, table
 from knowledge.errors import DuraError

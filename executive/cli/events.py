@@ -13,9 +13,10 @@ from typing import TYPE_CHECKING, Any
 from executive.bus.api import planning as api
 from executive.bus.event_text import line
 from executive.bus.keys import EVENTS
+from executive.bus.message import Message
 from executive.bus.payloads import read_event
 from executive.bus.schema import plain
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from executive.cli import exits_at_once
 from executive.cli.arguments import count, event_kind
 from executive.cli.client import add_client_options, connect

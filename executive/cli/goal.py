@@ -11,8 +11,9 @@ from typing import Any, TextIO
 
 from executive.bus.api import planning as api
 from executive.bus.keys import EVENTS
+from executive.bus.message import Message
 from executive.bus.schema import plain
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from executive.cli import exits_at_once
 from executive.cli.arguments import identifier, priority, seconds
 from executive.cli.client import add_client_options, ask, connect

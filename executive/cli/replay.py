@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from executive.bag_replay import BagReplay, MessageCounts
-from executive.bus.session import Message
+from executive.bus.message import Message
 from executive.bus.wording import plural
 from executive.cli.arguments import factor, seconds
 from executive.cli.output import add_json_flag, print_json, shown

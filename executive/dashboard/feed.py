@@ -22,8 +22,9 @@ from typing import Any
 
 from executive.bus.api import components, monitoring, planning, tasks
 from executive.bus.keys import DIAGNOSES, EVENTS, EXECUTIVE_ALIVE, OBSERVATIONS, component
+from executive.bus.message import Message
 from executive.bus.payloads import ComponentState, DiagnosisInfo, read_event
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from executive.dashboard.live import (
     FAULTS,
     GOALS,

@@ -32,7 +32,8 @@ from executive.bus.api.steps import (
     StepsUpcoming,
 )
 from executive.bus.keys import EXECUTIVE_ALIVE
-from executive.bus.session import Bus, Message
+from executive.bus.message import Message
+from executive.bus.session import Bus
 from executive.planning.partial_order import Step
 from executive.planning.task_runner import Progress, StepReport, StepTask, TaskRunner
 from knowledge.errors import DuraError

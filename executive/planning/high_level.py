@@ -36,9 +36,9 @@ from typing import Any
 from executive.bus.clock import Clock, system_clock
 from executive.bus.event_relay import EventRelay
 from executive.bus.keys import DIAGNOSES
+from executive.bus.message import Message
 from executive.bus.reports import DiagnosisInfo
 from executive.bus.service import Context, Service, ServiceState
-from executive.bus.session import Message
 from executive.planning.deliberation import Deliberation
 from executive.planning.goal_api import GoalApi
 from executive.planning.plan_executor import ExecutionLimits, TaskRunner

@@ -26,7 +26,7 @@ from typing import Any
 
 from executive.bus.clock import Clock
 from executive.bus.keys import topic as topic_key
-from executive.bus.session import Message
+from executive.bus.message import Message
 from executive.bus.topic_source import Subscription
 from executive.bus.worker import Worker
 from executive.planning.expression import Signature, parse_fact

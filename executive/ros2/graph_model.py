@@ -24,9 +24,9 @@ from typing import Any
 
 from executive.bus.api.monitoring import DIAGNOSIS_MODEL_CHANGE, ModelChange
 from executive.bus.keys import component
+from executive.bus.message import Message
 from executive.bus.payloads import ComponentState
 from executive.bus.service import Context, Service
-from executive.bus.session import Message
 from executive.bus.states import Lifecycle
 from executive.ros2.discovery import Discovery
 from knowledge.errors import DuraError

@@ -12,7 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from executive.bus.session import Message
+from executive.bus.message import Message
 from knowledge.errors import BusError
 
 # Decode one message's bytes (its caller id names it in a warning); raises BusError.

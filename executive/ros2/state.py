@@ -27,9 +27,9 @@ from collections.abc import Callable
 from typing import Any
 
 from executive.bus.keys import DIAGNOSES, EVENTS, OBSERVATIONS
+from executive.bus.message import Message
 from executive.bus.payloads import DiagnosisInfo, ObservationInfo
 from executive.bus.service import Context, Service
-from executive.bus.session import Message
 from executive.ros2.link import Ros2Link
 from executive.ros2.names import dds_topic
 from executive.ros2.participant import Writer

@@ -21,9 +21,10 @@ from typing import Any
 
 from executive.bus import keys
 from executive.bus.api.components import COMPONENT_ACHIEVE, Achievement
+from executive.bus.message import Message
 from executive.bus.payloads import GoalFeedback, GoalResult
 from executive.bus.schema import PayloadError
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from executive.bus.states import Command, GoalStatus
 from executive.bus.verb import Empty
 from executive.runtime.states import call_safely

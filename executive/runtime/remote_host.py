@@ -28,8 +28,9 @@ from typing import Any
 from executive.bus.api import hosts as api
 from executive.bus.api.components import LogQuery
 from executive.bus.keys import OBSERVATIONS, host, host_alive
+from executive.bus.message import Message
 from executive.bus.payloads import GENERAL_OK, NOT_AVAILABLE, ObservationInfo
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from executive.runtime.process_host import (
     ExitHandler,
     Launch,

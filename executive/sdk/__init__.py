@@ -19,7 +19,7 @@ An author subclasses :class:`Functionality` or :class:`Behavior` and overrides t
 
 from __future__ import annotations
 
-from executive.bus.session import Message
+from executive.bus.message import Message
 from executive.sdk.behavior import Behavior
 from executive.sdk.component import Functionality, Rate
 from executive.sdk.fault_injection import FaultMode

@@ -14,8 +14,9 @@ from collections.abc import Callable
 from typing import Any, final
 
 from executive.bus import keys
+from executive.bus.message import Message
 from executive.bus.payloads import GoalFeedback
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from executive.sdk.component import Component
 from executive.sdk.goal import GoalCancelled, GoalFailed, GoalRunner, GoalTimedOut
 from knowledge.description import Kind

@@ -42,8 +42,9 @@ from executive.bus import keys
 from executive.bus.api.components import COMPONENT_ACHIEVE, Achievement
 from executive.bus.api.planning import STATE_SET, STATE_UNSET, FactChange
 from executive.bus.clock import Clock, system_clock
+from executive.bus.message import Message
 from executive.bus.security import ENV_PASSWORD, ENV_USER, Login
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from executive.bus.states import ComponentPhase
 from executive.sdk.fault_injection import FaultInjector
 from executive.sdk.framework import Framework
@@ -181,7 +182,7 @@ class Component:
         """Call ``handler(message)`` for each message on ``topic/<topic>`` while running (a
         topic the description lists under ``subscribes``; the bus refuses the others).
 
-        ``message`` is a :class:`~executive.bus.session.Message`: ``message.payload`` is
+        ``message`` is a :class:`~executive.sdk.Message`: ``message.payload`` is
         the dict that was published (``message["celsius"]`` reads one field of it),
         ``message.stamp`` its ``stamp``. The handler runs on the bus's thread: keep it
         short. An exception escaping it ends the process (exit code 1), a fault.

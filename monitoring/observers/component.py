@@ -21,8 +21,8 @@ from dataclasses import dataclass
 from typing import Annotated, Any
 
 from executive.bus.keys import RESOURCES
+from executive.bus.message import Message
 from executive.bus.payloads import GENERAL_OK, NOT_AVAILABLE, NodeInfo
-from executive.bus.session import Message
 from executive.bus.states import Lifecycle
 from knowledge.conventions import Convert, Label
 from knowledge.typed_reader import MISSING, Place, open_entry, read_value

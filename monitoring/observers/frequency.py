@@ -39,8 +39,8 @@ from dataclasses import dataclass, field
 from typing import Annotated
 
 from executive.bus.keys import topic
+from executive.bus.message import Message
 from executive.bus.payloads import TIMEOUT
-from executive.bus.session import Message
 from knowledge.conventions import Above, Label
 from knowledge.typed_reader import Entry
 from monitoring.caller_groups import CallerGroup, TopicGroups, topics_with

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 from typing import Annotated, Any
 
 from executive.bus.keys import topic
-from executive.bus.session import Message
+from executive.bus.message import Message
 from knowledge.conventions import Above, Convert, Label
 from knowledge.errors import BusError, did_you_mean
 from knowledge.typed_reader import MISSING, Place, open_entry

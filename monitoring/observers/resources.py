@@ -28,8 +28,8 @@ from dataclasses import dataclass
 from typing import Annotated, Any
 
 from executive.bus.keys import RESOURCES
+from executive.bus.message import Message
 from executive.bus.payloads import NOT_AVAILABLE, NodeInfo
-from executive.bus.session import Message
 from knowledge.conventions import Check, Label, Titles
 from knowledge.errors import BusError
 from knowledge.typed_reader import MISSING, Entry, Place

@@ -25,8 +25,8 @@ from dataclasses import dataclass
 from typing import Annotated
 
 from executive.bus.keys import topic
+from executive.bus.message import Message
 from executive.bus.payloads import GENERAL_OK, TIMEOUT
-from executive.bus.session import Message
 from knowledge.conventions import Above, AtLeast
 from monitoring.caller_groups import TopicGroups, topics_with
 from monitoring.observer import Environment, Handler, Observer, ObserverConfig, ObserverResult

@@ -30,8 +30,8 @@ from dataclasses import dataclass
 from typing import Annotated
 
 from executive.bus.keys import topic
+from executive.bus.message import Message
 from executive.bus.payloads import GENERAL_ERROR
-from executive.bus.session import Message
 from knowledge.conventions import Label
 from knowledge.errors import BusError
 from knowledge.typed_reader import Entry

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from typing import Annotated
 
 from executive.bus.keys import topic
-from executive.bus.session import Message
+from executive.bus.message import Message
 from knowledge.conventions import Key, Label, Titles
 from knowledge.typed_reader import Entry
 from monitoring.caller_groups import CallerIds, TopicName

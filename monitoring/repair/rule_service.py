@@ -15,9 +15,9 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from executive.bus.keys import DIAGNOSES, OBSERVATIONS, host_alive
+from executive.bus.message import Message
 from executive.bus.payloads import DiagnosisInfo, ObservationInfo
 from executive.bus.service import Context, Service
-from executive.bus.session import Message
 from knowledge.errors import BusError, DuraError
 from monitoring.repair.action import ActionContext
 from monitoring.repair.engine import Fired, RuleEngine

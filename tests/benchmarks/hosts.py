@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from executive.bus.keys import topic
-from executive.bus.session import Message
+from executive.bus.message import Message
 from executive.testing.harness import RobotProcess, robot_variant
 from executive.testing.hosts import HostProcess
 from tests.benchmarks.runtime import percentiles

@@ -27,8 +27,9 @@ import time
 from pathlib import Path
 from typing import Any
 
+from executive.bus.message import Message
 from executive.bus.service import Context
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.robot import read_robot
 from monitoring.observer_manager import ObserverManager

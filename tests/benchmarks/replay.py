@@ -45,7 +45,7 @@ from executive.bags.bag import routes
 from executive.bags.reader import open_bag
 from executive.bags.recording import Recorder
 from executive.bus.keys import topic
-from executive.bus.session import Message
+from executive.bus.message import Message
 from executive.testing.harness import robot_variant
 from executive.testing.replay import BagReplay
 from knowledge.robot import load_robot

@@ -40,8 +40,9 @@ import time
 from pathlib import Path
 from typing import Any
 
+from executive.bus.message import Message
 from executive.bus.service import Context
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from executive.ros2.link import Ros2Link
 from executive.ros2.types import TypeLibrary
 from knowledge.knowledge_base import KnowledgeBase

@@ -25,7 +25,8 @@ from pathlib import Path
 import psutil
 
 from executive.bus.keys import component
-from executive.bus.session import Bus, Message
+from executive.bus.message import Message
+from executive.bus.session import Bus
 from tests.conftest import ROOT, USECASE, free_endpoint, run_dura, wait_for
 from tests.executive.runtime.rig import rig, robot, usecase
 

@@ -27,7 +27,8 @@ import zenoh
 
 from executive.bus import security
 from executive.bus.api.monitoring import DIAGNOSIS_MODEL_CHANGE, DIAGNOSIS_MODEL_READ, ModelChange
-from executive.bus.session import Bus, Message, session_config
+from executive.bus.message import Message
+from executive.bus.session import Bus, session_config
 from executive.testing.harness import RobotProcess, robot_variant
 from knowledge.errors import DuraError
 from tests.conftest import USECASE, wait_for

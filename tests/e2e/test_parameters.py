@@ -18,7 +18,7 @@ import yaml
 
 from executive.bus import security
 from executive.bus.keys import OBSERVATIONS
-from executive.bus.session import Message
+from executive.bus.message import Message
 from executive.testing.harness import RobotProcess, robot_variant
 from tests.conftest import ROOT, USECASE, wait_for
 

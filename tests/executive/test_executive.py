@@ -17,9 +17,10 @@ import pytest
 
 from executive.bus import security
 from executive.bus.keys import DIAGNOSES, EVENTS, component, service_alive, topic
+from executive.bus.message import Message
 from executive.bus.payloads import ComponentState
 from executive.bus.security import Login
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from executive.bus.states import Lifecycle
 from executive.testing.harness import RobotProcess
 from tests.conftest import ROOT, USECASE, run_dura, wait_for

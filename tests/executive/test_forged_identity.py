@@ -17,7 +17,8 @@ import pytest
 from executive.bus import security
 from executive.bus.api.monitoring import DIAGNOSIS_MODEL_CHANGE, DIAGNOSIS_MODEL_READ, ModelChange
 from executive.bus.keys import RESOURCES
-from executive.bus.session import Bus, Message
+from executive.bus.message import Message
+from executive.bus.session import Bus
 from executive.testing.harness import RobotProcess, robot_variant
 from knowledge.errors import BusError
 from tests.conftest import USECASE, wait_for

@@ -19,9 +19,10 @@ from typing import Any
 import pytest
 
 from executive.bus.keys import OBSERVATIONS, component
+from executive.bus.message import Message
 from executive.bus.payloads import ComponentState
 from executive.bus.service import Context
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from executive.bus.states import Lifecycle
 from knowledge.description import RobotDescription
 from knowledge.knowledge_base import KnowledgeBase

@@ -10,8 +10,8 @@ from collections.abc import Iterator
 import pytest
 
 from executive.bus.keys import component, topic
+from executive.bus.message import Message
 from executive.bus.payloads import ComponentState
-from executive.bus.session import Message
 from executive.bus.states import Lifecycle
 from knowledge.description import RobotDescription
 from knowledge.robot import load_robot

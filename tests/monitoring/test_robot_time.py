@@ -5,8 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from executive.bus.clock import Clock
+from executive.bus.message import Message
 from executive.bus.service import Context
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from knowledge.description import RobotDescription
 from knowledge.knowledge_base import KnowledgeBase
 from monitoring.observer_manager import ObserverManager

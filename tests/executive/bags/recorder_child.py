@@ -11,7 +11,7 @@ from pathlib import Path
 
 from executive.bags.recording import Recorder
 from executive.bus.keys import topic
-from executive.bus.session import Message, encode
+from executive.bus.message import Message, encode
 
 T0 = 1_700_000_000.0
 RATE = 100.0

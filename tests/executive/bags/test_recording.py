@@ -23,6 +23,7 @@ from executive.bags.reader import open_bag
 from executive.bags.recording import Recorder, rotated
 from executive.bags.schemas import SCHEMAS
 from executive.bus.keys import DIAGNOSES, OBSERVATIONS, RESOURCES, component, topic
+from executive.bus.message import Message, encode
 from executive.bus.payloads import (
     ComponentState,
     DiagnosisInfo,
@@ -30,7 +31,6 @@ from executive.bus.payloads import (
     ObservationInfo,
     ResourceInfo,
 )
-from executive.bus.session import Message, encode
 from executive.bus.states import Lifecycle
 from executive.ros2.message import RosMessage
 from tests.conftest import wait_for

@@ -13,8 +13,9 @@ import zenoh
 
 from executive.bus import security
 from executive.bus.api.components import COMPONENT_ACHIEVE, Achievement
+from executive.bus.message import Message
 from executive.bus.security import Credentials, Login
-from executive.bus.session import Bus, Message, session_config
+from executive.bus.session import Bus, session_config
 from executive.bus.verb import Empty
 from knowledge.errors import BusError
 from tests.conftest import wait_for

@@ -11,7 +11,8 @@ from collections.abc import Iterator
 import pytest
 import zenoh
 
-from executive.bus.session import Bus, Message, check_name, session_config
+from executive.bus.message import Message
+from executive.bus.session import Bus, check_name, session_config
 from knowledge.errors import BusError
 from tests.conftest import ROOT, wait_for
 

@@ -10,8 +10,8 @@ import logging
 import re
 from typing import Any
 
+from executive.bus.message import Message
 from executive.bus.schema import plain
-from executive.bus.session import Message
 from executive.cli.demo_timeline import Timeline, WarningLines, replans
 from knowledge.records import Event
 

@@ -12,7 +12,7 @@ from subprocess import CompletedProcess
 
 import pytest
 
-from executive.bus.session import Message
+from executive.bus.message import Message
 from executive.cli import replay as replay_command
 from executive.testing.harness import robot_variant
 from monitoring.timeline import Timeline

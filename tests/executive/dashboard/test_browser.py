@@ -19,7 +19,7 @@ import pytest
 
 from executive.bus.api import planning, tasks
 from executive.bus.keys import DIAGNOSES
-from executive.bus.session import Message
+from executive.bus.message import Message
 from executive.dashboard.server import Dashboard
 from executive.testing.harness import RobotProcess
 from tests.conftest import USECASE

@@ -13,7 +13,7 @@ import pytest
 from cyclonedds._clayer import ddspy_take, ddspy_write
 from cyclonedds.core import InstanceState, SampleState, ViewState
 
-from executive.bus.session import Message
+from executive.bus.message import Message
 from executive.ros2.link import Ros2Link
 from tests.conftest import ROOT, wait_for
 from tests.executive.ros2.messages import (

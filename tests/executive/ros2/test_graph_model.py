@@ -10,9 +10,9 @@ import pytest
 
 from executive.bus.api.monitoring import DIAGNOSIS_MODEL_CHANGE, ModelChange
 from executive.bus.keys import component
+from executive.bus.message import Message
 from executive.bus.payloads import ComponentState
 from executive.bus.service import Context
-from executive.bus.session import Message
 from executive.bus.states import Lifecycle
 from executive.ros2.graph_model import Ros2GraphModel, observed
 from executive.ros2.link import Ros2Link

@@ -14,8 +14,9 @@ from typing import Any
 import psutil
 
 from executive.bus.keys import EXECUTIVE_ALIVE, component
+from executive.bus.message import Message
 from executive.bus.payloads import ComponentState
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from executive.runtime.launcher import Launcher
 from knowledge.description import BehaviorSpec, ComponentSpec, FunctionalitySpec, RobotDescription
 from knowledge.knowledge_base import KnowledgeBase

@@ -19,7 +19,7 @@ import psutil
 import pytest
 
 from executive.bus.keys import DIAGNOSES, topic
-from executive.bus.session import Message
+from executive.bus.message import Message
 from executive.testing.harness import RobotProcess, free_endpoint, robot_variant
 from executive.testing.hosts import HostProcess, NetworkNamespace, namespaces_usable
 from tests.conftest import USECASE, wait_for

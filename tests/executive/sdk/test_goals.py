@@ -12,7 +12,8 @@ from pathlib import Path
 import pytest
 
 from executive.bus.keys import topic
-from executive.bus.session import Bus, Message
+from executive.bus.message import Message
+from executive.bus.session import Bus
 from executive.bus.states import GoalStatus
 from knowledge.description import ComponentSpec
 from tests.executive.runtime.rig import rig, robot, scripted

@@ -12,9 +12,10 @@ import pytest
 
 from executive.bus.api.monitoring import DIAGNOSIS_EXONERATE, ExonerationChange
 from executive.bus.keys import DIAGNOSES, DIAGNOSIS_MODEL, OBSERVATIONS
+from executive.bus.message import Message
 from executive.bus.payloads import DiagnosisInfo
 from executive.bus.service import Context
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.robot import load_robot
 from monitoring.diagnosis.diagnosis_service import DiagnosisService

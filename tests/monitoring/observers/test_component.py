@@ -5,8 +5,9 @@ from __future__ import annotations
 import json
 
 from executive.bus.keys import RESOURCES
+from executive.bus.message import Message
 from executive.bus.payloads import GENERAL_OK, NOT_AVAILABLE, NodeInfo
-from executive.bus.session import Bus, Message
+from executive.bus.session import Bus
 from executive.bus.states import Lifecycle
 from monitoring.observer import Environment, make_observer
 from monitoring.observer_config import config_of

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from executive.bus.session import Bus, Message
+from executive.bus.message import Message
+from executive.bus.session import Bus
 from executive.bus.states import Lifecycle
 from monitoring.observer import Environment, make_observer
 from monitoring.observer_config import config_of

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from executive.bus.message import Message
 from executive.bus.payloads import GENERAL_OK, TIMEOUT
-from executive.bus.session import Message
 from monitoring.observer import Observer, make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager

@@ -7,8 +7,8 @@ from typing import Any
 
 import pytest
 
+from executive.bus.message import Message
 from executive.bus.payloads import NO_STATE_FITS
-from executive.bus.session import Message
 from monitoring.observer import make_observer
 from monitoring.observer_config import config_of
 from monitoring.observer_manager import ObserverManager

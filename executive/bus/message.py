@@ -1,0 +1,84 @@
+"""What travels on the bus: JSON objects, encoded and decoded within limits, and the
+:class:`Message` a subscriber's handler gets (its payload, key, sender and times)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from knowledge.errors import BusError
+
+MAX_PAYLOAD = 1 << 20  # bytes: a larger message is dropped (a robot's messages are far smaller)
+
+
+def encode(payload: Mapping[str, Any]) -> bytes:
+    return json.dumps(payload, separators=(",", ":")).encode()
+
+
+def decode(raw: bytes, key: str = "") -> dict[str, Any]:
+    """A JSON object from bytes.
+
+    Raises:
+        BusError: the payload is not a JSON object, is larger than ``MAX_PAYLOAD`` or
+            nested too deeply to read.
+    """
+    if len(raw) > MAX_PAYLOAD:
+        raise BusError(f"{key}: payload of {len(raw)} bytes refused (at most {MAX_PAYLOAD})")
+    try:
+        value = json.loads(raw)
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise BusError(f"{key}: malformed payload (not JSON: {e})") from e
+    except RecursionError:
+        raise BusError(f"{key}: malformed payload (nested too deeply)") from None
+    if not isinstance(value, dict):
+        raise BusError(f"{key}: malformed payload (a JSON {type(value).__name__}, not an object)")
+    return value
+
+
+@dataclass
+class Message:
+    """One received message: what a ``subscribe`` handler gets.
+
+    ``payload`` is the published dict, decoded on first use (hot paths skip it);
+    ``message["celsius"]`` and ``message.get("celsius")`` read a field of it. ``key`` is
+    the key it came on, ``caller_id`` who sent it, ``stamp`` the payload's ``stamp``.
+    """
+
+    key: str
+    raw: bytes
+    caller_id: str = ""
+    sent: float | None = None
+    received: float = 0.0
+    _payload: dict[str, Any] | None = field(default=None, repr=False)
+
+    @property
+    def payload(self) -> dict[str, Any]:
+        if self._payload is None:
+            self._payload = decode(self.raw, self.key)
+        return self._payload
+
+    def __getitem__(self, field: str) -> Any:
+        """A field of the payload (``message["celsius"]``).
+
+        Raises:
+            KeyError: the payload has no such field (the message names those it has).
+        """
+        try:
+            return self.payload[field]
+        except KeyError:
+            has = ", ".join(sorted(self.payload)) or "none"
+            raise KeyError(
+                f"the message on {self.key} has no field {field!r} (it has: {has})"
+            ) from None
+
+    def get(self, field: str, default: Any = None) -> Any:
+        """A field of the payload, or ``default``."""
+        return self.payload.get(field, default)
+
+    @property
+    def stamp(self) -> float | None:
+        """The ``stamp`` field of the payload, if it is a number."""
+        value = self.payload.get("stamp")
+        return float(value) if isinstance(value, (int, float)) else None
