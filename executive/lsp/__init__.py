@@ -1,7 +1,7 @@
 """``dura lsp``: a language server for PDDL domains and problems, robot descriptions and
 their rule files (stdio, on pygls).
 
-- :mod:`.server` — the protocol wired to dura: the open documents, debounced checks;
+- :mod:`.server` — the protocol wired to dura: the open documents, the checks as the user types;
   :mod:`.features` — one handler per request about a place in a file;
 - :mod:`.project` — which files are checked together (a robot description and the files
   it names, or PDDL on its own);

@@ -1,7 +1,8 @@
 """``dura lsp``: the language server, wired to pygls.
 
 This module only connects the protocol to dura: the open documents and the projects
-they belong to (:class:`Session`), the debounced checks, and one handler per feature,
+they belong to (:class:`Session`), the checks (at once when none runs; the changes made
+during one coalesced into one more after it), and one handler per feature,
 each a call into the module that knows the answer.
 """
 
@@ -32,7 +33,8 @@ from executive.lsp.project import (
 from knowledge.finding import Finding
 from knowledge.sources import Memo, read_text
 
-DEBOUNCE = 0.1  # seconds of quiet typing before the checks run
+DEBOUNCE = 0.0  # seconds of quiet before a check starts: none, since changes made while
+# a check runs are coalesced into one more check after it (:meth:`Session.schedule`)
 
 
 def path_of(uri: str) -> Path | None:
@@ -97,6 +99,11 @@ class Session:
             self.schedule(project, delay)
 
     def schedule(self, project: Project, delay: float) -> None:
+        """Check a project after ``delay``, or after the check under way: however fast
+        the user types, one check runs at a time and the last text is always checked."""
+        if project in self.running:
+            self.again.add(project)
+            return
         previous = self.due.pop(project, None)
         if previous is not None:
             previous.cancel()
