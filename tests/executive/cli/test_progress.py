@@ -77,7 +77,7 @@ def test_plan_offline_says_what_it_does_on_a_terminal_and_takes_the_line_away(
 ) -> None:
     code, shown = on_terminal(*TRANSPORT, cwd=tmp_path)
     assert code == 0, shown
-    assert "\rdura: planning with kairos (at most 30 s)" in shown
+    assert "\rdura: planning with auto (at most 30 s)" in shown  # the default engine
     live, result = shown.rsplit("\r\x1b[K", 1)  # the last thing done to the live line: cleared
     assert "dura: starting the planner" in live
     assert re.match(r"\S*parcel\.pddl: \d+ steps, makespan ", result), result
