@@ -18,6 +18,7 @@ are unavailable until its agent is back. Both are events of the knowledge base
 
 from __future__ import annotations
 
+import functools
 import logging
 import threading
 import time
@@ -44,6 +45,11 @@ from knowledge.errors import BusError, ComponentError, DuraError
 from knowledge.knowledge_base import KnowledgeBase
 
 log = logging.getLogger("dura.launcher")
+
+# Seconds an agent's vanished token waits for the agent's "stopping": Zenoh may deliver
+# a liveliness change ahead of data sent before it, so a clean stop's message may come
+# just after it. An agent that says it stops has left at once.
+STOPPING_GRACE = 1.0
 
 HostListener = Callable[[str, bool], None]
 """Told ``(host, connected)`` when a host agent joins or is lost."""
@@ -87,6 +93,7 @@ class RemoteHost(ProcessHost):
         self._logs: dict[str, str] = {}
         self._connected = False
         self.stopping = False  # the agent said it stops: its end is not a loss
+        self.on_stopping: Callable[[], None] = lambda: None  # told when it says so
         self._subscribers: list[Any] = []
 
     @property
@@ -106,6 +113,7 @@ class RemoteHost(ProcessHost):
 
     def _on_stopping(self, message: Message) -> None:
         self.stopping = True
+        self.on_stopping()
 
     def running(self) -> list[str]:
         """The components of processes started there that have not ended."""
@@ -232,6 +240,10 @@ class Hosts:
         self._listeners: list[HostListener] = []
         self._reported: dict[str, set[str]] = {}  # host: components told unavailable
         self._watch: Any = None
+        self._tokens = threading.Lock()  # one change of a host's token at a time
+        self._vanishing: dict[str, threading.Timer] = {}  # host: its loss, due
+        for name, remote in self.remote.items():
+            remote.on_stopping = functools.partial(self._stopping, name, remote)
 
     def open(self) -> None:
         self.local.open()
@@ -244,6 +256,10 @@ class Hosts:
         if self._watch is not None:
             self._watch.undeclare()
             self._watch = None
+        with self._tokens:
+            for due in self._vanishing.values():
+                due.cancel()
+            self._vanishing.clear()
         for remote in self.remote.values():
             remote.close()
         self.local.close()
@@ -277,8 +293,41 @@ class Hosts:
             log.warning("a host agent '%s' announced itself, but robot '%s' places nothing "
                         "there", name, self.robot.name)  # fmt: skip
             return
-        if alive == remote.connected:
-            return
+        with self._tokens:
+            due = self._vanishing.pop(name, None)
+            if due is not None:
+                due.cancel()  # back before its loss was taken: it never left
+                if alive:
+                    return
+            if alive == remote.connected:
+                return
+            if alive:
+                self._changed(name, remote, alive=True)
+            elif remote.stopping:
+                self._changed(name, remote, alive=False)
+            else:  # its "stopping" may still be on its way
+                due = threading.Timer(STOPPING_GRACE, self._vanished, (name, remote))
+                due.daemon = True
+                self._vanishing[name] = due
+                due.start()
+
+    def _stopping(self, name: str, remote: RemoteHost) -> None:
+        """The agent said it stops: it has left (its token vanishes now or soon)."""
+        with self._tokens:
+            due = self._vanishing.pop(name, None)
+            if due is not None:
+                due.cancel()
+            if remote.connected:
+                self._changed(name, remote, alive=False)
+
+    def _vanished(self, name: str, remote: RemoteHost) -> None:
+        with self._tokens:
+            if self._vanishing.pop(name, None) is None:
+                return  # cancelled meanwhile
+            self._changed(name, remote, alive=False)
+
+    def _changed(self, name: str, remote: RemoteHost, *, alive: bool) -> None:
+        """A host's agent joined, or left (stopped if it said so, else lost)."""
         if alive:
             remote.joined()
             self._report(name, self._reported.pop(name, set()), available=True)
