@@ -41,10 +41,14 @@ rules:
 MOVE = {"task": "move_to", "goal": {"start": "dock", "target": "lab"}}
 
 
-def lidar_observed_ok(robot: RobotProcess) -> bool:
+def lidar_observed_ok(robot: RobotProcess, after: float = 0.0) -> bool:
+    """Both lidar observers' latest reports are fine (and stamped after ``after``: the
+    latest reports of a restarted component may still be those from before)."""
     latest = robot.bus.request(observers_api("latest"))["observations"]
     lidar = [o for o in latest if o["observer"].startswith("lidar/")]
-    return len(lidar) == 2 and all(o["observation"] >= 0 for o in lidar)
+    return len(lidar) == 2 and all(
+        o["observation"] >= 0 and float(o.get("stamp") or 0.0) > after for o in lidar
+    )
 
 
 def record(robot: RobotProcess, out: Path) -> subprocess.Popen[str]:
@@ -109,9 +113,11 @@ def test_dura_run_records_its_own_traffic_and_its_observers_replay_as_they_ran(
     try:
         robot.request("task/start", MOVE)
         assert wait_for(lambda: lidar_observed_ok(robot), 30)
+        before = robot.events()[-1].id
         robot.request("component/restart", {"name": "lidar", "reason": "test"})
         assert wait_for(lambda: robot.events("TASK_RESTARTED"), 20)
-        assert wait_for(lambda: lidar_observed_ok(robot), 30)  # afresh after the restart
+        ready = robot.wait_for_event("COMPONENT_READY", "lidar", after=before, timeout=30)
+        assert wait_for(lambda: lidar_observed_ok(robot, after=ready.stamp), 30)  # afresh
     finally:
         robot.stop()
     with open_bag(out) as bag:
