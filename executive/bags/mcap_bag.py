@@ -32,7 +32,7 @@ from mcap.stream_reader import StreamReader, breakup_chunk
 
 from executive.bags.bag import DURA_PROFILE, Bag, BagTopic, Route
 from executive.bags.ros_messages import Definition, RosTypes
-from executive.bags.rosbag2_bag import reason, unpack_files, unpack_message
+from executive.bags.rosbag2_bag import reason, uncompressed
 from executive.bus.message import Message
 from executive.ros2.message import RosMessage
 from knowledge.errors import BagError
@@ -233,11 +233,7 @@ def open_mcap(
     bag = McapBag(path=path, format="", distro=distro)
     bag.extra_types = extra_types or {}
     try:
-        if compression == "file":
-            bag.temporary = tempfile.TemporaryDirectory(prefix="dura-bag-")
-            files = unpack_files(files, Path(bag.temporary.name))
-        elif compression == "message":
-            bag.unpack = unpack_message
+        files, bag.temporary, bag.unpack = uncompressed(files, compression)
         for name in files:
             stream = name.open("rb")
             bag.files.append(_File(name, stream, Contents()))

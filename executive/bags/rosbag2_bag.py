@@ -45,6 +45,25 @@ def unpack_message(data: bytes) -> bytes:
     return bytes(zstandard.ZstdDecompressor().decompressobj().decompress(data))
 
 
+def uncompressed(
+    files: Sequence[Path], compression: str | None
+) -> tuple[list[Path], tempfile.TemporaryDirectory[str] | None, Callable[[bytes], bytes] | None]:
+    """For rosbag2's compression mode: the files to read, the folder that holds them
+    decompressed (remove it with the bag), and how to decompress each message.
+
+    Raises:
+        BagError: a file is not zstd or is cut short.
+    """
+    if compression != "file":
+        return list(files), None, unpack_message if compression == "message" else None
+    folder = tempfile.TemporaryDirectory(prefix="dura-bag-")
+    try:
+        return unpack_files(files, Path(folder.name)), folder, None
+    except BaseException:
+        folder.cleanup()
+        raise
+
+
 def unpack_files(files: Sequence[Path], into: Path) -> list[Path]:
     """Decompress the files of a bag compressed per file (``x.db3.zstd`` -> ``x.db3``).
 
@@ -166,11 +185,7 @@ def open_sqlite3(
     bag = Sqlite3Bag(path=path, format="rosbag2 (sqlite3)", distro=distro)
     bag.extra_types = extra_types or {}
     try:
-        if compression == "file":
-            bag.temporary = tempfile.TemporaryDirectory(prefix="dura-bag-")
-            files = unpack_files(files, Path(bag.temporary.name))
-        elif compression == "message":
-            bag.unpack = unpack_message
+        files, bag.temporary, bag.unpack = uncompressed(files, compression)
         for name in files:
             bag.readers.append(_open_file(name))
         _read_topics(bag)
