@@ -17,6 +17,7 @@ from knowledge.robot import BusSpec, RobotFile
 from knowledge.sensing_spec import SensingRuleSpec
 
 _WORD = re.compile(r"[^\s();\[\],:{}]*$")
+_KEY = re.compile(r"([\w-]+)\s*:")
 _KIND = {
     "type": types.CompletionItemKind.Class,
     "fluent": types.CompletionItemKind.Function,
@@ -115,7 +116,8 @@ def _yaml(names: Names, text: str, offset: int) -> list[types.CompletionItem]:
         if parents in (["tasks"],):
             return _items(names, "action")
         return _keys(parents)
-    key = code.split(":", 1)[0].strip(" -")
+    keys = _KEY.findall(code)  # in a flow mapping, the last key before the cursor
+    key = keys[-1] if keys else ""
     if key == "name" and parents[-1:] == ["topics"]:  # an observer's topic
         key = "topic"
     return _values(names, key)

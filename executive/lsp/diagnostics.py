@@ -24,7 +24,7 @@ _DID_YOU_MEAN = re.compile(r" \(did you mean '([^']+)'\?\)")
 
 
 def diagnostic(finding: Finding, lines: Lines) -> types.Diagnostic:
-    """The finding as a diagnostic in the text ``lines``."""
+    """The finding as a diagnostic in the text ``lines`` (in their encoding's units)."""
     line = max((finding.line or 1) - 1, 0)
     text = lines.line_text(line)
     message = finding.message
@@ -32,11 +32,19 @@ def diagnostic(finding: Finding, lines: Lines) -> types.Diagnostic:
     plain = _DID_YOU_MEAN.sub("", message)
     quoted = [m.group(1) for m in _QUOTED.finditer(plain)]
     start, end = _at_column(text, finding.column - 1) if finding.column else _place(text, quoted)
-    where = types.Range(types.Position(line, start), types.Position(line, end))
     span = _SPAN.search(message)  # unified-planning's own place: lines and columns from 1
     if span is not None and int(span.group(1)) - 1 == line:
         first, column, last, end_column = (int(g) - 1 for g in span.groups())
-        where = types.Range(types.Position(first, column), types.Position(last, end_column))
+    else:
+        first, column, last, end_column = line, start, line, end
+    where = types.Range(  # the columns found are characters; the client counts its units
+        types.Position(first, lines.units(first, column)),
+        types.Position(last, lines.units(last, end_column)),
+    )
+    fix = None
+    if suggestion is not None:
+        written = lines.line_text(first)[column:end_column] if first == last else ""
+        fix = {"replacement": suggestion.group(1), "name": written}
     return types.Diagnostic(
         range=where,
         message=message,
@@ -44,8 +52,32 @@ def diagnostic(finding: Finding, lines: Lines) -> types.Diagnostic:
         if finding.is_error
         else types.DiagnosticSeverity.Warning,
         source=SOURCE,
-        data={"replacement": suggestion.group(1)} if suggestion else None,
+        data=fix,
     )
+
+
+def fix_range(shown: types.Diagnostic, lines: Lines) -> types.Range:
+    """Where a did-you-mean's name is in the text now: the diagnostic's range as the
+    client sent it back may be off (Neovim 0.7 sends byte columns for UTF-16 ones), so
+    the name is looked for on its line, the nearest to that range."""
+    data = shown.data if isinstance(shown.data, dict) else {}
+    name = data.get("name")
+    line = shown.range.start.line
+    if not isinstance(name, str) or not name or shown.range.end.line != line:
+        return shown.range
+    found = [
+        (lines.units(line, m.start()), lines.units(line, m.end()))
+        for m in re.finditer(_whole(name), lines.line_text(line), re.IGNORECASE)
+    ]
+    if not found:
+        return shown.range
+    start, end = min(found, key=lambda f: abs(f[0] - shown.range.start.character))
+    return types.Range(types.Position(line, start), types.Position(line, end))
+
+
+def _whole(name: str) -> str:
+    """A pattern of ``name`` written as a whole word."""
+    return rf"(?<![\w?:-]){re.escape(name)}(?![\w-])"
 
 
 def _at_column(text: str, start: int) -> tuple[int, int]:
@@ -60,7 +92,7 @@ def _place(text: str, names: list[str]) -> tuple[int, int]:
     the text without its indentation and comment."""
     code = re.split(r";|(?:^|\s)#", text, maxsplit=1)[0]  # no PDDL or YAML comment
     for name in reversed(names):
-        found = re.search(rf"(?<![\w?:-]){re.escape(name)}(?![\w-])", code, re.IGNORECASE)
+        found = re.search(_whole(name), code, re.IGNORECASE)
         if found:
             return found.start(), found.end()
     stripped = code.rstrip()

@@ -9,10 +9,10 @@ from lsprotocol import types
 from pygls.lsp.server import LanguageServer
 
 from executive.lsp.completion import complete
+from executive.lsp.diagnostics import fix_range
 from executive.lsp.formatting import format_pddl
 from executive.lsp.names import Occurrence
 from executive.lsp.navigation import Names
-from executive.lsp.pddl_syntax import Lines
 
 if TYPE_CHECKING:
     from executive.lsp.server import Session
@@ -29,17 +29,17 @@ _SYMBOL_KINDS = {
 }
 
 
-def _range(names: Names, o: Occurrence) -> types.Range:
-    lines = Lines(names.texts[o.path])
+def _range(session: Session, names: Names, o: Occurrence) -> types.Range:
+    lines = session.lines(names.texts[o.path])
     return types.Range(
         types.Position(*lines.position(o.start)), types.Position(*lines.position(o.end))
     )
 
 
-def _location(names: Names, o: Occurrence) -> types.Location:
+def _location(session: Session, names: Names, o: Occurrence) -> types.Location:
     from executive.lsp.server import uri_of
 
-    return types.Location(uri_of(o.path), _range(names, o))
+    return types.Location(uri_of(o.path), _range(session, names, o))
 
 
 def register(server: LanguageServer, session: Session) -> None:
@@ -53,7 +53,7 @@ def register(server: LanguageServer, session: Session) -> None:
         if path is None:
             return Names({}, ()), None
         names = session.names(path)
-        lines = Lines(names.texts.get(path, ""))
+        lines = session.lines(names.texts.get(path, ""))
         offset = lines.offset(params.position.line, params.position.character)
         return names, names.at(path, offset)
 
@@ -63,13 +63,16 @@ def register(server: LanguageServer, session: Session) -> None:
         if name is None:
             return None
         return types.Hover(
-            types.MarkupContent(types.MarkupKind.Markdown, names.hover(name)), _range(names, name)
+            types.MarkupContent(types.MarkupKind.Markdown, names.hover(name)),
+            _range(session, names, name),
         )
 
     @server.feature(types.TEXT_DOCUMENT_DEFINITION)
     def definition(ls: LanguageServer, params: types.DefinitionParams) -> list[types.Location]:
         names, name = at(params)
-        return [] if name is None else [_location(names, d) for d in names.definitions(name)]
+        return (
+            [] if name is None else [_location(session, names, d) for d in names.definitions(name)]
+        )
 
     @server.feature(types.TEXT_DOCUMENT_REFERENCES)
     def references(ls: LanguageServer, params: types.ReferenceParams) -> list[types.Location]:
@@ -77,7 +80,7 @@ def register(server: LanguageServer, session: Session) -> None:
         if name is None:
             return []
         found = names.references(name, params.context.include_declaration)
-        return [_location(names, o) for o in found]
+        return [_location(session, names, o) for o in found]
 
     @server.feature(
         types.TEXT_DOCUMENT_COMPLETION,
@@ -88,7 +91,7 @@ def register(server: LanguageServer, session: Session) -> None:
         if path is None:
             return types.CompletionList(False, [])
         names = session.names(path)
-        lines = Lines(names.texts.get(path, ""))
+        lines = session.lines(names.texts.get(path, ""))
         offset = lines.offset(params.position.line, params.position.character)
         return types.CompletionList(False, complete(names, path, offset))
 
@@ -104,8 +107,8 @@ def register(server: LanguageServer, session: Session) -> None:
             types.DocumentSymbol(
                 name=o.name,
                 kind=_SYMBOL_KINDS.get(o.kind, types.SymbolKind.Variable),
-                range=_range(names, o),
-                selection_range=_range(names, o),
+                range=_range(session, names, o),
+                selection_range=_range(session, names, o),
                 detail=o.detail or o.kind,
             )
             for o in names.occurrences
@@ -123,7 +126,7 @@ def register(server: LanguageServer, session: Session) -> None:
         formatted = format_pddl(text)
         if formatted == text:
             return []
-        end = Lines(text).position(len(text))
+        end = session.lines(text).position(len(text))
         return [types.TextEdit(types.Range(types.Position(0, 0), types.Position(*end)), formatted)]
 
     @server.feature(
@@ -131,13 +134,15 @@ def register(server: LanguageServer, session: Session) -> None:
         types.CodeActionOptions(code_action_kinds=[types.CodeActionKind.QuickFix]),
     )
     def code_actions(ls: LanguageServer, params: types.CodeActionParams) -> list[types.CodeAction]:
+        path = path_of(params.text_document.uri)
+        lines = session.lines(session.text(path) if path is not None else "")
         found = []
         for d in params.context.diagnostics:
             data = d.data if isinstance(d.data, dict) else {}
             replacement = data.get("replacement")
             if d.source != "dura" or not isinstance(replacement, str):
                 continue
-            edit = types.TextEdit(d.range, replacement)
+            edit = types.TextEdit(fix_range(d, lines), replacement)
             found.append(
                 types.CodeAction(
                     title=f"Change to '{replacement}'",

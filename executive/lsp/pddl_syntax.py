@@ -102,28 +102,51 @@ def parse(text: str) -> Form:
 
 
 class Lines:
-    """Offsets to (line, column) and back, both counted from 0 as the protocol does."""
+    """Offsets of a text to (line, column) and back, both counted from 0 as the protocol
+    does; a column counts the code units of the encoding the client and the server agreed
+    on (UTF-16 by default: an emoji is two)."""
 
-    def __init__(self, text: str) -> None:
+    def __init__(self, text: str, encoding: str = "utf-16") -> None:
         self.text = text
+        self.encoding = encoding
         self.starts = [0] + [i + 1 for i, c in enumerate(text) if c == "\n"]
 
     def position(self, offset: int) -> tuple[int, int]:
         line = bisect.bisect_right(self.starts, offset) - 1
-        return line, offset - self.starts[line]
+        return line, self.units(line, offset - self.starts[line])
 
     def offset(self, line: int, column: int) -> int:
         if line >= len(self.starts):
             return len(self.text)
         start = self.starts[max(line, 0)]
-        end = self.starts[line + 1] - 1 if line + 1 < len(self.starts) else len(self.text)
-        return min(start + max(column, 0), end)
+        text = self.line_text(max(line, 0))
+        if self.encoding == "utf-32" or text.isascii():
+            return start + min(max(column, 0), len(text))
+        units = 0
+        for i, c in enumerate(text):
+            if units >= column:
+                return start + i
+            units += _units(c, self.encoding)
+        return start + len(text)
+
+    def units(self, line: int, column: int) -> int:
+        """The code units of the first ``column`` characters of a line."""
+        text = self.line_text(line)[: max(column, 0)]
+        if self.encoding == "utf-32" or text.isascii():
+            return max(column, 0)
+        return sum(_units(c, self.encoding) for c in text) + max(column - len(text), 0)
 
     def line_text(self, line: int) -> str:
         if not 0 <= line < len(self.starts):
             return ""
         end = self.starts[line + 1] - 1 if line + 1 < len(self.starts) else len(self.text)
         return self.text[self.starts[line] : end]
+
+
+def _units(c: str, encoding: str) -> int:
+    if encoding == "utf-8":
+        return len(c.encode("utf-8", "surrogatepass"))
+    return 2 if ord(c) > 0xFFFF else 1  # utf-16: a surrogate pair beyond the BMP
 
 
 def typed_list(items: list[Token | Form]) -> list[tuple[Token, Token | None]]:

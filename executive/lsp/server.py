@@ -154,8 +154,12 @@ class Session:
         robot = next((p.robot for p in projects if p.robot is not None), None)
         return Names.of({f: self.text(f) for f in files}, robot)
 
+    def lines(self, text: str) -> Lines:
+        """A text's lines, their columns counted as the client and the server agreed."""
+        return Lines(text, self.server.workspace.position_encoding or "utf-16")
+
     def publish(self, path: Path, findings: list[Finding]) -> None:
-        lines = Lines(self.text(path))
+        lines = self.lines(self.text(path))
         self.server.text_document_publish_diagnostics(
             types.PublishDiagnosticsParams(
                 uri=uri_of(path), diagnostics=[diagnostic(f, lines) for f in findings]

@@ -93,17 +93,17 @@ local function run()
     return true
   end)
 
-  -- A typo typed in robot.yaml, sent as the small change the editor makes.
-  local line = cursor(robot, "requires: [obstacle_scan, base]")
+  -- A typo typed in robot.yaml after an emoji, sent as the small change the editor makes.
+  local line = cursor(robot, "📷")
   local text = vim.api.nvim_buf_get_lines(robot, line, line + 1, false)[1]
-  local from = text:find("obstacle_scan", 1, true) - 1
-  replace(robot, line, from, from + #"obstacle_scan", "obstacle_scna")
+  local from = text:find("laser_scan", 1, true) - 1
+  replace(robot, line, from, from + #"laser_scan", "laser_scna")
   got.robot_typo = diagnostics(robot, function(d)
     return #d > 0
   end)
 
   -- Its quick fix, applied as the editor applies a code action.
-  cursor(robot, "obstacle_scna", 2)
+  cursor(robot, "laser_scna", 2)
   local client = vim.lsp.get_active_clients()[1]
   local params = vim.lsp.util.make_range_params(0, client.offset_encoding)
   params.context = { diagnostics = vim.lsp.diagnostic.get_line_diagnostics(robot) }

@@ -16,6 +16,7 @@ from typing import Any
 import pytest
 
 from tests.conftest import ROOT
+from tests.executive.lsp.test_encoding import CAM
 
 NVIM = shutil.which("nvim")
 DRIVER = Path(__file__).with_name("neovim_driver.lua")
@@ -69,6 +70,11 @@ def test_neovim_shows_diagnostics_hover_definition_completion_formatting_and_fix
 ) -> None:
     problem = usecase / "examples" / "usecase" / "problem.pddl"
     problem.write_text(problem.read_text().replace("(robot_at dock)", "(robot_at dokc)"))
+    robot = usecase / "examples" / "usecase" / "robot.yaml"
+    text = robot.read_text()
+    start = text.index("  cam:\n")
+    cam = CAM.replace("laser_scna", "laser_scan")
+    robot.write_text(text[:start] + cam + text[text.index("\n\n", start) :])
     got = run_neovim(usecase, tmp_path)
     assert "error" not in got, got["error"]
     assert got["log"] == []
@@ -81,17 +87,16 @@ def test_neovim_shows_diagnostics_hover_definition_completion_formatting_and_fix
     assert dokc["severity"] == 1  # an error
     assert got["robot_opened"] == []
 
-    # a typo typed in robot.yaml, then its quick fix
+    # a typo typed in robot.yaml after an emoji, then its quick fix
     [typo] = got["robot_typo"]
     assert typo["message"] == (
-        "behavior 'move_to' requires unknown capability 'obstacle_scna'"
-        " (did you mean 'obstacle_scan'?)"
+        "functionality 'cam' requires unknown capability 'laser_scna' (did you mean 'laser_scan'?)"
     )
-    robot = (usecase / "examples" / "usecase" / "robot.yaml").read_text().splitlines()
-    line = robot.index("    requires: [obstacle_scan, base]")  # the file is as it was
-    assert (typo["lnum"], typo["col"], typo["end_col"]) == (line, 15, 28)
-    assert got["code_actions"] == ["Change to 'obstacle_scan'"]
-    assert got["fixed_line"] == "    requires: [obstacle_scan, base]"
+    line = robot.read_text().splitlines().index(cam.rstrip("\n"))  # the file is as it was
+    column = cam.encode().index(b"laser_scan")
+    assert (typo["lnum"], typo["col"], typo["end_col"]) == (line, column, column + 10)
+    assert got["code_actions"] == ["Change to 'laser_scan'"]
+    assert got["fixed_line"] == cam.rstrip("\n")
     assert got["robot_fixed"] == []
 
     # the task's definition is the domain's action; hover there tells of it
