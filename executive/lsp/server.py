@@ -57,6 +57,7 @@ class Session:
         self.due: dict[Project, asyncio.TimerHandle] = {}
         self.running: set[Project] = set()  # being checked
         self.again: set[Project] = set()  # changed while being checked
+        self.checked: dict[Path | Project, frozenset[Path]] = {}  # by robot, or project
         self.memo = Memo()  # written by the checker thread only
         self.checker = ThreadPoolExecutor(
             1, thread_name_prefix="dura-lsp-check"
@@ -136,10 +137,30 @@ class Session:
                     by_file = {}
                 for path, findings in by_file.items():
                     self.publish(path, findings)
+                if by_file:
+                    self.forget(project, frozenset(by_file))
                 if project not in self.again:
                     return
         finally:
             self.running.discard(project)
+
+    def forget(self, project: Project, files: frozenset[Path]) -> None:
+        """Clear the diagnostics of the files the project's last check covered and this
+        one did not (a robot's ``domain:`` edited), unless another project checks them;
+        such a file still open is checked on its own."""
+        owner = project.robot or project
+        before = self.checked.get(owner, frozenset())
+        self.checked[owner] = files
+        if project.robot is not None:  # what a robot checks is no longer checked alone
+            for alone in [o for o, f in self.checked.items() if isinstance(o, Project)]:
+                if self.checked[alone] & files:
+                    del self.checked[alone]
+        covered = frozenset().union(*self.checked.values())
+        open_files = self.texts()
+        for path in before - covered:
+            self.publish(path, [])
+            if path in open_files:
+                self.changed(path, delay=0)
 
     def names(self, path: Path) -> Names:
         """The names of the files checked with ``path`` (and of ``path``), and of the open

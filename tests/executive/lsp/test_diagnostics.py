@@ -148,3 +148,29 @@ async def test_a_standalone_observers_file_is_checked_as_dura_validate_checks_it
     assert checked is not None
     assert _words(shown) == [f.message for f in checked[1]]
     assert shown[0].range == _at(wrong, 0, "timeot")
+
+
+@pytest.mark.parametrize("domain_open", [False, True], ids=["closed", "open"])
+async def test_a_robot_that_names_another_domain_clears_the_old_domains_diagnostics(
+    client: LanguageClient, usecase: Path, domain_open: bool
+) -> None:
+    robot = usecase / "examples" / "usecase" / "robot.yaml"
+    domain = usecase / "domains" / "usecase" / "domain.pddl"
+    other = domain.with_name("other.pddl")
+    other.write_text(domain.read_text())
+    renamed = domain.read_text().replace("(:durative-action take_picture", "(:durative-action snap")
+    domain.write_text(renamed)
+    if domain_open:
+        open_file(client, domain)
+    text = robot.read_text()
+    open_file(client, robot)
+    on_domain = await diagnostics_until(client, domain, lambda d: len(d) > 0)
+    assert _words(on_domain) == [
+        "action 'snap' has no task in robot.yaml: it will be applied without running a behavior"
+    ]
+    moved = text.replace(
+        "domain: ../../domains/usecase/domain.pddl", "domain: ../../domains/usecase/other.pddl"
+    )
+    change_file(client, robot, moved)
+    assert await diagnostics_until(client, domain, lambda d: len(d) == 0) == []
+    assert await diagnostics_until(client, robot, lambda d: len(d) == 0) == []
