@@ -3,17 +3,22 @@ texts, with their findings grouped by file."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from pathlib import Path
 
 from executive.cli.validate import check_rule_files
 from executive.lsp.project import Project
 from executive.planning.domain_check import check_domain
-from knowledge.errors import DomainError
-from knowledge.finding import Finding, finding_of
-from knowledge.sources import Memo, unsaved
+from knowledge.asp import Asp
+from knowledge.errors import AspError, DomainError
+from knowledge.finding import Finding, Report, finding_of
+from knowledge.sources import Memo, read_text, unsaved
 from knowledge.validation import validate
 from monitoring.observer_config import check_observer_file, check_observers
+from monitoring.repair.rule import read_rules
+
+_RULES_KEY = re.compile(r"^(rules|asp)\s*:", re.MULTILINE)  # a repair rules file
 
 
 def check(
@@ -28,8 +33,7 @@ def check(
         if project.robot is not None:
             findings += _robot_findings(project.robot)
         elif project.alone is not None:
-            observers = check_observer_file(project.alone)
-            findings += observers[1] if observers is not None else []
+            findings += _alone_findings(project.alone)
         elif project.domain is not None:
             findings += _domain_findings(
                 project.domain, project.problems[0] if project.problems else None
@@ -65,3 +69,23 @@ def _domain_findings(domain: Path, problem: Path | None) -> list[Finding]:
         return check_domain(domain, problem)
     except DomainError as e:
         return [finding_of(e, str(domain))]
+
+
+def _alone_findings(path: Path) -> list[Finding]:
+    """A YAML file no robot names: an observers file as ``dura validate`` checks one; a
+    repair rules file as it checks a robot's, with the clingo syntax of its ASP files
+    (an integrity rules file needs the robot and its domain: it is not checked alone)."""
+    observers = check_observer_file(path)
+    if observers is not None:
+        return observers[1]
+    if _RULES_KEY.search(read_text(path)) is None:
+        return []
+    report = Report(str(path))
+    rules = read_rules(path, report)
+    findings = list(report.findings)
+    for program in rules.asp:
+        try:
+            Asp().load(program)
+        except AspError as e:
+            findings.append(finding_of(e, str(program)))
+    return findings

@@ -9,8 +9,10 @@ import pytest
 from lsprotocol import types
 from pytest_lsp import LanguageClient
 
+from knowledge.finding import Report
 from knowledge.validation import validate
 from monitoring.observer_config import check_observer_file
+from monitoring.repair.rule import read_rules as read_repair_rules
 from tests.executive.lsp.conftest import change_file, diagnostics_until, open_file
 
 pytestmark = [pytest.mark.slow, pytest.mark.asyncio]
@@ -174,3 +176,28 @@ async def test_a_robot_that_names_another_domain_clears_the_old_domains_diagnost
     change_file(client, robot, moved)
     assert await diagnostics_until(client, domain, lambda d: len(d) == 0) == []
     assert await diagnostics_until(client, robot, lambda d: len(d) == 0) == []
+
+
+async def test_a_rules_file_no_robot_names_is_checked_alone_with_its_asp_files(
+    client: LanguageClient, usecase: Path
+) -> None:
+    rules = usecase / "spare_rules.yaml"
+    text = "rules:\n  - type: restart\n    name: restart_cam\n    component: cam\n"
+    rules.write_text(text)
+    open_file(client, rules)
+    shown = await diagnostics_until(client, rules, lambda d: len(d) > 0)
+    report = Report(str(rules))
+    read_repair_rules(rules, report)
+    assert _words(shown) == [f.message for f in report.findings]
+    assert _words(shown) == [
+        "rule 'restart_cam' has no condition (give it one, or trigger it from an ASP file"
+        " named under 'asp')"
+    ]
+    assert shown[0].range == _at(text, 1, "- type: restart")
+    program = usecase / "more.lp"
+    program.write_text('trigger("restart_cam") :- fault(cam)\ninhibit(X).\n')
+    change_file(client, rules, "asp: [more.lp]\n" + text)
+    assert await diagnostics_until(client, rules, lambda d: len(d) == 0) == []
+    [syntax] = await diagnostics_until(client, program, lambda d: len(d) > 0)
+    assert syntax.message == "syntax error, unexpected <IDENTIFIER>"
+    assert syntax.range.start.line == 1
