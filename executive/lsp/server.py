@@ -33,9 +33,6 @@ from executive.lsp.project import (
 from knowledge.finding import Finding
 from knowledge.sources import Memo, read_text
 
-DEBOUNCE = 0.0  # seconds of quiet before a check starts: none, since changes made while
-# a check runs are coalesced into one more check after it (:meth:`Session.schedule`)
-
 
 def path_of(uri: str) -> Path | None:
     """The file of a ``file:`` URI, resolved; ``None`` for another scheme."""
@@ -54,7 +51,7 @@ class Session:
     def __init__(self, server: LanguageServer) -> None:
         self.server = server
         self.robots: dict[Path, Project] = {}
-        self.due: dict[Project, asyncio.TimerHandle] = {}
+        self.due: dict[Project, asyncio.Handle] = {}
         self.running: set[Project] = set()  # being checked
         self.again: set[Project] = set()  # changed while being checked
         self.checked: dict[Path | Project, frozenset[Path]] = {}  # by robot, or project
@@ -72,6 +69,15 @@ class Session:
                 found[path] = document.source
         return found
 
+    def versions(self) -> dict[Path, int | None]:
+        """The open documents' versions, by file."""
+        found = {}
+        for uri, document in self.server.workspace.text_documents.items():
+            path = path_of(uri)
+            if path is not None:
+                found[path] = document.version
+        return found
+
     def text(self, path: Path) -> str:
         """A file's text: its open document's, else the file's, else empty."""
         texts = self.texts()
@@ -86,7 +92,7 @@ class Session:
         for robot in find_robots(folders):
             self.robots[robot] = robot_project(robot, self.text(robot))
 
-    def changed(self, path: Path, delay: float = DEBOUNCE) -> None:
+    def changed(self, path: Path) -> None:
         """A document opened, changed or saved: check every project it belongs to."""
         if path.suffix in (".yaml", ".yml"):
             text = self.text(path)
@@ -97,11 +103,11 @@ class Session:
             else:
                 self.robots.pop(path, None)
         for project in projects_of(path, self.robots, self.texts()):
-            self.schedule(project, delay)
+            self.schedule(project)
 
-    def schedule(self, project: Project, delay: float) -> None:
-        """Check a project after ``delay``, or after the check under way: however fast
-        the user types, one check runs at a time and the last text is always checked."""
+    def schedule(self, project: Project) -> None:
+        """Check a project at once, or after the check under way: however fast the user
+        types, one check runs at a time and the last text is always checked."""
         if project in self.running:
             self.again.add(project)
             return
@@ -109,9 +115,7 @@ class Session:
         if previous is not None:
             previous.cancel()
         loop = asyncio.get_running_loop()
-        self.due[project] = loop.call_later(
-            delay, lambda: loop.create_task(self.run_checks(project))
-        )
+        self.due[project] = loop.call_soon(lambda: loop.create_task(self.run_checks(project)))
 
     async def run_checks(self, project: Project) -> None:
         """Check a project, once at a time: changes made meanwhile are checked after."""
@@ -124,7 +128,7 @@ class Session:
         try:
             while True:
                 self.again.discard(project)
-                texts = self.texts()
+                texts, versions = self.texts(), self.versions()
                 try:
                     by_file = await loop.run_in_executor(
                         self.checker, check, project, texts, self.memo
@@ -135,8 +139,8 @@ class Session:
                         types.LogMessageParams(types.MessageType.Error, message)
                     )
                     by_file = {}
-                for path, findings in by_file.items():
-                    self.publish(path, findings)
+                for path, findings in by_file.items():  # placed in the texts checked
+                    self.publish(path, findings, texts.get(path), versions.get(path))
                 if by_file:
                     self.forget(project, frozenset(by_file))
                 if project not in self.again:
@@ -160,7 +164,7 @@ class Session:
         for path in before - covered:
             self.publish(path, [])
             if path in open_files:
-                self.changed(path, delay=0)
+                self.changed(path)
 
     def names(self, path: Path) -> Names:
         """The names of the files checked with ``path`` (and of ``path``), and of the open
@@ -179,11 +183,21 @@ class Session:
         """A text's lines, their columns counted as the client and the server agreed."""
         return Lines(text, self.server.workspace.position_encoding or "utf-16")
 
-    def publish(self, path: Path, findings: list[Finding]) -> None:
-        lines = self.lines(self.text(path))
+    def publish(
+        self,
+        path: Path,
+        findings: list[Finding],
+        text: str | None = None,
+        version: int | None = None,
+    ) -> None:
+        """Show a file's findings, placed in ``text`` (by default, the file's now), as
+        found in the document's ``version`` (an editor drops those of an older one)."""
+        lines = self.lines(self.text(path) if text is None else text)
         self.server.text_document_publish_diagnostics(
             types.PublishDiagnosticsParams(
-                uri=uri_of(path), diagnostics=[diagnostic(f, lines) for f in findings]
+                uri=uri_of(path),
+                diagnostics=[diagnostic(f, lines) for f in findings],
+                version=version,
             )
         )
 
@@ -204,7 +218,7 @@ def make_server(version: str) -> LanguageServer:
     def did_open(ls: LanguageServer, params: types.DidOpenTextDocumentParams) -> None:
         path = path_of(params.text_document.uri)
         if path is not None:
-            session.changed(path, delay=0)
+            session.changed(path)
 
     @server.feature(types.TEXT_DOCUMENT_DID_CHANGE)
     def did_change(ls: LanguageServer, params: types.DidChangeTextDocumentParams) -> None:
@@ -216,13 +230,13 @@ def make_server(version: str) -> LanguageServer:
     def did_save(ls: LanguageServer, params: types.DidSaveTextDocumentParams) -> None:
         path = path_of(params.text_document.uri)
         if path is not None:
-            session.changed(path, delay=0)
+            session.changed(path)
 
     @server.feature(types.TEXT_DOCUMENT_DID_CLOSE)
     def did_close(ls: LanguageServer, params: types.DidCloseTextDocumentParams) -> None:
         path = path_of(params.text_document.uri)
         if path is not None:  # its file on disk is what counts now
-            session.changed(path, delay=0)
+            session.changed(path)
 
     features.register(server, session)
     return server
