@@ -3,6 +3,7 @@ check``, each at the name it is about, the domain and the robot checked together
 
 from __future__ import annotations
 
+import asyncio
 from pathlib import Path
 
 import pytest
@@ -13,7 +14,7 @@ from knowledge.finding import Report
 from knowledge.validation import validate
 from monitoring.observer_config import check_observer_file
 from monitoring.repair.rule import read_rules as read_repair_rules
-from tests.executive.lsp.conftest import change_file, diagnostics_until, open_file
+from tests.executive.lsp.conftest import WAIT, change_file, diagnostics_until, open_file, uri
 
 pytestmark = [pytest.mark.slow, pytest.mark.asyncio]
 
@@ -201,3 +202,23 @@ async def test_a_rules_file_no_robot_names_is_checked_alone_with_its_asp_files(
     [syntax] = await diagnostics_until(client, program, lambda d: len(d) > 0)
     assert syntax.message == "syntax error, unexpected <IDENTIFIER>"
     assert syntax.range.start.line == 1
+
+
+async def test_diagnostics_name_the_version_of_the_text_they_were_found_in(
+    client: LanguageClient, usecase: Path
+) -> None:
+    robot = usecase / "examples" / "usecase" / "robot.yaml"
+    text = robot.read_text()
+    open_file(client, robot)
+    await diagnostics_until(client, robot, lambda d: True)
+    typo = text.replace("requires: [obstacle_scan, base]", "requires: [obstacle_scna, base]")
+    change_file(client, robot, typo, version=7)
+
+    async def published() -> types.PublishDiagnosticsParams:
+        while True:
+            params = await client.wait_for_notification(types.TEXT_DOCUMENT_PUBLISH_DIAGNOSTICS)
+            if params.uri == uri(robot) and params.diagnostics:
+                return params  # type: ignore[no-any-return]
+
+    shown = await asyncio.wait_for(published(), WAIT)
+    assert shown.version == 7
