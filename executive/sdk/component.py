@@ -210,19 +210,22 @@ class Component:
             self.log.warning("achievement %r not stored: %s", key, e)
 
     @final
-    def set_fact(self, fact: str) -> None:
+    def set_fact(self, fact: str, *, at: float | None = None) -> None:
         """Make a fact true in the robot's world (the planner's state), e.g.
-        ``(battery_low)``, through the executive.
+        ``(battery_low)``, through the executive; with ``at`` (wall clock, seconds since
+        the epoch, as :func:`time.time`), only from then on: the planner plans with it
+        before (a timed fact, as ``dura state set --at``).
 
         Raises:
-            BusError: the executive refused it (unknown predicate or object) or is gone.
+            BusError: the executive refused it (unknown predicate or object, a time in
+                the past) or is gone.
         """
-        STATE_SET.call(self.bus, FactChange(fact, source=self.name), timeout=5.0)
+        STATE_SET.call(self.bus, FactChange(fact, source=self.name, at=at), timeout=5.0)
 
     @final
-    def unset_fact(self, fact: str) -> None:
+    def unset_fact(self, fact: str, *, at: float | None = None) -> None:
         """Make a fact false in the robot's world (see :meth:`set_fact`)."""
-        STATE_UNSET.call(self.bus, FactChange(fact, source=self.name), timeout=5.0)
+        STATE_UNSET.call(self.bus, FactChange(fact, source=self.name, at=at), timeout=5.0)
 
     @final
     def at_rate(self, hz: float, step: Callable[[], None]) -> Rate:

@@ -30,7 +30,7 @@ from executive.bus.session import Bus
 from executive.bus.states import Lifecycle
 from knowledge.description import RobotDescription
 from knowledge.errors import BusError, DuraError
-from knowledge.records import Event, Goal, GoalState
+from knowledge.records import Event, Goal, GoalState, TimedFact
 
 INJECT_TIMEOUT = 30.0  # seconds a fault injection waits for its component to run
 POLL = 0.05  # seconds between two looks of a wait
@@ -118,13 +118,19 @@ class RobotClient(ABC):
         reply = planning.STATE_GET.call(self.bus, planning.StateQuery(pattern))
         return [f.text for f in reply.facts]
 
-    def set_fact(self, fact: str) -> None:
-        """Make a fact true (or set a value: ``(= (battery) 80)``), as ``dura state set``."""
-        planning.STATE_SET.call(self.bus, planning.FactChange(fact))
+    def set_fact(self, fact: str, *, at: float | None = None) -> None:
+        """Make a fact true (or set a value: ``(= (battery) 80)``), as ``dura state set``;
+        with ``at`` (seconds since the epoch), from then on, as ``dura state set --at``."""
+        planning.STATE_SET.call(self.bus, planning.FactChange(fact, at=at))
 
-    def unset_fact(self, fact: str) -> None:
-        """Make a fact false, as ``dura state unset``."""
-        planning.STATE_UNSET.call(self.bus, planning.FactChange(fact))
+    def unset_fact(self, fact: str, *, at: float | None = None) -> None:
+        """Make a fact false, as ``dura state unset`` (``at``: as for :meth:`set_fact`)."""
+        planning.STATE_UNSET.call(self.bus, planning.FactChange(fact, at=at))
+
+    def timed_facts(self) -> list[TimedFact]:
+        """The facts that take effect later, soonest first, as ``dura state get`` lists
+        them under LATER."""
+        return planning.STATE_GET.call(self.bus, planning.StateQuery()).timed or []
 
     # --- events and status ---------------------------------------------------------------
 
