@@ -33,7 +33,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, Protocol
 
 from mcap.writer import CompressionType
 from mcap.writer import Writer as McapWriter
@@ -350,6 +350,19 @@ def repair(path: Path) -> Repaired:
     return Repaired(len(found), contents.whole, contents.size - contents.whole, end, rewritten=True)
 
 
+class RecordedTopics(TopicSource, Protocol):
+    """Topics whose messages do not travel on the bus, recorded in their own types: a
+    robot's ROS 2 topics (:class:`~executive.ros2.topics.Ros2Topics`), as CDR with
+    their type's ``ros2msg`` definition."""
+
+    @property
+    def keys(self) -> list[str]:
+        """The keys of the topics (``topic/scan``)."""
+
+    def definition(self, type: str) -> str:
+        """Return the ``ros2msg`` definition of a type (``sensor_msgs/msg/LaserScan``)."""
+
+
 class BusRecording:
     """A recorder fed by a bus session: it subscribes to every recorded key.
 
@@ -357,7 +370,7 @@ class BusRecording:
         bus: the robot's bus.
         recorder: where messages go.
         on_failure: called once if writing fails (e.g. the disk is full).
-        topics: topic keys whose messages are not on the bus (ROS 2's), with their source.
+        ros2: the robot's ROS 2 topics (not on the bus), recorded too.
     """
 
     def __init__(
@@ -365,25 +378,55 @@ class BusRecording:
         bus: Bus,
         recorder: Recorder,
         on_failure: Callable[[BagError], None] | None = None,
-        topics: Mapping[str, TopicSource] | None = None,
+        ros2: RecordedTopics | None = None,
     ) -> None:
         self.bus = bus
         self.recorder = recorder
-        self.topics = dict(topics or {})
+        self.ros2 = ros2
         self.failure: BagError | None = None
         self._on_failure = on_failure
         self._entities: list[Any] = []
+
+    @classmethod
+    def to_file(
+        cls,
+        bus: Bus,
+        path: Path,
+        *,
+        max_size: int = DEFAULT_MAX_SIZE,
+        keep: int = DEFAULT_KEEP,
+        flush_every: float = DEFAULT_FLUSH_EVERY,
+        ros2: RecordedTopics | None = None,
+        on_failure: Callable[[BagError], None] | None = None,
+    ) -> BusRecording:
+        """A recording of a robot's bus and ROS 2 topics to a file (``dura record``'s and
+        ``dura run --record``'s): see :class:`Recorder`.
+
+        Raises:
+            BagError: the file cannot be written.
+        """
+        definition = None if ros2 is None else ros2.definition
+        recorder = Recorder(
+            path,
+            bus.robot,
+            max_size=max_size,
+            keep=keep,
+            flush_every=flush_every,
+            ros2_definition=definition,
+        )
+        return cls(bus, recorder, on_failure, ros2)
 
     def start(self, states: Sequence[Mapping[str, Any]] = ()) -> None:
         """Subscribe; then record ``states`` (component state payloads: who runs now)
         for the components no state was recorded of meanwhile."""
         for key in RECORDED:
             self._entities.append(self.bus.subscribe(key, self._on_message, decoded=False))
-        for key, source in self.topics.items():
-            try:
-                self._entities.append(source.subscribe(key, self._on_message))
-            except DuraError as e:  # e.g. DDS refused the reader: the rest is recorded
-                log.warning("%s is not recorded: %s", key, e)
+        if self.ros2 is not None:
+            for key in self.ros2.keys:
+                try:
+                    self._entities.append(self.ros2.subscribe(key, self._on_message))
+                except DuraError as e:  # e.g. DDS refused the reader: the rest is recorded
+                    log.warning("%s is not recorded: %s", key, e)
         for state in states:
             key = component(str(state["component"]), "state")
             if not self.recorder.has_state(key):
@@ -412,8 +455,8 @@ class BusRecording:
 class Recording(Service):
     """The executive's own recording (``dura run --record``): it records from its
     configuration on, before the other services are configured, so it sees every
-    component state from the first; and the robot's ROS 2 topics (``ros2_topics``),
-    as CDR with their ``ros2msg`` schemas."""
+    component state from the first; and the robot's ROS 2 topics (``ros2``), as CDR
+    with their ``ros2msg`` schemas."""
 
     name = "recording"
 
@@ -424,15 +467,13 @@ class Recording(Service):
         *,
         max_size: int = DEFAULT_MAX_SIZE,
         flush_every: float = DEFAULT_FLUSH_EVERY,
-        ros2_topics: Mapping[str, TopicSource] | None = None,
-        ros2_definition: Callable[[str], str] | None = None,
+        ros2: RecordedTopics | None = None,
     ) -> None:
         super().__init__(context)
         self.path = path
         self.max_size = max_size
         self.flush_every = flush_every
-        self.ros2_topics = dict(ros2_topics or {})
-        self.ros2_definition = ros2_definition
+        self.ros2 = ros2
         self._recording: BusRecording | None = None
 
     @property
@@ -441,14 +482,13 @@ class Recording(Service):
         return self._recording.recorder.messages if self._recording is not None else 0
 
     def on_configure(self) -> None:
-        recorder = Recorder(
+        self._recording = BusRecording.to_file(
+            self.context.bus,
             self.path,
-            self.context.robot.name,
             max_size=self.max_size,
             flush_every=self.flush_every,
-            ros2_definition=self.ros2_definition,
+            ros2=self.ros2,
         )
-        self._recording = BusRecording(self.context.bus, recorder, topics=self.ros2_topics)
         self._recording.start()
 
     def on_shutdown(self) -> None:
