@@ -107,7 +107,7 @@ class Recorder:
         self._schemas: dict[str, int] = {}
         self._channels: dict[tuple[str, str, str], int] = {}
         self._sequence: dict[int, int] = {}
-        self._last = 0.0  # the newest message's arrival: when the next file begins
+        self._last = 0  # the newest message's arrival (ns): when the next file begins
         self.flush_every = flush_every
         self.ros2_definition = ros2_definition
         self._unflushed = False  # written since the last flush
@@ -207,12 +207,13 @@ class Recorder:
 
     def _add(self, writer: McapWriter, message: Message, schema: str, ros_type: str = "") -> None:
         channel = self._channel(writer, message.key, message.caller_id, schema, ros_type)
-        received = round(message.received * 1e9)
-        sent = round(message.sent * 1e9) if message.sent is not None else received
+        received = message.received_ns
+        sent = message.sent_ns
         sequence = self._sequence[channel] = self._sequence.get(channel, 0) + 1
-        writer.add_message(channel, received, message.raw, sent, sequence)
+        writer.add_message(channel, received, message.raw, received if sent is None else sent,
+                           sequence)  # fmt: skip
         self.messages += 1
-        self._last = max(self._last, message.received)
+        self._last = max(self._last, received)
 
     def _channel(
         self, writer: McapWriter, key: str, caller: str, schema: str, ros_type: str
@@ -254,7 +255,9 @@ class Recorder:
         self._schemas, self._channels, self._sequence = {}, {}, {}
         self.files += 1
         for state in self._states.values():  # each file replays on its own
-            snapshot = Message(state.key, state.raw, state.caller_id, state.sent, self._last)
+            snapshot = Message.at_ns(
+                state.key, state.raw, state.caller_id, state.sent_ns, self._last
+            )
             self._add(writer, snapshot, "dura.ComponentState")
 
     def _finish(self) -> None:
@@ -430,9 +433,8 @@ class BusRecording:
         for state in states:
             key = component(str(state["component"]), "state")
             if not self.recorder.has_state(key):
-                now = time.time()
                 raw = encode(state)
-                self._on_message(Message(key, raw, SNAPSHOT_CALLER, None, now))
+                self._on_message(Message.at_ns(key, raw, SNAPSHOT_CALLER, None, time.time_ns()))
 
     def stop(self) -> None:
         for entity in self._entities:

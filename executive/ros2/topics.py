@@ -214,18 +214,18 @@ class Ros2Topics:
 
         def on_samples(samples: list[Any], received: float) -> None:
             handlers = feed.handlers
+            received_ns = round(received * 1e9)
             for data, info in samples:
                 if not info.valid_data:
                     continue
-                message = RosMessage(
+                message = RosMessage.at_ns(
                     key,
                     data,
                     caller(info.publication_handle),
-                    info.source_timestamp * 1e-9,
-                    received,
-                    None,
-                    feed.decode,
-                    feed.type or "",
+                    info.source_timestamp,
+                    received_ns,
+                    decode=feed.decode,
+                    type=feed.type or "",
                 )
                 for handler in handlers:
                     try:
