@@ -50,6 +50,12 @@ def register(sub: Any) -> None:
         "to its last whole chunk, and say how much was cut (no robot needed)",
     )  # fmt: skip
     p.add_argument(
+        "--ros2-bag", metavar="FILE", type=Path,
+        help="write the ROS 2 topics of recording FILE as a rosbag2 bag (for rosbags, "
+        "'ros2 bag' and Foxglove) in the folder OUT (default: FILE's name with _ros2); "
+        "dura's own messages stay in FILE (no robot needed)",
+    )  # fmt: skip
+    p.add_argument(
         "--flush", type=seconds(), default=DEFAULT_FLUSH_EVERY, metavar="S",
         help=f"write a whole chunk at least every S seconds (default {DEFAULT_FLUSH_EVERY:g})",
     )  # fmt: skip
@@ -75,6 +81,8 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.repair is not None:
         return run_repair(args)
+    if args.ros2_bag is not None:
+        return run_ros2_bag(args)
     if args.out is None:
         raise BagError("record: give OUT.mcap to record to, or --repair FILE")
     robot = described_robot(args)
@@ -142,4 +150,23 @@ def run_repair(args: argparse.Namespace) -> int:
             f"dura: repaired {shown(args.repair)}: kept {plural(repaired.messages, 'message')}"
             f"{until}; cut {repaired.lost} bytes after its last whole chunk"
         )
+    return 0
+
+
+def run_ros2_bag(args: argparse.Namespace) -> int:
+    from executive.bags.export import export_ros2  # rosbags' writer: only here
+
+    source: Path = args.ros2_bag
+    out = args.out or source.with_name(source.stem + "_ros2")
+    exported = export_ros2(source, out)
+    if args.json:
+        print_json({"path": str(out), "topics": list(exported.topics),
+                    "messages": exported.messages, "left": list(exported.left)})  # fmt: skip
+        return 0
+    topics = ", ".join(exported.topics) or "none"
+    print(
+        f"dura: wrote {plural(exported.messages, 'message')} of {shown(source)} to the ROS 2 "
+        f"bag {shown(out)} (topics: {topics}); {plural(len(exported.left), 'channel')} of "
+        "dura's own stay in the recording"
+    )
     return 0
