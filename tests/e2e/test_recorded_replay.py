@@ -62,16 +62,14 @@ def first_live(path: Path, observer: str, verdict: str) -> float:
 
 
 def assert_loops_as_live(path: Path, timeline: Timeline) -> None:
-    """The replayed lidar timeout is seen at the live observer's loop, to the ms, and
-    diagnosed within less than a loop of the live diagnosis: the replay loops when the
-    live observer did (its own loops would be anywhere within an 8 Hz period)."""
+    """The replayed lidar timeout is seen at the live observer's loop, to the ms: the
+    replay loops when the live observer did (its own loops could be anywhere within an
+    8 Hz period; the diagnoses are compared by ``differences``)."""
     replayed = next(
         e for e in timeline.observations("lidar/1") if e.info.observation_msg == "timeout"
     )
     live = first_live(path, "lidar/1", "timeout")
     assert timeline.origin + replayed.time == pytest.approx(live, abs=0.001)
-    ours, theirs = timeline.holds()[0].periods[0][0], timeline.recorded_holds()[0].periods[0][0]
-    assert ours == pytest.approx(theirs, abs=0.1)
 
 
 def record(robot: RobotProcess, out: Path) -> subprocess.Popen[str]:
