@@ -54,8 +54,9 @@ class Message:
     sent: float | None = None
     received: float = 0.0
     _payload: dict[str, Any] | None = field(default=None, repr=False)
-    _sent_ns: int | None = field(default=None, init=False, repr=False, compare=False)
-    _received_ns: int | None = field(default=None, init=False, repr=False, compare=False)
+    # the times in exact ns where the source had them (see at_ns)
+    _sent_ns: int | None = field(default=None, kw_only=True, repr=False, compare=False)
+    _received_ns: int | None = field(default=None, kw_only=True, repr=False, compare=False)
 
     @classmethod
     def at_ns(
@@ -69,10 +70,9 @@ class Message:
     ) -> Self:
         """A message whose times are integer nanoseconds since the epoch, kept exact
         (``sent`` and ``received`` are their seconds, rounded to a float)."""
-        message = cls(key, raw, caller_id, None if sent_ns is None else sent_ns / 1e9,
-                      received_ns / 1e9, **fields)  # fmt: skip
-        message._sent_ns, message._received_ns = sent_ns, received_ns
-        return message
+        sent = None if sent_ns is None else sent_ns / 1e9
+        return cls(key, raw, caller_id, sent, received_ns / 1e9, _sent_ns=sent_ns,
+                   _received_ns=received_ns, **fields)  # fmt: skip
 
     @property
     def received_ns(self) -> int:
