@@ -91,8 +91,8 @@ class BagReplay:
             self.replay = Replay(
                 self.robot,
                 provided={r.key for r in found.values()},
-                origin=self.bag.start,
-                start=self.start,
+                origin_ns=self.bag.start_ns,
+                start_ns=self.start_ns,
                 on_entry=on_entry,
                 loops=self._live_loops(),
             )
@@ -106,17 +106,18 @@ class BagReplay:
             self.bag.close()
             raise
 
-    def _live_loops(self) -> dict[str, list[float]]:
+    def _live_loops(self) -> dict[str, list[int]]:
         """When each observer looped in the recorded run (a dura recording's
-        observations), so that the replay's loops are the live ones."""
+        observations, in ns), so that the replay's loops are the live ones."""
         bag = self.bag
         if not bag.keys_are_bus_keys or OBSERVATIONS not in {t.name for t in bag.topics}:
             return {}
-        loops: dict[str, set[float]] = {}
+        loops: dict[str, set[int]] = {}
         for message in bag.messages({OBSERVATIONS: Route(OBSERVATIONS)}):
             try:
                 payload = message.payload
-                loops.setdefault(str(payload["observer"]), set()).add(float(payload["stamp"]))
+                stamp = round(float(payload["stamp"]) * 1e9)  # the bus has it in seconds
+                loops.setdefault(str(payload["observer"]), set()).add(stamp)
             except (BusError, KeyError, TypeError, ValueError):
                 continue  # a malformed observation: that loop is not known
         return {observer: sorted(times) for observer, times in loops.items()}
@@ -150,7 +151,7 @@ class BagReplay:
 
     def run(self, messages: Iterable[Message] | None = None) -> Timeline:
         """Replay ``messages`` (default: :meth:`messages`) and return the timeline."""
-        return self.replay.run(self.messages() if messages is None else messages, self.end)
+        return self.replay.run(self.messages() if messages is None else messages, self.end_ns)
 
     def counts(self, timeline: Timeline) -> MessageCounts:
         """How the bag's messages were used by a replay of it."""

@@ -19,7 +19,6 @@ a process runs.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,7 +29,7 @@ from executive.bus.event_relay import EventRelay
 from executive.bus.service import Context, Service, ServiceState
 from executive.bus.session import Bus, Handler
 from knowledge.description import RobotDescription
-from knowledge.errors import ConfigError, DuraError
+from knowledge.errors import DuraError
 
 if TYPE_CHECKING:
     from executive.bus.reports import ComponentEntry, ExecutorTask
@@ -59,18 +58,11 @@ class TaskSettings:
 
 def ros2_link(robot: RobotDescription, group: str | None = None) -> Ros2Link:
     """The robot's ROS 2 link (the robot has a ``ros2:`` section): the executive's, or
-    that of a group of services in a process of its own, whose node is named after the
-    group (``dura_monitoring``) so that ROS 2 tools tell the two apart."""
+    that of a group of services in a process of its own (node ``dura_monitoring``).
+    Cyclone DDS loads only here, for a ROS 2 robot."""
     from executive.ros2.link import Ros2Link
 
-    spec = robot.ros2
-    if spec is None:
-        raise ConfigError(f"robot '{robot.name}' has no ros2 section")
-    if group is not None:
-        spec = dataclasses.replace(spec, node=f"{spec.node}_{group}")
-    nodes = {c.ros2.node: name for name, c in robot.components.items()
-             if c.ros2 is not None and c.ros2.node is not None}  # fmt: skip
-    return Ros2Link(spec, nodes=nodes)
+    return Ros2Link.of(robot, group)
 
 
 def launcher(
@@ -129,22 +121,10 @@ def recording_group(
     if path is None:
         return []
     from executive.bags.recording import DEFAULT_FLUSH_EVERY, DEFAULT_MAX_SIZE, Recording
-    from executive.bus.keys import topic
 
     size, flush = max_size or DEFAULT_MAX_SIZE, flush_every or DEFAULT_FLUSH_EVERY
-    if ros2 is None:
-        return [Recording(context, path, max_size=size, flush_every=flush)]
-    store = ros2.library.store
-    return [
-        Recording(
-            context,
-            path,
-            max_size=size,
-            flush_every=flush,
-            ros2_topics={topic(t.observed_as): ros2.topics for t in ros2.spec.topics.values()},
-            ros2_definition=lambda name: store.generate_msgdef(name, ros_version=2)[0],
-        )
-    ]
+    topics = None if ros2 is None else ros2.topics
+    return [Recording(context, path, max_size=size, flush_every=flush, ros2=topics)]
 
 
 def ros2_group(context: Context, link: Ros2Link | None) -> list[Service]:

@@ -13,9 +13,14 @@ first looked up; a plugin that fails to load is a warning naming it.
 
 Messages reach an observer through the handlers of :meth:`Observer.inputs`, called on
 the bus's threads: they only queue. Everything else (filters, checks) happens in
-:meth:`Observer.observe`, on the manager's loop thread. Times are seconds of robot time
-(the wall clock unless ``DURA_TIME_SCALE`` is set, see :mod:`monitoring.robot_time`):
-the ``now`` of a loop and the ``received`` (and ``sent``) times of messages.
+:meth:`Observer.observe`, on the manager's loop thread. Times are robot time (the wall
+clock unless ``DURA_TIME_SCALE`` is set, see :mod:`monitoring.robot_time`): the ``now`` of
+a loop and the ``received`` (and ``sent``) times of messages. They are exact integer
+nanoseconds since the epoch (:meth:`Observer.observe_ns`, ``self.now_ns``,
+``self.started_ns``, ``message.received_ns``): an observer subtracts those and turns the
+difference into seconds, since seconds since the epoch as floats are 240 ns apart and
+a silence of exactly the timeout would not compare as one. The hooks also get ``now``
+in float seconds, as before.
 """
 
 from __future__ import annotations
@@ -95,7 +100,9 @@ class Observer(ABC):
     def __init__(self, config: ObserverConfig, environment: Environment | None = None) -> None:
         self.config = config
         self.environment = environment or Environment()
-        self.started = 0.0
+        self.started = 0.0  # seconds since the epoch
+        self.started_ns = 0  # the same, exact
+        self.now_ns = 0  # the loop being observed (exact)
 
     # --- the type's parts -----------------------------------------------------------
 
@@ -127,14 +134,29 @@ class Observer(ABC):
         return max(self.config.start_up_time, self.period)
 
     def start(self, now: float) -> None:
-        """Start observing afresh (on activation)."""
-        self.started = now
-        self._reset(now)
+        """Start observing afresh (on activation); ``now`` in seconds since the epoch."""
+        self.start_ns(round(now * 1e9))
+
+    def start_ns(self, now_ns: int) -> None:
+        """Start observing afresh; ``now_ns`` in integer nanoseconds since the epoch."""
+        self.started_ns, self.started = now_ns, now_ns / 1e9
+        self._reset(self.started)
 
     def observe(self, now: float) -> list[ObserverResult]:
-        """Report every resource; nothing during the start-up time."""
-        results = self._observe(now)
-        return results if now - self.started >= self.config.start_up_time else []
+        """Report every resource; nothing during the start-up time. ``now`` in seconds."""
+        return self.observe_ns(round(now * 1e9))
+
+    def observe_ns(self, now_ns: int) -> list[ObserverResult]:
+        """Report every resource; nothing during the start-up time. ``now_ns`` in
+        integer nanoseconds since the epoch."""
+        self.now_ns = now_ns
+        results = self._observe(now_ns / 1e9)
+        up = now_ns - self.started_ns >= round(self.config.start_up_time * 1e9)
+        return results if up else []
+
+    def since(self, then_ns: int) -> float:
+        """Seconds from ``then_ns`` to the loop being observed, exact to the nanosecond."""
+        return (self.now_ns - then_ns) / 1e9
 
     def result(
         self,

@@ -326,7 +326,7 @@ class ObserverManager(Service):
             else:
                 feed.handlers = tuple(h for h in feed.handlers if h is not handler)
         if should:
-            slot.observer.start(self._time.now())
+            slot.observer.start_ns(self._time.now_ns())
             slot.due = time.monotonic() + self._time.clock.wall(slot.observer.first_report)
             self._lock.notify_all()
         else:
@@ -363,13 +363,13 @@ class ObserverManager(Service):
                     log.warning("cannot publish an observation: %s", e)
 
     def _observe(self, due: list[_Slot], now: float) -> list[dict[str, Any]]:
-        wall, robot_now = time.time(), self._time.now()
+        wall, robot_now = time.time(), self._time.now_ns()
         payloads: list[dict[str, Any]] = []
         for slot in due:
             period = self._time.clock.wall(slot.observer.period)
             slot.due = slot.due + period if slot.due + period > now else now + period
             try:
-                results = slot.observer.observe(robot_now)
+                results = slot.observer.observe_ns(robot_now)
             except Exception:
                 log.exception("observer %s failed", slot.id)
                 continue

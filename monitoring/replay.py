@@ -26,6 +26,11 @@ per period from its start: a replay of a live run then sees each silence at the 
 the live run saw it, diagnoses it at the same time, and before the recorded repair
 that the live diagnosis caused (a restart stops the component a few ms later).
 
+Times are integer nanoseconds since the epoch, as the recording has them, from the
+messages through the observers' loops (:meth:`Observer.observe_ns`) to the timeline,
+whose entries are seconds since ``origin``: seconds since the epoch as floats are 240 ns
+apart, and a message exactly one timeout before a loop would not be seen as one.
+
 A recording without component states (a ROS 2 bag) counts every component as ready
 from the start. An observer that listens to a key the recording does not have is not
 replayed (:attr:`Timeline.skipped` says why). A recording of a dura run also holds
@@ -110,14 +115,15 @@ class Replay:
         robot: the robot description whose observers and rules to replay.
         provided: the keys the recording has messages on (``topic/scan``, ``resources``,
             ``component/lidar/state``).
-        origin: the recording's time of the timeline's 0 (its first message).
-        start: when to start observing (default: ``origin``).
+        origin_ns: the recording's time of the timeline's 0 (its first message), in
+            integer nanoseconds since the epoch, as every time the replay takes.
+        start_ns: when to start observing (default: ``origin_ns``).
         rule_sets: the repair rules (default: the robot description's rules files).
         exonerate, max_card, timeout: the diagnosis engine's options (as live: off,
             none, 2 s).
         settle, period: the diagnosis service's timing (as live).
         on_entry: called with each timeline entry as it happens.
-        loops: when each observer (by id) looped live, in the recording's time, sorted.
+        loops: when each observer (by id) looped live, in the recording's time (ns), sorted.
 
     Raises:
         ConfigError, AspError: an observer or a rules file of the robot is invalid.
@@ -128,8 +134,8 @@ class Replay:
         robot: RobotDescription,
         *,
         provided: Collection[str],
-        origin: float,
-        start: float | None = None,
+        origin_ns: int,
+        start_ns: int | None = None,
         rule_sets: Sequence[RuleSet] | None = None,
         exonerate: bool = False,
         max_card: int | None = None,
@@ -137,13 +143,13 @@ class Replay:
         settle: float = SETTLE,
         period: float = PERIOD,
         on_entry: Callable[[Entry], None] | None = None,
-        loops: Mapping[str, Sequence[float]] | None = None,
+        loops: Mapping[str, Sequence[int]] | None = None,
     ) -> None:
         self.robot = robot
         self._loops = dict(loops or {})
-        self.origin = origin
-        self.start = origin if start is None else start
-        self.now = self.start
+        self.origin_ns = origin_ns
+        self.start_ns = origin_ns if start_ns is None else start_ns
+        self.now_ns = self.start_ns
         self._on_entry = on_entry
         self._with_states = any(state_component(k) is not None for k in provided)
         self._states: dict[str, Lifecycle] = {}
@@ -157,7 +163,7 @@ class Replay:
         if rule_sets is None:
             rule_sets = [read_rules(path) for path in robot.rules]
         self.rules = RuleEngine(rule_sets, clock=lambda: self.now) if rule_sets else None
-        self._due: list[tuple[float, int, int]] = []  # observer loops: (time, slot, generation)
+        self._due: list[tuple[int, int, int]] = []  # observer loops: (time, slot, generation)
         self._verdicts: dict[tuple[str, str, tuple[str, ...], tuple[str, ...]], object] = {}
         self._recorded_last: tuple[object, ...] | None = None
         self._begun = False
@@ -192,6 +198,11 @@ class Replay:
                 self._slots.append(_Slot(index, observer_id, component.name, observer, inputs))
 
     @property
+    def now(self) -> float:
+        """The replay's clock, in seconds since the epoch (the rules' clock)."""
+        return self.now_ns / 1e9
+
+    @property
     def observers(self) -> list[str]:
         """The ids of the observers that are replayed."""
         return [slot.id for slot in self._slots]
@@ -215,31 +226,31 @@ class Replay:
 
     # --- input ----------------------------------------------------------------------
 
-    def run(self, messages: Iterable[Message], end: float | None = None) -> Timeline:
-        """Replay messages (in order of reception), then up to ``end`` (default: the last
-        message), and return the timeline."""
-        last = self.start
+    def run(self, messages: Iterable[Message], end_ns: int | None = None) -> Timeline:
+        """Replay messages (in order of reception), then up to ``end_ns`` (default: the
+        last message), and return the timeline."""
+        last = self.start_ns
         for message in messages:
             self.deliver(message)
-            last = max(last, message.received)
-        return self.finish(last if end is None else end)
+            last = max(last, message.received_ns)
+        return self.finish(last if end_ns is None else end_ns)
 
     def deliver(self, message: Message) -> None:
         """Run what was due until the message was received, then take it in."""
-        t = message.received
+        t = message.received_ns
         name = state_component(message.key)
-        if t < self.start:
+        if t < self.start_ns:
             if name is not None:  # before the window: only who is ready counts
                 self._component_state(message, t, quiet=True)
             return
         self.advance(t)
         self.messages += 1
         if name is not None:
-            self._component_state(message, self.now)
+            self._component_state(message, self.now_ns)
         elif message.key == DIAGNOSES:
-            self._recorded_diagnosis(message, self.now)
+            self._recorded_diagnosis(message, self.now_ns)
         elif message.key == EVENTS:
-            self._recorded_event(message, self.now)
+            self._recorded_event(message, self.now_ns)
         for handler in self._feeds.get(message.key, ()):
             try:
                 handler(message)
@@ -248,36 +259,38 @@ class Replay:
             except Exception:
                 log.exception("observer handler for %s failed", message.key)
 
-    def advance(self, until: float) -> None:
-        """Run every observer loop and diagnosis that is due until ``until``."""
+    def advance(self, until_ns: int) -> None:
+        """Run every observer loop and diagnosis that is due until ``until_ns``."""
         if not self._begun:
-            if until < self.start:
+            if until_ns < self.start_ns:
                 return
             self._begin()
         due = self._due
         diagnosis = self.diagnosis
         while True:  # the earliest of the next loop and the diagnosis' wake; loops first
             wake = diagnosis.wake_at
-            if due and due[0][0] <= until and (wake is None or due[0][0] <= wake):
+            wake_ns = None if wake is None else round(wake * 1e9)
+            if due and due[0][0] <= until_ns and (wake_ns is None or due[0][0] <= wake_ns):
                 t, index, generation = heapq.heappop(due)
-                self.now = max(self.now, t)
+                self.now_ns = max(self.now_ns, t)
                 slot = self._slots[index]
                 if slot.active and slot.generation == generation:
                     self._loop(slot, t)
-            elif wake is not None and wake <= until:
-                self.now = max(self.now, wake)
-                self._diagnosed(wake)
+            elif wake_ns is not None and wake_ns <= until_ns:
+                self.now_ns = max(self.now_ns, wake_ns)
+                self._diagnosed(wake_ns)
             else:
                 break
-        self.now = max(self.now, until)
+        self.now_ns = max(self.now_ns, until_ns)
 
-    def finish(self, end: float) -> Timeline:
-        """Run what is due until ``end`` and return the timeline of the whole replay."""
-        self.advance(max(end, self.start))
+    def finish(self, end_ns: int) -> Timeline:
+        """Run what is due until ``end_ns`` and return the timeline of the whole replay."""
+        end_ns = max(end_ns, self.start_ns)
+        self.advance(end_ns)
         return Timeline(
-            origin=self.origin,
-            begin=self._time(self.start),
-            end=self._time(max(end, self.start)),
+            origin=self.origin_ns / 1e9,
+            begin=self._time(self.start_ns),
+            end=self._time(end_ns),
             entries=tuple(self._entries),
             recorded=tuple(self._recorded),
             messages=self.messages,
@@ -288,16 +301,16 @@ class Replay:
 
     def _begin(self) -> None:
         self._begun = True
-        self.now = self.start
+        self.now_ns = self.start_ns
         if not self._with_states:  # a bag of a robot without dura: everything runs
             for name in self.robot.components:
                 self._states[name] = Lifecycle.READY
         ready = [n for n, state in self._states.items() if state is Lifecycle.READY]
-        self._model(UpdateAction.ADD, ready, self.start)
+        self._model(UpdateAction.ADD, ready, self.start_ns)
         for slot in self._slots:
-            self._refresh(slot, self.start)
+            self._refresh(slot, self.start_ns)
 
-    def _component_state(self, message: Message, t: float, *, quiet: bool = False) -> None:
+    def _component_state(self, message: Message, t: int, *, quiet: bool = False) -> None:
         try:
             state = ComponentState.from_payload(message.payload)
         except (BusError, KeyError, ValueError, TypeError) as e:
@@ -319,13 +332,13 @@ class Replay:
             if slot.component == name:
                 self._refresh(slot, t)
 
-    def _model(self, action: UpdateAction, names: list[str], t: float) -> None:
+    def _model(self, action: UpdateAction, names: list[str], t: int) -> None:
         """Add or remove nodes as the task executor does when components start or stop."""
         specs = [self.robot.components[name] for name in names]
         nodes = [Node(c.name, tuple(c.subscribes), tuple(c.publishes)) for c in specs]
-        self.diagnosis.change_model(action, nodes, t)
+        self.diagnosis.change_model(action, nodes, t / 1e9)
 
-    def _refresh(self, slot: _Slot, t: float) -> None:
+    def _refresh(self, slot: _Slot, t: int) -> None:
         """(De)activate an observer as its component's state says."""
         should = self._states.get(slot.component) is Lifecycle.READY
         if should == slot.active:
@@ -339,9 +352,9 @@ class Replay:
             else:
                 self._feeds[key] = tuple(h for h in handlers if h is not handler)
         if should:
-            slot.observer.start(t)
-            first = t + slot.observer.first_report
-            due = self._next_loop(slot, first - slot.observer.period / 2, first)
+            slot.observer.start_ns(t)
+            first = t + round(slot.observer.first_report * 1e9)
+            due = self._next_loop(slot, first - round(slot.observer.period * 0.5e9), first)
             heapq.heappush(self._due, (due, slot.index, slot.generation))
         else:
             for old in [k for k in self._verdicts if k[0] == slot.id]:
@@ -349,7 +362,7 @@ class Replay:
 
     # --- observers ------------------------------------------------------------------
 
-    def _next_loop(self, slot: _Slot, after: float, otherwise: float) -> float:
+    def _next_loop(self, slot: _Slot, after: int, otherwise: int) -> int:
         """The first live loop of the observer after ``after``, if the recording says."""
         times = self._loops.get(slot.id)
         if not times:
@@ -357,33 +370,33 @@ class Replay:
         i = bisect.bisect_right(times, after)
         return times[i] if i < len(times) else otherwise
 
-    def _loop(self, slot: _Slot, t: float) -> None:
-        due = self._next_loop(slot, t, t + slot.observer.period)
+    def _loop(self, slot: _Slot, t: int) -> None:
+        due = self._next_loop(slot, t, t + round(slot.observer.period * 1e9))
         heapq.heappush(self._due, (due, slot.index, slot.generation))
         try:
-            results = slot.observer.observe(t)
+            results = slot.observer.observe_ns(t)
         except Exception:
             log.exception("observer %s failed", slot.id)
             return
         for result in results:
             self._observed(slot, result, t)
 
-    def _observed(self, slot: _Slot, result: ObserverResult, t: float) -> None:
+    def _observed(self, slot: _Slot, result: ObserverResult, t: int) -> None:
         info = result.info
         key = (slot.id, info.type, info.resource, info.callerids)
         verdict = (info.observation, info.observation_msg)
         if self._verdicts.get(key) != verdict:
             self._verdicts[key] = verdict
             self._emit(ObservationEntry(self._time(t), slot.id, info, dict(result.values)))
-        self.diagnosis.observe(info, t)
+        self.diagnosis.observe(info, t / 1e9)
         if self.rules is not None:
             self.rules.observe(info)
             self._fire(self.rules, t)
 
     # --- diagnosis and rules ----------------------------------------------------------
 
-    def _diagnosed(self, t: float) -> None:
-        published = self.diagnosis.wake(t)
+    def _diagnosed(self, t: int) -> None:
+        published = self.diagnosis.wake(t / 1e9)
         if published is None:
             return
         result = published.result
@@ -391,17 +404,17 @@ class Replay:
             failed = tuple(str(o) for o in result.failed)
             self._emit(DiagnosisEntry(self._time(t), result.status.value, result.diagnoses, failed))
         if self.rules is not None:
-            self.rules.diagnosed(result.to_info(t))
+            self.rules.diagnosed(result.to_info(t / 1e9))
             self._fire(self.rules, t)
 
-    def _fire(self, rules: RuleEngine, t: float) -> None:
+    def _fire(self, rules: RuleEngine, t: int) -> None:
         for fired in rules.evaluate():
             action = fired.rule.action.describe()
             self._emit(RepairEntry(self._time(t), fired.rule.name, action, fired.firing.faulty))
 
     # --- what the recording says --------------------------------------------------------
 
-    def _recorded_diagnosis(self, message: Message, t: float) -> None:
+    def _recorded_diagnosis(self, message: Message, t: int) -> None:
         try:
             entry = recorded_diagnosis(message.payload, self._time(t))
         except (BusError, KeyError, ValueError, TypeError) as e:
@@ -411,7 +424,7 @@ class Replay:
             self._recorded_last = (entry.status, entry.diagnoses)
             self._recorded.append(entry)
 
-    def _recorded_event(self, message: Message, t: float) -> None:
+    def _recorded_event(self, message: Message, t: int) -> None:
         try:
             entry = recorded_repair(message.payload, self._time(t))
         except BusError:
@@ -421,8 +434,9 @@ class Replay:
 
     # --- output ---------------------------------------------------------------------
 
-    def _time(self, t: float) -> float:
-        return round(t - self.origin, 6)
+    def _time(self, t: int) -> float:
+        """Seconds since the origin (to the microsecond, as the timeline has them)."""
+        return round((t - self.origin_ns) / 1e9, 6)
 
     def _emit(self, entry: Entry) -> None:
         self._entries.append(entry)

@@ -37,6 +37,11 @@ class ScaledMessage(Message):
         stamp = self.original.stamp if self.original is not None else None
         return None if stamp is None else stamp * self.scale
 
+    @property
+    def stamp_ns(self) -> int | None:
+        stamp = self.original.stamp_ns if self.original is not None else None
+        return None if stamp is None else round(stamp * self.scale)
+
 
 class RobotTime:
     """The time axis observers see (see the module docstring)."""
@@ -48,14 +53,20 @@ class RobotTime:
         """Return now, on the robot-time axis."""
         return time.time() * self.clock.scale
 
+    def now_ns(self) -> int:
+        """Return now in integer nanoseconds, on the robot-time axis."""
+        scale = self.clock.scale
+        return time.time_ns() if scale == 1.0 else round(time.time_ns() * scale)
+
     def message(self, message: Message) -> Message:
         """Return a message as seen on the robot-time axis."""
         scale = self.clock.scale
         if scale == 1.0:
             return message
-        sent = None if message.sent is None else message.sent * scale
-        return ScaledMessage(
-            message.key, message.raw, message.caller_id, sent, message.received * scale,
+        sent = message.sent_ns
+        return ScaledMessage.at_ns(
+            message.key, message.raw, message.caller_id,
+            None if sent is None else round(sent * scale), round(message.received_ns * scale),
             original=message, scale=scale,
         )  # fmt: skip
 

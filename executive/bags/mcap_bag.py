@@ -154,8 +154,8 @@ class McapBag(Bag):
         if channel.message_encoding == "json":
 
             def plain(record: McapMessage) -> Message:
-                sent = record.publish_time / 1e9 if record.publish_time else None
-                return Message(key, record.data, caller, sent, record.log_time / 1e9)
+                sent = record.publish_time or None
+                return Message.at_ns(key, record.data, caller, sent, record.log_time)
 
             return plain
         topic = channel.topic
@@ -170,9 +170,9 @@ class McapBag(Bag):
             decoder = RosTypes.undecodable(f"its encoding '{encoding}' is not CDR or JSON", unknown)
 
         def ros(record: McapMessage) -> Message:
-            sent = record.publish_time / 1e9 if record.publish_time else None
+            sent = record.publish_time or None
             data = record.data if unpack is None else unpack(record.data)
-            return RosMessage(key, data, caller, sent, record.log_time / 1e9, decode=decoder)
+            return RosMessage.at_ns(key, data, caller, sent, record.log_time, decode=decoder)
 
         return ros
 

@@ -33,7 +33,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, Protocol
 
 from mcap.writer import CompressionType
 from mcap.writer import Writer as McapWriter
@@ -107,7 +107,7 @@ class Recorder:
         self._schemas: dict[str, int] = {}
         self._channels: dict[tuple[str, str, str], int] = {}
         self._sequence: dict[int, int] = {}
-        self._last = 0.0  # the newest message's arrival: when the next file begins
+        self._last = 0  # the newest message's arrival (ns): when the next file begins
         self.flush_every = flush_every
         self.ros2_definition = ros2_definition
         self._unflushed = False  # written since the last flush
@@ -207,12 +207,13 @@ class Recorder:
 
     def _add(self, writer: McapWriter, message: Message, schema: str, ros_type: str = "") -> None:
         channel = self._channel(writer, message.key, message.caller_id, schema, ros_type)
-        received = round(message.received * 1e9)
-        sent = round(message.sent * 1e9) if message.sent is not None else received
+        received = message.received_ns
+        sent = message.sent_ns
         sequence = self._sequence[channel] = self._sequence.get(channel, 0) + 1
-        writer.add_message(channel, received, message.raw, sent, sequence)
+        writer.add_message(channel, received, message.raw, received if sent is None else sent,
+                           sequence)  # fmt: skip
         self.messages += 1
-        self._last = max(self._last, message.received)
+        self._last = max(self._last, received)
 
     def _channel(
         self, writer: McapWriter, key: str, caller: str, schema: str, ros_type: str
@@ -254,7 +255,9 @@ class Recorder:
         self._schemas, self._channels, self._sequence = {}, {}, {}
         self.files += 1
         for state in self._states.values():  # each file replays on its own
-            snapshot = Message(state.key, state.raw, state.caller_id, state.sent, self._last)
+            snapshot = Message.at_ns(
+                state.key, state.raw, state.caller_id, state.sent_ns, self._last
+            )
             self._add(writer, snapshot, "dura.ComponentState")
 
     def _finish(self) -> None:
@@ -350,6 +353,19 @@ def repair(path: Path) -> Repaired:
     return Repaired(len(found), contents.whole, contents.size - contents.whole, end, rewritten=True)
 
 
+class RecordedTopics(TopicSource, Protocol):
+    """Topics whose messages do not travel on the bus, recorded in their own types: a
+    robot's ROS 2 topics (:class:`~executive.ros2.topics.Ros2Topics`), as CDR with
+    their type's ``ros2msg`` definition."""
+
+    @property
+    def keys(self) -> list[str]:
+        """The keys of the topics (``topic/scan``)."""
+
+    def definition(self, type: str) -> str:
+        """Return the ``ros2msg`` definition of a type (``sensor_msgs/msg/LaserScan``)."""
+
+
 class BusRecording:
     """A recorder fed by a bus session: it subscribes to every recorded key.
 
@@ -357,7 +373,7 @@ class BusRecording:
         bus: the robot's bus.
         recorder: where messages go.
         on_failure: called once if writing fails (e.g. the disk is full).
-        topics: topic keys whose messages are not on the bus (ROS 2's), with their source.
+        ros2: the robot's ROS 2 topics (not on the bus), recorded too.
     """
 
     def __init__(
@@ -365,31 +381,60 @@ class BusRecording:
         bus: Bus,
         recorder: Recorder,
         on_failure: Callable[[BagError], None] | None = None,
-        topics: Mapping[str, TopicSource] | None = None,
+        ros2: RecordedTopics | None = None,
     ) -> None:
         self.bus = bus
         self.recorder = recorder
-        self.topics = dict(topics or {})
+        self.ros2 = ros2
         self.failure: BagError | None = None
         self._on_failure = on_failure
         self._entities: list[Any] = []
+
+    @classmethod
+    def to_file(
+        cls,
+        bus: Bus,
+        path: Path,
+        *,
+        max_size: int = DEFAULT_MAX_SIZE,
+        keep: int = DEFAULT_KEEP,
+        flush_every: float = DEFAULT_FLUSH_EVERY,
+        ros2: RecordedTopics | None = None,
+        on_failure: Callable[[BagError], None] | None = None,
+    ) -> BusRecording:
+        """A recording of a robot's bus and ROS 2 topics to a file (``dura record``'s and
+        ``dura run --record``'s): see :class:`Recorder`.
+
+        Raises:
+            BagError: the file cannot be written.
+        """
+        definition = None if ros2 is None else ros2.definition
+        recorder = Recorder(
+            path,
+            bus.robot,
+            max_size=max_size,
+            keep=keep,
+            flush_every=flush_every,
+            ros2_definition=definition,
+        )
+        return cls(bus, recorder, on_failure, ros2)
 
     def start(self, states: Sequence[Mapping[str, Any]] = ()) -> None:
         """Subscribe; then record ``states`` (component state payloads: who runs now)
         for the components no state was recorded of meanwhile."""
         for key in RECORDED:
             self._entities.append(self.bus.subscribe(key, self._on_message, decoded=False))
-        for key, source in self.topics.items():
-            try:
-                self._entities.append(source.subscribe(key, self._on_message))
-            except DuraError as e:  # e.g. DDS refused the reader: the rest is recorded
-                log.warning("%s is not recorded: %s", key, e)
+        if self.ros2 is not None:
+            for key in self.ros2.keys:
+                try:
+                    self._entities.append(self.ros2.subscribe(key, self._on_message))
+                except DuraError as e:  # e.g. DDS refused the reader: the rest is recorded
+                    log.warning("%s is not recorded: %s", key, e)
         for state in states:
             key = component(str(state["component"]), "state")
             if not self.recorder.has_state(key):
-                now = time.time()
                 raw = encode(state)
-                self._on_message(Message(key, raw, SNAPSHOT_CALLER, None, now))
+                self._on_message(Message.at_ns(key, raw, SNAPSHOT_CALLER, None, time.time_ns()))
 
     def stop(self) -> None:
         for entity in self._entities:
@@ -412,8 +457,8 @@ class BusRecording:
 class Recording(Service):
     """The executive's own recording (``dura run --record``): it records from its
     configuration on, before the other services are configured, so it sees every
-    component state from the first; and the robot's ROS 2 topics (``ros2_topics``),
-    as CDR with their ``ros2msg`` schemas."""
+    component state from the first; and the robot's ROS 2 topics (``ros2``), as CDR
+    with their ``ros2msg`` schemas."""
 
     name = "recording"
 
@@ -424,15 +469,13 @@ class Recording(Service):
         *,
         max_size: int = DEFAULT_MAX_SIZE,
         flush_every: float = DEFAULT_FLUSH_EVERY,
-        ros2_topics: Mapping[str, TopicSource] | None = None,
-        ros2_definition: Callable[[str], str] | None = None,
+        ros2: RecordedTopics | None = None,
     ) -> None:
         super().__init__(context)
         self.path = path
         self.max_size = max_size
         self.flush_every = flush_every
-        self.ros2_topics = dict(ros2_topics or {})
-        self.ros2_definition = ros2_definition
+        self.ros2 = ros2
         self._recording: BusRecording | None = None
 
     @property
@@ -441,14 +484,13 @@ class Recording(Service):
         return self._recording.recorder.messages if self._recording is not None else 0
 
     def on_configure(self) -> None:
-        recorder = Recorder(
+        self._recording = BusRecording.to_file(
+            self.context.bus,
             self.path,
-            self.context.robot.name,
             max_size=self.max_size,
             flush_every=self.flush_every,
-            ros2_definition=self.ros2_definition,
+            ros2=self.ros2,
         )
-        self._recording = BusRecording(self.context.bus, recorder, topics=self.ros2_topics)
         self._recording.start()
 
     def on_shutdown(self) -> None:

@@ -157,7 +157,7 @@ class Sqlite3Bag(Bag):
         key, caller = route.key, route.caller
 
         def make(raw: bytes, timestamp: int) -> Message:
-            return RosMessage(key, raw, caller, None, timestamp / 1e9, decode=decoder)
+            return RosMessage.at_ns(key, raw, caller, None, timestamp, decode=decoder)
 
         return make
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Self
 
 from knowledge.errors import BusError
 
@@ -43,7 +43,9 @@ class Message:
 
     ``payload`` is the published dict, decoded on first use (hot paths skip it);
     ``message["celsius"]`` and ``message.get("celsius")`` read a field of it. ``key`` is
-    the key it came on, ``caller_id`` who sent it, ``stamp`` the payload's ``stamp``.
+    the key it came on, ``caller_id`` who sent it, ``stamp`` the payload's ``stamp``;
+    ``sent`` and ``received`` are seconds since the epoch, ``sent_ns`` and
+    ``received_ns`` the same in integer nanoseconds (exact: compare and subtract those).
     """
 
     key: str
@@ -52,6 +54,39 @@ class Message:
     sent: float | None = None
     received: float = 0.0
     _payload: dict[str, Any] | None = field(default=None, repr=False)
+    # the times in exact ns where the source had them (see at_ns)
+    _sent_ns: int | None = field(default=None, kw_only=True, repr=False, compare=False)
+    _received_ns: int | None = field(default=None, kw_only=True, repr=False, compare=False)
+
+    @classmethod
+    def at_ns(
+        cls,
+        key: str,
+        raw: bytes,
+        caller_id: str,
+        sent_ns: int | None,
+        received_ns: int,
+        **fields: Any,
+    ) -> Self:
+        """A message whose times are integer nanoseconds since the epoch, kept exact
+        (``sent`` and ``received`` are their seconds, rounded to a float)."""
+        sent = None if sent_ns is None else sent_ns / 1e9
+        return cls(key, raw, caller_id, sent, received_ns / 1e9, _sent_ns=sent_ns,
+                   _received_ns=received_ns, **fields)  # fmt: skip
+
+    @property
+    def received_ns(self) -> int:
+        """When it was received, in integer nanoseconds since the epoch (exact where
+        the source had nanoseconds: DDS, a bag, a recording)."""
+        found = self._received_ns
+        return round(self.received * 1e9) if found is None else found
+
+    @property
+    def sent_ns(self) -> int | None:
+        """When it was sent, in integer nanoseconds since the epoch (``None``: unknown)."""
+        if self._sent_ns is not None:
+            return self._sent_ns
+        return None if self.sent is None else round(self.sent * 1e9)
 
     @property
     def payload(self) -> dict[str, Any]:
@@ -82,3 +117,10 @@ class Message:
         """The ``stamp`` field of the payload, if it is a number."""
         value = self.payload.get("stamp")
         return float(value) if isinstance(value, (int, float)) else None
+
+    @property
+    def stamp_ns(self) -> int | None:
+        """``stamp`` in integer nanoseconds since the epoch (exact where the stamp is:
+        a ROS 2 header's)."""
+        stamp = self.stamp
+        return None if stamp is None else round(stamp * 1e9)

@@ -279,12 +279,12 @@ class Bus:
             if not sender and attachment is not None:
                 sender = attachment.to_bytes().decode(errors="replace")
             stamp = sample.timestamp
-            message = Message(
+            message = Message.at_ns(
                 relative,
                 sample.payload.to_bytes(),
                 sender,
-                stamp.get_time().timestamp() if stamp is not None else None,
-                time.time(),
+                round(stamp.get_time().timestamp() * 1e9) if stamp is not None else None,
+                time.time_ns(),
             )
             try:
                 if decoded:

@@ -14,13 +14,16 @@ import json
 import os
 import time
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from executive.bus import security
 from executive.bus.security import Login
 from executive.bus.session import Bus
 from executive.bus.verb import Codec, Verb
 from knowledge.errors import DuraError, NoAnswer
+
+if TYPE_CHECKING:
+    from knowledge.description import RobotDescription
 
 RUN_FILE = Path(".dura") / "executive.json"
 
@@ -65,12 +68,7 @@ def _target(args: argparse.Namespace) -> tuple[str, str, Login | None]:
     executive that runs in this folder, unless ``--robot`` names another robot (then
     at ``--endpoint``, else where its description says)."""
     if args.robot is not None:
-        from knowledge.robot import read_robot  # YAML and the schema: only with --robot
-
-        robot, findings = read_robot(args.robot)
-        if robot is None:
-            errors = [f for f in findings if f.is_error]
-            raise DuraError(str(errors[0]) if errors else f"{args.robot}: unusable")
+        robot = _read(args.robot)
         if args.endpoint is None and RUN_FILE.is_file():
             with contextlib.suppress(DuraError):  # this folder's executive, if it is this robot's
                 name, endpoint, login = _running_here(args)
@@ -79,6 +77,37 @@ def _target(args: argparse.Namespace) -> tuple[str, str, Login | None]:
         login = security.find_login(robot.name, security.OPERATOR, [Path.cwd()])
         return robot.name, args.endpoint or robot.endpoint, login
     return _running_here(args)
+
+
+def described_robot(args: argparse.Namespace) -> RobotDescription:
+    """The description of the robot the command line names: ``--robot``, else that of
+    the executive ``dura run`` runs in this folder.
+
+    Raises:
+        DuraError: no robot is named, or its description is unusable.
+    """
+    if args.robot is not None:
+        return _read(args.robot)
+    try:
+        description = Path(json.loads(RUN_FILE.read_text())["description"])
+    except FileNotFoundError:
+        raise DuraError(
+            f"no executive runs in this folder (no {RUN_FILE}): start one with "
+            "'dura run ROBOT.yaml' or name its robot with --robot ROBOT.yaml"
+        ) from None
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise DuraError(f"{RUN_FILE}: unreadable ({e}); name the robot with --robot") from e
+    return _read(description)
+
+
+def _read(path: Path) -> RobotDescription:
+    from knowledge.robot import read_robot  # YAML and the schema: only where needed
+
+    robot, findings = read_robot(path)
+    if robot is None:
+        errors = [f for f in findings if f.is_error]
+        raise DuraError(str(errors[0]) if errors else f"{path}: unusable")
+    return robot
 
 
 def _running_here(args: argparse.Namespace) -> tuple[str, str, Login | None]:

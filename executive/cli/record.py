@@ -1,9 +1,11 @@
-"""``dura record [--robot ROBOT.yaml] OUT.mcap``: record a running robot's bus traffic;
-``dura record --repair FILE``: make a recording cut off by a crash whole again."""
+"""``dura record [--robot ROBOT.yaml] OUT.mcap``: record a running robot's bus traffic
+and ROS 2 topics; ``dura record --repair FILE``: make a recording cut off by a crash
+whole again."""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import threading
 from pathlib import Path
@@ -15,14 +17,13 @@ from executive.bags.recording import (
     DEFAULT_MAX_SIZE,
     MB,
     BusRecording,
-    Recorder,
     repair,
 )
 from executive.bus.api.components import COMPONENT_LIST, lifecycle
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.wording import plural
 from executive.cli.arguments import count, megabytes, seconds
-from executive.cli.client import add_client_options, connect
+from executive.cli.client import add_client_options, connect, described_robot
 from executive.cli.output import add_json_flag, print_json, shown
 from executive.cli.stopping import stop_on_signals, wait
 from knowledge.errors import BagError
@@ -34,7 +35,9 @@ def register(sub: Any) -> None:
         help="record a running robot's bus traffic to MCAP",
         description="Record what a running robot says on its bus (component topics, "
         "observations, diagnoses, resources, events and component states) to an MCAP file "
-        "with JSON schemas, for MCAP tools and 'dura replay'. It stops on Ctrl-C or "
+        "with JSON schemas, for MCAP tools and 'dura replay'; and a ROS 2 robot's ROS 2 "
+        "topics as rosbag2 does (CDR, ros2msg schemas), from a ROS 2 node of its own "
+        "(dura_record). It stops on Ctrl-C or "
         "SIGTERM, or when the executive stops. The file is rotated at --max-size "
         "(OUT.mcap becomes OUT.1.mcap, ...), with --keep older files kept. What was "
         "recorded is on disk as a whole chunk every --flush seconds, so a recorder "
@@ -45,6 +48,12 @@ def register(sub: Any) -> None:
         "--repair", metavar="FILE", type=Path,
         help="rewrite a recording cut off by a crash as a whole file, with its messages up "
         "to its last whole chunk, and say how much was cut (no robot needed)",
+    )  # fmt: skip
+    p.add_argument(
+        "--ros2-bag", metavar="FILE", type=Path,
+        help="write the ROS 2 topics of recording FILE as a rosbag2 bag (for rosbags, "
+        "'ros2 bag' and Foxglove) in the folder OUT (default: FILE's name with _ros2); "
+        "dura's own messages stay in FILE (no robot needed)",
     )  # fmt: skip
     p.add_argument(
         "--flush", type=seconds(), default=DEFAULT_FLUSH_EVERY, metavar="S",
@@ -72,10 +81,14 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.repair is not None:
         return run_repair(args)
+    if args.ros2_bag is not None:
+        return run_ros2_bag(args)
     if args.out is None:
         raise BagError("record: give OUT.mcap to record to, or --repair FILE")
+    robot = described_robot(args)
     stop = stop_on_signals()
-    with connect(args) as bus:
+    with contextlib.ExitStack() as stack:
+        bus = stack.enter_context(connect(args))
         seen = threading.Event()
 
         def on_executive(_: str, alive: bool) -> None:
@@ -86,10 +99,21 @@ def run(args: argparse.Namespace) -> int:
 
         bus.watch_alive(EXECUTIVE_ALIVE, on_executive)
         states = [lifecycle(c).to_payload() for c in COMPONENT_LIST.call(bus).components]
-        recorder = Recorder(
-            args.out, bus.robot, max_size=args.max_size, keep=args.keep, flush_every=args.flush
+        ros2 = None
+        if robot.ros2 is not None:  # its ROS 2 topics, from a node of its own: dura_record
+            from executive.ros2.link import Ros2Link  # Cyclone DDS: only for a ROS 2 robot
+
+            ros2 = stack.enter_context(Ros2Link.of(robot, "record"))
+        recording = BusRecording.to_file(
+            bus,
+            args.out,
+            max_size=args.max_size,
+            keep=args.keep,
+            flush_every=args.flush,
+            ros2=None if ros2 is None else ros2.topics,
+            on_failure=lambda _: stop.set(),
         )
-        recording = BusRecording(bus, recorder, on_failure=lambda _: stop.set())
+        recorder = recording.recorder
         recording.start(states)
         if not args.json:
             print(
@@ -126,4 +150,23 @@ def run_repair(args: argparse.Namespace) -> int:
             f"dura: repaired {shown(args.repair)}: kept {plural(repaired.messages, 'message')}"
             f"{until}; cut {repaired.lost} bytes after its last whole chunk"
         )
+    return 0
+
+
+def run_ros2_bag(args: argparse.Namespace) -> int:
+    from executive.bags.export import export_ros2  # rosbags' writer: only here
+
+    source: Path = args.ros2_bag
+    out = args.out or source.with_name(source.stem + "_ros2")
+    exported = export_ros2(source, out)
+    if args.json:
+        print_json({"path": str(out), "topics": list(exported.topics),
+                    "messages": exported.messages, "left": list(exported.left)})  # fmt: skip
+        return 0
+    topics = ", ".join(exported.topics) or "none"
+    print(
+        f"dura: wrote {plural(exported.messages, 'message')} of {shown(source)} to the ROS 2 "
+        f"bag {shown(out)} (topics: {topics}); {plural(len(exported.left), 'channel')} of "
+        "dura's own stay in the recording"
+    )
     return 0

@@ -84,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
             printer.header(session)
         messages: Iterable[Message] = session.messages()
         if args.rate:
-            messages = paced(messages, session.replay, session.start, args.rate)
+            messages = paced(messages, session.replay, session.start_ns, args.rate)
         if printer is not None and sys.stderr.isatty():
             messages = Progress(sys.stderr, session.start, session.end).wrap(messages)
         timeline = session.run(messages)
@@ -110,19 +110,19 @@ def run(args: argparse.Namespace) -> int:
 
 
 def paced(
-    messages: Iterable[Message], replay: Replay, start: float, rate: float
+    messages: Iterable[Message], replay: Replay, start_ns: int, rate: float
 ) -> Iterator[Message]:
     """Yield each message at its time at ``rate`` times the recorded speed, running what
     is due between them at its own time."""
     began = time.monotonic()
     for message in messages:
         while True:
-            due = began + (message.received - start) / rate
+            due = began + (message.received_ns - start_ns) / 1e9 / rate
             now = time.monotonic()
             if now >= due:
                 break
             time.sleep(min(0.05, due - now))
-            replay.advance(start + (time.monotonic() - began) * rate)
+            replay.advance(start_ns + round((time.monotonic() - began) * rate * 1e9))
         yield message
 
 

@@ -12,12 +12,14 @@ reverse. The composition root opens one and hands its parts to the services::
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 
 from executive.ros2.discovery import Discovery
 from executive.ros2.participant import Participant
 from executive.ros2.topics import Ros2Topics
 from executive.ros2.types import TypeLibrary
+from knowledge.description import RobotDescription
 from knowledge.errors import ConfigError
 from knowledge.ros2_spec import Ros2Spec
 
@@ -47,6 +49,24 @@ class Ros2Link:
         except BaseException:
             self.participant.close()
             raise
+
+    @classmethod
+    def of(cls, robot: RobotDescription, process: str | None = None) -> Ros2Link:
+        """Open the link of a robot with a ``ros2:`` section: the executive's, or that of
+        another dura process of the robot (``monitoring``, ``record``), whose node is
+        named after it (``dura_monitoring``) so that ROS 2 tools tell them apart.
+
+        Raises:
+            ConfigError: the robot has no ``ros2:`` section, or see the class.
+        """
+        spec = robot.ros2
+        if spec is None:
+            raise ConfigError(f"robot '{robot.name}' has no ros2 section")
+        if process is not None:
+            spec = dataclasses.replace(spec, node=f"{spec.node}_{process}")
+        nodes = {c.ros2.node: name for name, c in robot.components.items()
+                 if c.ros2 is not None and c.ros2.node is not None}  # fmt: skip
+        return cls(spec, nodes=nodes)
 
     def close(self) -> None:
         """Close the topics, the graph and the participant (idempotent)."""

@@ -37,12 +37,27 @@ class RosMessage(Message):
     @property
     def stamp(self) -> float | None:
         """Return ``header.stamp`` in seconds (a message without a header: its ``stamp``)."""
+        stamp = self._stamp()
+        if isinstance(stamp, tuple):
+            return stamp[0] + stamp[1] * 1e-9
+        return float(stamp) if isinstance(stamp, (int, float)) else None
+
+    @property
+    def stamp_ns(self) -> int | None:
+        """Return ``header.stamp`` in integer nanoseconds, exact."""
+        stamp = self._stamp()
+        if isinstance(stamp, tuple):
+            return stamp[0] * 1_000_000_000 + stamp[1]
+        return round(stamp * 1e9) if isinstance(stamp, (int, float)) else None
+
+    def _stamp(self) -> tuple[int, int] | float | None:
+        """``header.stamp`` as (sec, nanosec), or a plain ``stamp`` number."""
         payload = self.payload
         header = payload.get("header")
         stamp = header.get("stamp") if isinstance(header, dict) else payload.get("stamp")
         if isinstance(stamp, dict):
             sec, nanosec = stamp.get("sec"), stamp.get("nanosec")
             if isinstance(sec, int) and isinstance(nanosec, int):
-                return sec + nanosec * 1e-9
+                return sec, nanosec
             return None
         return float(stamp) if isinstance(stamp, (int, float)) else None

@@ -100,6 +100,15 @@ class Ros2Topics:
     def serves(self, key: str) -> bool:
         return key in self._feeds
 
+    @property
+    def keys(self) -> list[str]:
+        """The keys it serves, one per ROS 2 topic of the robot (``topic/scan``)."""
+        return list(self._feeds)
+
+    def definition(self, type: str) -> str:
+        """Return the ``ros2msg`` definition of a type, as rosbag2 writes it in a bag."""
+        return self.library.definition(type)
+
     def subscribe(self, key: str, handler: Handler) -> _Subscription:
         """Deliver the samples of a ROS 2 topic to ``handler`` (on the receive thread).
 
@@ -205,18 +214,18 @@ class Ros2Topics:
 
         def on_samples(samples: list[Any], received: float) -> None:
             handlers = feed.handlers
+            received_ns = round(received * 1e9)
             for data, info in samples:
                 if not info.valid_data:
                     continue
-                message = RosMessage(
+                message = RosMessage.at_ns(
                     key,
                     data,
                     caller(info.publication_handle),
-                    info.source_timestamp * 1e-9,
-                    received,
-                    None,
-                    feed.decode,
-                    feed.type or "",
+                    info.source_timestamp,
+                    received_ns,
+                    decode=feed.decode,
+                    type=feed.type or "",
                 )
                 for handler in handlers:
                     try:

@@ -89,6 +89,11 @@ class TypeLibrary:
         """Return a type's fields in rosbags' form: ``(name, (Nodetype, details))``."""
         return list(self.store.fielddefs[self.check(name)][1])
 
+    def definition(self, name: str) -> str:
+        """Return a type's full ``ros2msg`` definition, as rosbag2 writes it in a bag."""
+        text: str = self.store.generate_msgdef(self.check(name), ros_version=2)[0]
+        return text
+
     def idl(self, name: str) -> type[IdlStruct]:
         """Return the Cyclone DDS class of a type (typename ``pkg::msg::dds_::Name_``)."""
         name = self.check(name)

@@ -87,9 +87,10 @@ class _Group:
 class _Topic:
     config: TopicGroups[FrequencySettings]
     groups: list[_Group]
-    arrivals: deque[tuple[str, float]] = field(default_factory=deque)  # (caller id, sent)
-    heard: dict[str, float] = field(default_factory=dict)  # caller id -> last received
-    sent: dict[str, float] = field(default_factory=dict)  # caller id -> last drained sent
+    # times in integer ns since the epoch
+    arrivals: deque[tuple[str, int]] = field(default_factory=deque)  # (caller id, sent)
+    heard: dict[str, int] = field(default_factory=dict)  # caller id -> last received
+    sent: dict[str, int] = field(default_factory=dict)  # caller id -> last drained sent
     members: dict[str, list[_Group]] = field(default_factory=dict)  # caller id -> its groups
 
 
@@ -149,9 +150,9 @@ class FrequencyObserver(Observer):
 
         def on_message(message: Message) -> None:
             # periods from the publisher's send times: exact, whatever delays reception
-            sent = message.sent
-            append((message.caller_id, sent if sent is not None else message.received))
-            heard[message.caller_id] = message.received
+            sent, received = message.sent_ns, message.received_ns
+            append((message.caller_id, sent if sent is not None else received))
+            heard[message.caller_id] = received
 
         return on_message
 
@@ -173,7 +174,7 @@ class FrequencyObserver(Observer):
                     bound = settings.timeout or math.inf  # no period known yet
                     group.tracks[caller] = _Track(settings.filter.make(), bound)
                 elif previous is not None:
-                    period = sent - previous
+                    period = (sent - previous) / 1e9
                     if period > track.bound and track.filter.state() is not None:
                         track.filter.reset()  # it had stopped: the gap is no period
                     else:
@@ -194,7 +195,7 @@ class FrequencyObserver(Observer):
         live: list[FilterState] = []
         waiting = False
         for caller, track in group.tracks.items():
-            silence = now - feed.heard[caller]
+            silence = self.since(feed.heard[caller])
             periods = track.filter.state()
             if periods is None:  # one message so far: wait for a second, not forever
                 track.bound = settings.timeout or max(self.config.start_up_time, 2 * self.period)
@@ -214,10 +215,10 @@ class FrequencyObserver(Observer):
         if waiting:
             return None
         if group.tracks:
-            silence = now - max(feed.heard[c] for c in group.tracks)
+            silence = self.since(max(feed.heard[c] for c in group.tracks))
             verbose = f"stopped: no message for {silence:.3g} s"
         else:
-            silence = now - self.started
+            silence = self.since(self.started_ns)
             bound = settings.timeout or max(self.config.start_up_time, 2 * self.period)
             if silence <= bound:
                 return None

@@ -182,9 +182,10 @@ class _Comparison:
 
     def __init__(self, config: Correlation) -> None:
         self.config = config
-        self.queue: deque[tuple[float, bool, Message]] = deque()  # (received, is B, message)
+        # (received in ns, is B, message)
+        self.queue: deque[tuple[int, bool, Message]] = deque()
         self.filters: dict[str, Filter] = {a: f.make() for a, f in config.filters.items()}
-        self.latest: list[tuple[float, dict[str, float]] | None] = [None, None]
+        self.latest: list[tuple[int, dict[str, float]] | None] = [None, None]
 
     def handler(self, is_b: bool) -> Handler:
         callerids = (self.config.source_b if is_b else self.config.source_a).callerids
@@ -192,7 +193,7 @@ class _Comparison:
 
         def on_message(message: Message) -> None:
             if not callerids or message.caller_id in callerids:
-                append((message.received, is_b, message))
+                append((message.received_ns, is_b, message))
 
         return on_message
 
@@ -217,7 +218,7 @@ class _Comparison:
             values = {a: v for a, v in reading.items() if v is not None}
             self.latest[is_b] = (received, values)
             other = self.latest[not is_b]
-            if other is None or received - other[0] > self.config.max_delay:
+            if other is None or (received - other[0]) / 1e9 > self.config.max_delay:
                 continue
             a_values, b_values = (other[1], values) if is_b else (values, other[1])
             for axis, axis_filter in self.filters.items():

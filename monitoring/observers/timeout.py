@@ -51,9 +51,10 @@ class TimeoutObserver(Observer):
 
     def __init__(self, config: TimeoutConfig, environment: Environment | None = None) -> None:
         super().__init__(config, environment)
-        self._last: list[dict[str, float]] = [{} for _ in config.topics]  # caller -> last
+        # caller -> the last message's arrival (ns)
+        self._last: list[dict[str, int]] = [{} for _ in config.topics]
         # (topic, group) -> the last message before the silence reported as TIMEOUT
-        self._reported: dict[tuple[int, int], float | None] = {}
+        self._reported: dict[tuple[int, int], int | None] = {}
 
     def default_rate(self) -> float:
         timeouts = [g.settings.timeout for t in self.config.topics for g in t.groups]
@@ -66,9 +67,9 @@ class TimeoutObserver(Observer):
         ]
 
     @staticmethod
-    def _handler(last: dict[str, float]) -> Handler:
+    def _handler(last: dict[str, int]) -> Handler:
         def on_message(message: Message) -> None:
-            last[message.caller_id] = message.received
+            last[message.caller_id] = message.received_ns
 
         return on_message
 
@@ -90,7 +91,7 @@ class TimeoutObserver(Observer):
                     continue
                 if verdict.number == TIMEOUT:
                     self._reported[i, j] = latest
-                silence = {"silence": now - max(times, default=self.started)}
+                silence = {"silence": self.since(max(times, default=self.started_ns))}
                 results.append(
                     self.result(
                         (config.name,), verdict, now, values=silence, callerids=group.callerids
@@ -99,11 +100,11 @@ class TimeoutObserver(Observer):
         return results
 
     def _verdict(
-        self, settings: TimeoutSettings, now: float, last: float | None, *, reported: bool
+        self, settings: TimeoutSettings, now: float, last: int | None, *, reported: bool
     ) -> Verdict | None:
         """OK or TIMEOUT; ``None`` once ``max_timeouts_in_a_row`` timeouts were reported
         (``reported``: this silence was reported already)."""
-        silence = max(0.0, now - (last if last is not None else self.started))
+        silence = max(0.0, self.since(last if last is not None else self.started_ns))
         timeout = settings.timeout
         if silence <= timeout:
             return Verdict(

@@ -110,13 +110,13 @@ class TimestampObserver(Observer):
         for _ in range(len(queue)):
             message = queue.popleft()
             try:
-                stamp = message.stamp
+                stamp = message.stamp_ns
             except BusError:
                 stamp = None
             if stamp is None:
                 unstamped += 1
                 continue
-            age = message.received - stamp
+            age = (message.received_ns - stamp) / 1e9
             for group, ages in zip(config.groups, filters, strict=True):
                 if group.includes(message.caller_id):
                     ages.update(age)

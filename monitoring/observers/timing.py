@@ -71,9 +71,9 @@ class _Pairing:
 
     def __init__(self, config: TopicPair) -> None:
         self.config = config
-        self.arrivals: deque[tuple[float, bool]] = deque()  # (received, is topic B)
+        self.arrivals: deque[tuple[int, bool]] = deque()  # (received in ns, is topic B)
         self.delays = config.filter.make()
-        self.start: float | None = None  # the A message a measurement started at
+        self.start: int | None = None  # the A message a measurement started at
 
     def handler(self, is_b: bool) -> Handler:
         callerids = self.config.callerids_b if is_b else self.config.callerids_a
@@ -81,7 +81,7 @@ class _Pairing:
 
         def on_message(message: Message) -> None:
             if not callerids or message.caller_id in callerids:
-                append((message.received, is_b))
+                append((message.received_ns, is_b))
 
         return on_message
 
@@ -97,7 +97,7 @@ class _Pairing:
                 if self.start is None or self.config.single_shot_mode:
                     self.start = received
             elif self.start is not None:
-                self.delays.update(received - self.start)
+                self.delays.update((received - self.start) / 1e9)
                 self.start = None
 
 

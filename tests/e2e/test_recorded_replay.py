@@ -51,6 +51,27 @@ def lidar_observed_ok(robot: RobotProcess, after: float = 0.0) -> bool:
     )
 
 
+def first_live(path: Path, observer: str, verdict: str) -> float:
+    """When the live ``observer`` first reported ``verdict`` (its recorded stamp)."""
+    with open_bag(path) as bag:
+        return min(
+            float(m.payload["stamp"])
+            for m in bag.messages({OBSERVATIONS: Route(OBSERVATIONS)})
+            if m.payload["observer"] == observer and m.payload["observation_msg"] == verdict
+        )
+
+
+def assert_loops_as_live(path: Path, timeline: Timeline) -> None:
+    """The replayed lidar timeout is seen at the live observer's loop, to the ms: the
+    replay loops when the live observer did (its own loops could be anywhere within an
+    8 Hz period; the diagnoses are compared by ``differences``)."""
+    replayed = next(
+        e for e in timeline.observations("lidar/1") if e.info.observation_msg == "timeout"
+    )
+    live = first_live(path, "lidar/1", "timeout")
+    assert timeline.origin + replayed.time == pytest.approx(live, abs=0.001)
+
+
 def record(robot: RobotProcess, out: Path) -> subprocess.Popen[str]:
     """``dura record`` of a running robot, once it records."""
     argv = [sys.executable, "-m", "executive.cli", "record", str(out)]
@@ -171,6 +192,7 @@ def test_a_run_whose_lidar_was_restarted_replays_to_the_same_diagnosis_and_firin
     assert timeline.differences(tolerance) == []
     assert [h.diagnosis for h in timeline.holds()] == [h.diagnosis for h in live]
     assert [r.rule for r in timeline.repairs()][:1] == ["restart_lidar"]
+    assert_loops_as_live(out, timeline)
 
 
 def test_a_run_whose_lidar_was_restarted_replays_as_live_from_dura_record(
@@ -196,3 +218,33 @@ def test_a_run_whose_lidar_was_restarted_replays_as_live_from_dura_record(
     assert [h.diagnosis for h in timeline.recorded_holds()][:1] == [("lidar",)]
     assert timeline.differences(tolerance) == []
     assert [r.rule for r in timeline.repairs()][:1] == ["restart_lidar"]
+    assert_loops_as_live(out, timeline)
+
+
+def test_a_recording_begun_while_the_robot_runs_replays_at_the_live_observers_loops(
+    dura_robot: Callable[..., RobotProcess], tmp_path: Path
+) -> None:
+    """``dura record`` started next to a robot whose lidar is running: the recording
+    begins with lidar's state as of then, so the replay's observers start then, at
+    another phase than the live ones (started when lidar became ready); they loop when
+    the live ones did, and see the fault at the live loops."""
+    robot = dura_robot(USECASE, changes={"behaviors": {"move_to": LONG_MOVE}})
+    robot.request("task/start", MOVE)
+    assert wait_for(lambda: lidar_observed_ok(robot), 30)
+    out = tmp_path / "run.mcap"
+    recorder = record(robot, out)
+    try:
+        wait_for(lambda: False, 2.5)  # past the replayed observers' start-up time
+        robot.inject_fault("lidar", "stop_publishing")
+        assert wait_for(lambda: robot.events("RULE_FIRED"), 20)
+        assert wait_for(lambda: lidar_observed_ok(robot), 30)  # restarted, publishing again
+    finally:
+        robot.stop()
+        recorder.wait(30)
+    with BagReplay(out, robot.description) as session:
+        timeline = session.run()
+        tolerance = session.replay.loop
+    assert [h.diagnosis for h in timeline.recorded_holds()][:1] == [("lidar",)]
+    assert timeline.differences(tolerance) == []
+    assert [r.rule for r in timeline.repairs()][:1] == ["restart_lidar"]
+    assert_loops_as_live(out, timeline)

@@ -40,7 +40,8 @@ def gap_of_two_seconds() -> list[Message]:
 
 def replay(robot: RobotDescription, messages: list[Message], **options: object) -> Timeline:
     keys = {m.key for m in messages}
-    return Replay(robot, provided=keys, origin=messages[0].received, **options).run(messages)  # type: ignore[arg-type]
+    origin = messages[0].received_ns
+    return Replay(robot, provided=keys, origin_ns=origin, **options).run(messages)  # type: ignore[arg-type]
 
 
 def test_a_two_second_gap_in_the_scan_is_seen_diagnosed_and_repaired_at_the_recorded_times(
@@ -96,7 +97,7 @@ def test_a_diagnosis_still_held_at_the_end_is_held_until_the_end(robot: RobotDes
 
 def test_observers_start_at_the_start_of_the_window(robot: RobotDescription) -> None:
     messages = gap_of_two_seconds()
-    timeline = replay(robot, messages, start=T0 + 5.0)
+    timeline = replay(robot, messages, start_ns=round((T0 + 5.0) * 1e9))
     assert timeline.observations()[0].time == 7.0  # 2 s start-up after the window's start
     assert timeline.begin == 5.0 and timeline.messages == 130
 
@@ -151,7 +152,7 @@ def test_with_component_states_observers_run_only_while_their_component_is_ready
 def test_observers_loop_when_the_live_run_says_they_did(robot: RobotDescription) -> None:
     # the live timeout observer (8 Hz) looped 40 ms off the replay's own phase
     live = [2.04 + k / 8 for k in range(150)]
-    loops = {"lidar/1": [T0 + t for t in live]}
+    loops = {"lidar/1": [round((T0 + t) * 1e9) for t in live]}
     timeline = replay(robot, gap_of_two_seconds(), loops=loops)
     timeouts = [(e.time, e.info.observation_msg) for e in timeline.observations("lidar/1")]
     assert timeouts == [(2.04, "ok"), (10.415, "timeout"), (12.04, "ok")]  # live loops only

@@ -69,7 +69,7 @@ def test_publish_times_are_the_send_times_the_frequency_observer_measures(
     with open_bag(write_mcap(tmp_path / "jazzy.mcap", records)) as bag:
         messages = list(bag.messages(routes(bag, robot)))
     assert messages[3].sent == T0 + 0.3 and messages[3].received == T0 + 0.5
-    timeline = Replay(robot, provided={"topic/scan"}, origin=T0).run(messages)
+    timeline = Replay(robot, provided={"topic/scan"}, origin_ns=T0 * 10**9).run(messages)
     frequency = timeline.observations("lidar/0")[0]
     assert frequency.values["frequency"] == pytest.approx(10.0)
 

@@ -107,6 +107,23 @@ def test_a_recording_reads_back_as_the_messages_it_recorded(tmp_path: Path) -> N
     assert messages[0].sent == T0 - 0.001
 
 
+def test_a_recording_keeps_the_times_of_its_messages_to_the_nanosecond(tmp_path: Path) -> None:
+    # epoch times in ns that float seconds cannot hold (they are 240 ns apart there)
+    times = [1_700_000_000_046_666_662 + k * 100_000_001 for k in range(20)]
+    path = tmp_path / "run.mcap"
+    with Recorder(path, "usecase") as recorder:
+        for t in times:
+            recorder.write(Message.at_ns(topic("scan"), b"{}", "lidar", t - 1, t))
+    with path.open("rb") as f:  # read without dura
+        written = [(m.publish_time, m.log_time) for _, _, m in make_reader(f).iter_messages()]
+    assert written == [(t - 1, t) for t in times]
+    with open_bag(path) as bag:
+        read = [
+            (m.sent_ns, m.received_ns) for m in bag.messages({"topic/scan": Route("topic/scan")})
+        ]
+    assert read == written
+
+
 def test_a_recording_is_rotated_by_size_and_each_file_begins_with_the_component_states(
     tmp_path: Path,
 ) -> None:

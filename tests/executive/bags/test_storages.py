@@ -130,3 +130,24 @@ def test_metadata_dura_cannot_read_is_one_line_naming_the_file(
     with pytest.raises(BagError) as error:
         open_bag(folder)
     assert str(error.value) == f"{metadata}: {reason}"
+
+
+# an epoch time whose seconds, as floats, round so that 0.5 s after a message looks longer
+ROUNDED = T0 * 10**9 + 46_666_662
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_a_silence_of_exactly_the_timeout_is_no_timeout_whatever_the_epoch_time(
+    tmp_path: Path, storage: str
+) -> None:
+    # scans at 10 Hz to 9.8 s, one more at 9.875 s, then silence until 12 s: the timeout
+    # observer (0.5 s, 8 Hz from 2 s on) loops at 10.375 s, exactly 0.5 s after the
+    # last scan: in integer ns that is no timeout yet; the next loop, 10.5 s, is one
+    scan = [ROUNDED + k * 10**8 for k in range(99)] + [ROUNDED + 9_875_000_000]
+    times = scan + [ROUNDED + k * 10**8 for k in range(120, 140)]
+    timeline = replay_bag(write_scan_bag(tmp_path / storage, storage, times=times), USECASE)
+    changes = [(e.time, e.info.observation_msg) for e in timeline.observations("lidar/1")]
+    assert changes == [(2.0, "ok"), (10.5, "timeout"), (12.125, "ok")]
+    ok = next(e for e in timeline.observations("lidar/1") if e.time == 2.0)
+    assert ok.values["silence"] == pytest.approx(0.1)
+    assert (timeline.begin, timeline.end, timeline.messages) == (0.0, 13.9, len(times))
