@@ -288,6 +288,12 @@ def _host(subject: str, data: Data, kind: str) -> str:
     return f"host {subject} {how}" + (f": ended {listed(components)}" if components else "")
 
 
+def _robot(subject: str, data: Data, kind: str) -> str:
+    if kind == "ROBOT_JOINED":
+        return f"robot {subject} joined the fleet"
+    return _why(f"robot {subject} is unavailable", data.get("reason"))
+
+
 def _component(subject: str, data: Data, kind: str) -> str:
     text = subject + (f" (pid {data['pid']})" if data.get("pid") is not None else "")
     if data.get("signal") is not None:
@@ -330,6 +336,7 @@ _TEXTS: Mapping[str, Text] = {
     "CONFIGURATION": _configuration, "REPAIR": _repair, "FAULT": _fault,
     "PERMANENT_FAULT": _permanent_fault, "COMPONENT_RESET": _reset,
     "HOST_JOINED": _host, "HOST_LOST": _host, "HOST_STOPPED": _host,
+    "ROBOT_JOINED": _robot, "ROBOT_LOST": _robot,
     "RULE_FIRED": _rule, "RULE_FAILED": _rule,
 }  # fmt: skip
 """The readable form of each named kind."""

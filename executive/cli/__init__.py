@@ -40,6 +40,7 @@ COMMANDS = (
     "new",
     "validate",
     "run",
+    "fleet",
     "host",
     "goal",
     "plan",
