@@ -41,7 +41,7 @@ def register(sub: Any) -> None:
     r.add_argument("--db", type=Path, help="the knowledge base file (default: the fleet's)")
     r.add_argument(
         "--join-wait",
-        type=seconds,
+        type=seconds(zero=True),
         default=10.0,
         help="seconds to wait for the robots before the first plan (default 10)",
     )

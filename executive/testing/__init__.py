@@ -25,6 +25,8 @@ repair rules, with the recording's time as the clock, and returns the timeline
 - :mod:`.harness` — a robot run by a real ``dura run`` process, driven over the bus
   (:class:`~.harness.RobotProcess`, and :class:`~.harness.ServiceGroupProcess` for a
   service group in a process of its own);
+- :mod:`.fleet` — a fleet's high level run by a real ``dura fleet run`` process
+  (:class:`~.fleet.FleetProcess`), beside its robots' :class:`~.harness.RobotProcess`;
 - :mod:`.client` — what a test asks a running robot over the bus, answered with records
   (:class:`~.client.RobotClient`, the base of :class:`~.harness.RobotProcess`);
 - :mod:`.replay` — a recording replayed through a robot's monitoring;

@@ -1,0 +1,122 @@
+"""A fleet end to end: real executives (one per robot, each its own process and bus
+login), real components on simulated hardware, a real planner, and the fleet's high
+level (``dura fleet run``) running each step on the robot it names."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+import pytest
+
+from executive.testing.fleet import FleetProcess
+from executive.testing.harness import RobotProcess
+from knowledge.records import Event
+from tests.conftest import ROOT, wait_for
+
+pytestmark = pytest.mark.slow
+
+EXAMPLE = ROOT / "examples" / "fleet"
+SCALE = 2.0  # robot time twice as fast as the wall clock: a drive takes 2.5 s
+
+
+def fleet_file(folder: Path, robots: Sequence[RobotProcess]) -> Path:
+    """The example fleet with these robots, where they run."""
+    lines = [
+        "fleet: depot",
+        f"domain: {EXAMPLE / 'depot.pddl'}",
+        f"problem: {EXAMPLE / 'problem.pddl'}",
+        "max_failures: 2",
+        "robots:",
+    ]
+    for robot in robots:
+        login = robot.folder / ".dura" / f"{robot.robot.name}.fleet.bus.json"
+        lines.append(
+            f"  {robot.robot.name}: {{description: {robot.description}, "
+            f"endpoint: '{robot.endpoint}', login: {login}}}"
+        )
+    path = folder / "fleet.yaml"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@contextlib.contextmanager
+def depot(
+    tmp_path: Path, names: Sequence[str]
+) -> Iterator[tuple[FleetProcess, list[RobotProcess]]]:
+    """The robots' executives, each in its own folder, and the fleet beside them."""
+    with contextlib.ExitStack() as stack:
+        robots = [
+            stack.enter_context(
+                RobotProcess(EXAMPLE / f"{name}.yaml", tmp_path / name, time_scale=SCALE)
+            )
+            for name in names
+        ]
+        path = fleet_file(tmp_path, robots)
+        fleet = stack.enter_context(FleetProcess(path, tmp_path / "fleet", time_scale=SCALE))
+        yield fleet, robots
+
+
+def steps_of(events: list[Event], kind: str, robot: str) -> list[str]:
+    """The plan steps of one robot with an event of ``kind`` (``drive(r1, ...)``)."""
+    return [e.subject for e in events if e.kind == kind and f"({robot}," in e.subject]
+
+
+def test_two_robots_deliver_in_parallel_each_step_on_its_own_executive(tmp_path: Path) -> None:
+    with depot(tmp_path, ["r1", "r2"]) as (fleet, (r1, r2)):
+        first = fleet.submit_goal("(crate_at parcel1 lab)")
+        second = fleet.submit_goal("(crate_at parcel2 office)")
+        fleet.wait_for(first, "achieved", timeout=120)
+        fleet.wait_for(second, "achieved", timeout=120)
+        events = fleet.events()
+        ended = {robot: steps_of(events, "END", robot) for robot in ("r1", "r2")}
+        assert ended["r1"] and ended["r2"]  # both robots worked
+        # each step ran on the executive of the robot it names, and only there
+        for robot, process in (("r1", r1), ("r2", r2)):
+            ran = [e.subject for e in process.events("TASK_SUCCEEDED")]
+            assert len(ran) == len(ended[robot])
+            assert all(f"({robot}," in subject for subject in ran)
+        # in parallel: each robot's first step started before the other's last one ended
+        kinds = [(e.kind, e.subject) for e in events]
+        starts = {r: kinds.index(("START", steps_of(events, "START", r)[0])) for r in ended}
+        ends = {r: kinds.index(("END", ended[r][-1])) for r in ended}
+        assert starts["r1"] < ends["r2"] and starts["r2"] < ends["r1"]
+        assert sorted(fleet.facts("crate_at")) == [
+            "(crate_at parcel1 lab)",
+            "(crate_at parcel2 office)",
+            "(crate_at parcel3 store)",
+        ]
+
+
+def test_a_robot_killed_mid_step_has_its_goal_finished_by_another_and_takes_work_when_back(
+    tmp_path: Path,
+) -> None:
+    with depot(tmp_path, ["r1", "r2"]) as (fleet, robots):
+        by_name = {r.robot.name: r for r in robots}
+        goal = fleet.submit_goal("(crate_at parcel1 lab)")
+        started = fleet.wait_for_event("START", timeout=60)
+        worker = next(name for name in by_name if f"({name}," in started.subject)
+        other = next(name for name in by_name if name != worker)
+        by_name[worker].kill()  # SIGKILL of its executive, mid-step
+        fleet.wait_for(goal, "achieved", timeout=120)
+        events = fleet.events()
+        lost = [e for e in events if e.kind == "ROBOT_LOST"]
+        assert [e.subject for e in lost] == [worker]
+        after = [e for e in events[events.index(lost[0]) :] if e.kind == "END"]
+        assert after and all(f"({other}," in e.subject for e in after)
+        # nothing done twice: the parcel was dropped once, where the goal wanted it
+        drops = [e.subject for e in events if e.kind == "END" and e.subject.startswith("drop")]
+        assert drops == [f"drop({other}, parcel1, lab)"]
+        assert "(crate_at parcel1 lab)" in fleet.facts("crate_at")
+
+        # back: it joins again, and takes work when the other is gone
+        by_name[worker].start()
+        assert wait_for(lambda: len(fleet.events("ROBOT_JOINED")) >= 3, 30)
+        by_name[other].stop()
+        assert wait_for(lambda: len(fleet.events("ROBOT_LOST")) >= 2, 30)
+        again = fleet.submit_goal("(crate_at parcel2 office)")
+        fleet.wait_for(again, "achieved", timeout=120)
+        events = fleet.events()
+        assert f"drop({worker}, parcel2, office)" in steps_of(events, "END", worker)
+        assert by_name[worker].events("TASK_SUCCEEDED")  # its new executive ran them
