@@ -3,7 +3,7 @@
 ; carries it out (its parameter of type robot): `dura fleet run` runs the step on that
 ; robot's executive, whose robot description maps the action to a task.
 (define (domain depot)
-  (:requirements :strips :typing :durative-actions)
+  (:requirements :strips :typing :durative-actions :numeric-fluents)
   (:types robot place crate)
 
   (:predicates
@@ -12,6 +12,9 @@
     (crate_at ?c - crate ?p - place)    ; where a crate stands
     (holding ?r - robot ?c - crate)     ; a robot carries the crate
     (hands_free ?r - robot))            ; a robot carries nothing
+
+  (:functions
+    (battery ?r - robot))               ; its charge in percent, as the robot measures it
 
   ; Drive along a path (the robot's behavior drive_to).
   (:durative-action drive

@@ -8,6 +8,7 @@
   (:init
     (at r1 dock1) (at r2 dock2) (at r3 dock3)
     (hands_free r1) (hands_free r2) (hands_free r3)
+    (= (battery r1) 100) (= (battery r2) 100) (= (battery r3) 100)
     (road dock1 store) (road store dock1)
     (road dock2 store) (road store dock2)
     (road dock3 store) (road store dock3)

@@ -2,7 +2,7 @@
 ; each robot's executive checks its tasks against this domain, and runs the steps the
 ; fleet asks of it (examples/fleet/depot.pddl) with the same tasks.
 (define (domain transport_robot)
-  (:requirements :strips :typing :durative-actions)
+  (:requirements :strips :typing :durative-actions :numeric-fluents)
   (:types place crate)
 
   (:predicates
@@ -11,6 +11,9 @@
     (crate_at ?c - crate ?p - place)
     (holding ?c - crate)
     (hands_free))
+
+  (:functions
+    (battery_level))                  ; kept up to date by the sensing rule
 
   (:durative-action drive
     :parameters (?from ?to - place)

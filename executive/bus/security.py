@@ -20,7 +20,7 @@ router on every message that reaches it from a client:
 - ``fleet`` (a fleet's high level, ``dura fleet run``, which plans for several robots):
   ask this robot's task executor for plan steps and control them
   (``executive/steps/{run,control,upcoming}``), hear how they go
-  (``executive/steps/progress``), read the robot's world (``state/get``, ``status``) and
+  (``executive/steps/progress``) and the robot's events, read the robot's world (``state/get``, ``status``) and
   watch liveliness — nothing else: it cannot post goals, change facts, command components
   or publish;
 - ``component.<name>`` (one user per component): publish the topics its description
@@ -266,7 +266,8 @@ def access_control(
                                          f"{root}/executive/steps/upcoming",
                                          f"{root}/executive/api/state/get",
                                          f"{root}/executive/api/status"]),
-        _rule("fleet hears", ["declare_subscriber"], [f"{root}/executive/steps/progress"]),
+        _rule("fleet hears", ["declare_subscriber"], [f"{root}/executive/steps/progress",
+                                                      f"{root}/events"]),
     ]  # fmt: skip
     subjects = [
         {"id": "trusted", "usernames": [EXECUTIVE, SERVICE]},

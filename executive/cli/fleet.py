@@ -80,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
         check.robots,
         check.actors,
         outside=check.outside,
+        mappings=check.mappings,
         endpoint=args.endpoint,
         kb_path=args.db,
         join_wait=args.join_wait,

@@ -6,7 +6,8 @@ its robots: each with its robot description, where its executive listens, how th
 logs in there (the fleet's login, which the robot's executive writes into
 ``.dura/<robot>.fleet.bus.json``) and the PDDL object that stands for it. A step is
 carried out by the robot its action names: the action's parameter of the robot type,
-or the parameter ``actions: {ACTION: {robot: ?p}}`` names.
+or the parameter ``actions: {ACTION: {robot: ?p}}`` names. ``facts:`` maps facts of each
+robot's own world to facts of the fleet's (:mod:`executive.fleet.robot_facts`).
 
 Reading checks the file alone (:func:`read_fleet`); the checks against the domain and
 each robot's description are in :mod:`executive.fleet.validation`.
@@ -104,7 +105,8 @@ class FleetFile:
     actions: Annotated[Mapping[str, ActionRobot], Named("action '{name}'")] = field(
         default_factory=dict
     )
-    lines: Annotated[Mapping[str, int], KeyLines()] = field(
+    facts: Mapping[str, str] = field(default_factory=dict)  # a robot's fact -> the fleet's
+    lines: Annotated[Mapping[str, int], KeyLines("facts")] = field(
         default_factory=dict, compare=False, repr=False
     )
 
@@ -138,6 +140,7 @@ class FleetDescription:
     knowledge_base: Path | None = None
     max_failures: int = 3
     actions: Mapping[str, ActionRobot] = field(default_factory=dict)
+    facts: Mapping[str, str] = field(default_factory=dict)
     lines: Mapping[str, int] = field(default_factory=dict, compare=False, repr=False)
 
     def robot_of_object(self, name: str) -> FleetRobot | None:
@@ -188,6 +191,7 @@ def read_fleet(path: Path) -> tuple[FleetDescription | None, list[Finding]]:
         knowledge_base=written.knowledge_base,
         max_failures=written.max_failures,
         actions=written.actions,
+        facts=written.facts,
         lines=written.lines,
     )
     return fleet, report.findings

@@ -14,12 +14,14 @@ that its first plan shares the work among all that are there.
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import time
-from collections.abc import Callable, Collection, Mapping
+from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
 
 from executive.bus import security
+from executive.bus.api.planning import STATE_GET, STATE_SET, STATE_UNSET, FactChange, StateQuery
 from executive.bus.event_relay import EventRelay
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.lifecycle_manager import LifecycleManager
@@ -28,10 +30,15 @@ from executive.bus.session import Bus
 from executive.fleet.availability import Availability
 from executive.fleet.description import FleetDescription
 from executive.fleet.fleet_tasks import FleetTasks
+from executive.fleet.robot_facts import FactMapping, RobotFacts
 from executive.fleet.robot_link import RobotLink
 from executive.planning.high_level import HighLevel
 from knowledge.description import RobotDescription
+from knowledge.errors import DuraError
 from knowledge.knowledge_base import KnowledgeBase
+from knowledge.records import Fact
+
+log = logging.getLogger("dura.fleet")
 
 JOIN_WAIT = 10.0  # seconds the fleet waits for its robots before it first plans
 
@@ -58,6 +65,7 @@ class Fleet:
         robots: each robot's description, by name (as :mod:`.validation` read them).
         actors: each acting action's robot parameter.
         outside: the objects of the robot type that are no robot of the fleet.
+        mappings: the robots' own facts that reach the fleet's world.
         endpoint: where the fleet listens (default: its description's).
         kb_path: its knowledge base (default: ``./.dura/<fleet>.db``).
         folder: the working folder whose ``.dura/`` holds the fleet's bus credentials.
@@ -74,6 +82,7 @@ class Fleet:
         actors: Mapping[str, str],
         *,
         outside: Collection[str] = (),
+        mappings: Sequence[FactMapping] = (),
         endpoint: str | None = None,
         kb_path: Path | None = None,
         folder: Path | None = None,
@@ -86,6 +95,7 @@ class Fleet:
         self.robot = fleet_robot(fleet)
         self.robots = dict(robots)
         self.actors = dict(actors)
+        self.mappings = tuple(mappings)
         self.endpoint = endpoint or fleet.endpoint
         self.kb_path = kb_path or fleet.kb_path()
         self.folder = folder or Path.cwd()
@@ -129,17 +139,20 @@ class Fleet:
             stack.callback(kb.log_event, "EXECUTIVE_STOPPED", self.fleet.name)
             context = Context(self.robot, bus, kb)
             relay = EventRelay(context)
-            self.links = {
-                name: RobotLink(
+            for name, robot in self.robots.items():
+                facts = self._facts(name, bus, kb)
+                self.links[name] = RobotLink(
                     robot,
                     self.fleet.robots[name].endpoint or robot.endpoint,
                     self.fleet.login_file(self.fleet.robots[name]),
                     self.fleet.name,
                     on_alive=self._alive,
                     say=self.say,
+                    on_event=facts.heard if facts is not None else None,
                 )
-                for name, robot in self.robots.items()
-            }
+                if facts is not None:
+                    facts.start()
+                    stack.callback(facts.stop)
             objects = {self.fleet.robots[name].pddl_object: name for name in self.robots}
             runner = FleetTasks(self.actors, objects, self.links, self.availability)
             self.high_level = HighLevel(
@@ -165,6 +178,33 @@ class Fleet:
 
     def __exit__(self, *exc: object) -> None:
         self._stack.close()
+
+    def _facts(self, name: str, bus: Bus, kb: KnowledgeBase) -> RobotFacts | None:
+        """What keeps the fleet's facts of a robot in step with its own (if any map)."""
+        if not self.mappings:
+            return None
+
+        def ask(predicate: str) -> list[Fact]:
+            link = self.links[name]
+            if link.bus is None:
+                return []
+            return STATE_GET.call(link.bus, StateQuery(predicate)).facts
+
+        def change(fact: str, unset: bool) -> None:
+            verb = STATE_UNSET if unset else STATE_SET
+            try:
+                verb.call(bus, FactChange(fact, source=name))
+            except DuraError as e:
+                log.warning("robot %s: %s could not be %s: %s", name, fact,
+                            "unset" if unset else "set", e)  # fmt: skip
+
+        return RobotFacts(
+            self.mappings,
+            self.fleet.robots[name].pddl_object,
+            ask=ask,
+            fleet_facts=lambda predicate: [f for f in kb.facts() if f.name == predicate],
+            change=change,
+        )
 
     def _wait_for_robots(self) -> None:
         deadline = time.monotonic() + self.join_wait

@@ -6,7 +6,9 @@ The link connects in the background and keeps trying while the executive is not
 there (its login file is read at each try: the executive writes it on its first run).
 Once connected it watches the executive's liveliness token: the link tells who asks
 whether the robot is there, before the steps running there fail when it vanishes; the
-session stays open, and the robot is there again when its executive comes back.
+session stays open, and the robot is there again when its executive comes back. It
+also hands on the robot's events (``on_event``: its facts follow them,
+:mod:`.robot_facts`).
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from executive.bus import security
-from executive.bus.keys import EXECUTIVE_ALIVE
+from executive.bus.keys import EVENTS, EXECUTIVE_ALIVE
+from executive.bus.message import Message
 from executive.bus.session import Bus, connect_when_there
 from executive.planning.bus_tasks import BusTasks
 from knowledge.description import RobotDescription
@@ -32,6 +35,7 @@ class RobotLink:
         fleet: the fleet's name (the session's name on the robot's bus).
         on_alive: told ``(robot, there)`` whenever its executive comes or goes.
         say: told one line at each change, for the operator.
+        on_event: told ``(kind, subject)`` of each event the robot logs.
     """
 
     def __init__(
@@ -43,6 +47,7 @@ class RobotLink:
         *,
         on_alive: Callable[[str, bool], None],
         say: Callable[[str], None] = lambda line: None,
+        on_event: Callable[[str, str], None] | None = None,
     ) -> None:
         self.robot = robot
         self.name = robot.name
@@ -51,6 +56,7 @@ class RobotLink:
         self.fleet = fleet
         self.on_alive = on_alive
         self.say = say
+        self.on_event = on_event
         self.runner: BusTasks | None = None  # once connected
         self.bus: Bus | None = None
         self._stop = threading.Event()
@@ -81,9 +87,18 @@ class RobotLink:
             if task.behavior in self.robot.behaviors
         }
         self.bus = bus
+        if self.on_event is not None:
+            bus.subscribe(EVENTS, self._event)
         self.runner = BusTasks(
             bus, interruptible, EXECUTIVE_ALIVE, on_server=self._alive, fleet=self.fleet
         )
+
+    def _event(self, message: Message) -> None:
+        payload = message.payload
+        if self.on_event is not None and isinstance(payload, dict):
+            kind, subject = payload.get("kind"), payload.get("subject")
+            if isinstance(kind, str) and isinstance(subject, str):
+                self.on_event(kind, subject)
 
     def _waiting(self, line: str) -> None:
         self.say(f"robot '{self.name}': {line}")

@@ -6,6 +6,8 @@
   object is in the fleet's problem, of the robot type (or a subtype);
 - each action's robot: the parameter ``actions:`` names, else its first parameter of the
   robot type (an action without one completes at once with its effects, a warning);
+- each fact mapping reads, and its fleet side is a predicate or function of the domain
+  with as many arguments;
 - every action a robot may carry out (its object fits the action's robot parameter) has
   a task in that robot's description, whose goal fields name only the action's
   parameters.
@@ -19,9 +21,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from executive.fleet.description import FleetDescription, read_fleet
+from executive.fleet.robot_facts import FactMapping
 from knowledge.description import RobotDescription
 from knowledge.domain import DomainInfo, parse_problem, read_domain, type_name
-from knowledge.errors import DomainError
+from knowledge.errors import ConfigError, DomainError
 from knowledge.finding import Finding, Report, finding_of
 from knowledge.sources import read_text
 from knowledge.validation import validate
@@ -38,6 +41,7 @@ class FleetCheck:
     actors: Mapping[str, str] = field(default_factory=dict)  # action -> robot parameter
     objects: Mapping[str, str] = field(default_factory=dict)  # the problem's, name -> type
     findings: tuple[Finding, ...] = ()
+    mappings: tuple[FactMapping, ...] = ()  # a robot's facts in the fleet's world
 
     @property
     def outside(self) -> frozenset[str]:
@@ -85,6 +89,7 @@ def check_fleet(path: Path) -> FleetCheck:
         )
         return FleetCheck(fleet, domain, findings=(*findings, *report.findings))
     actors = _actors(fleet, domain, report)
+    mappings = _mappings(fleet, domain, report)
     robots: dict[str, RobotDescription] = {}
     for robot in fleet.robots.values():
         described = _robot(fleet, robot.name, objects, domain, report)
@@ -93,7 +98,7 @@ def check_fleet(path: Path) -> FleetCheck:
             findings += _tasks(
                 fleet, described, domain, actors=actors, objects=objects, report=report
             )
-    check = FleetCheck(fleet, domain, robots, actors, objects)
+    check = FleetCheck(fleet, domain, robots, actors, objects, mappings=mappings)
     for name in sorted(check.outside):
         report.warning(
             fleet.lines.get("robots"),
@@ -134,6 +139,31 @@ def _actors(fleet: FleetDescription, domain: DomainInfo, report: Report) -> dict
         else:
             actors[name] = found
     return actors
+
+
+def _mappings(
+    fleet: FleetDescription, domain: DomainInfo, report: Report
+) -> tuple[FactMapping, ...]:
+    """The fact mappings that read and fit the fleet's domain."""
+    found: list[FactMapping] = []
+    for robot_side, fleet_side in fleet.facts.items():
+        line = fleet.lines.get(f"facts.{robot_side}", fleet.lines.get("facts"))
+        try:
+            mapping = FactMapping.read(robot_side, fleet_side)
+        except ConfigError as e:
+            report.error(line, f"fact mapping: {e}")
+            continue
+        name, arity = mapping.fleet.name, len(mapping.fleet.args)
+        kinds = domain.predicates.get(name, domain.functions.get(name))
+        if kinds is None:
+            report.error(line, f"fact mapping: '{name}' is no predicate or function of "
+                               f"domain '{domain.name}'")  # fmt: skip
+        elif len(kinds) != arity:
+            report.error(line, f"fact mapping: '{name}' takes {len(kinds)} arguments, not "
+                               f"{arity}")  # fmt: skip
+        else:
+            found.append(mapping)
+    return tuple(found)
 
 
 def _robot(

@@ -28,6 +28,7 @@ def fleet_file(folder: Path, robots: Sequence[RobotProcess]) -> Path:
         f"domain: {EXAMPLE / 'depot.pddl'}",
         f"problem: {EXAMPLE / 'problem.pddl'}",
         "max_failures: 2",
+        "facts: {(battery_level): (battery ?robot)}",
         "robots:",
     ]
     for robot in robots:
@@ -82,6 +83,12 @@ def test_two_robots_deliver_in_parallel_each_step_on_its_own_executive(tmp_path:
         starts = {r: kinds.index(("START", steps_of(events, "START", r)[0])) for r in ended}
         ends = {r: kinds.index(("END", ended[r][-1])) for r in ended}
         assert starts["r1"] < ends["r2"] and starts["r2"] < ends["r1"]
+
+        # each robot's battery, as its own sensing rule measures it, is in the fleet's world
+        def drained() -> set[str]:
+            return {f.split()[2].rstrip(")") for f in fleet.facts("battery") if "100)" not in f}
+
+        assert wait_for(lambda: drained() == {"r1", "r2"}, 30), fleet.facts("battery")
         assert sorted(fleet.facts("crate_at")) == [
             "(crate_at parcel1 lab)",
             "(crate_at parcel2 office)",

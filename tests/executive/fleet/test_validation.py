@@ -50,7 +50,7 @@ def test_a_robot_without_a_task_for_an_action_it_may_carry_out_is_refused_at_its
 ) -> None:
     replace(depot / "r2.yaml", '  pick:  {behavior: pick, goal: {crate: "?c", place: "?p"}}\n', "")
     assert errors(depot / "fleet.yaml") == [
-        f"{depot / 'fleet.yaml'}:12: robot 'r2' may carry out action 'pick' ('r2' is a "
+        f"{depot / 'fleet.yaml'}:15: robot 'r2' may carry out action 'pick' ('r2' is a "
         "'robot'), but r2.yaml has no task for it"
     ]
 
@@ -69,7 +69,7 @@ def test_a_task_goal_naming_a_parameter_the_fleet_action_lacks_is_refused_in_the
     found = errors(depot / "fleet.yaml")
     assert len(found) == 3
     assert found[0] == (
-        f"{depot / 'r1.yaml'}:28: goal field 'crate' of task 'drop' names '?crate', which "
+        f"{depot / 'r1.yaml'}:31: goal field 'crate' of task 'drop' names '?crate', which "
         "action 'drop' of fleet domain 'depot' lacks (it has ?r, ?c, ?p)"
     )
 
@@ -126,6 +126,6 @@ def test_dura_validate_checks_a_fleet_and_says_where_it_does_not_fit(depot: Path
     report = json.loads(refused.stdout)
     assert report["valid"] is False
     assert [(f["line"], f["message"]) for f in report["findings"]] == [
-        (10, "object 'r3' of type 'robot' is no robot of the fleet: no plan gives it a step"),
-        (13, "robot 'r3': object 'dock3' is a 'place', not a 'robot'"),
+        (13, "object 'r3' of type 'robot' is no robot of the fleet: no plan gives it a step"),
+        (16, "robot 'r3': object 'dock3' is a 'place', not a 'robot'"),
     ]
