@@ -17,6 +17,8 @@ whose steps keep failing, is unavailable: no plan gives it a step
 - :mod:`.robot_link` — one robot as the fleet reaches it: its bus session and its task
   executor as a runner of steps, and whether it is there;
 - :mod:`.availability` — which robots can act now, and why the others cannot;
+- :mod:`.robot_facts` — a robot's own facts (where it is, its battery) in the fleet's
+  world;
 - :mod:`.fleet_tasks` — the fleet's runner of steps: each step to its robot's link;
 - :mod:`.fleet` — the fleet's process: its bus, knowledge base, links and high level.
 """
