@@ -183,7 +183,12 @@ def run_show(args: argparse.Namespace) -> int:
          states.get(s.index, "-"), bar(s.start, s.duration, span)]
         for s in steps
     ]  # fmt: skip
-    table(["#", "start", "duration", "step", "state", "timeline"], rows)
+    headers = ["#", "start", "duration", "step", "state", "timeline"]
+    if reply.robots is not None:  # a fleet's plan: who carries out each step
+        robots = [*reply.robots, *[""] * len(rows)][: len(rows)]
+        rows = [[*row[:1], robot or "-", *row[1:]] for row, robot in zip(rows, robots, strict=True)]
+        headers.insert(1, "robot")
+    table(headers, rows)
     return 0
 
 

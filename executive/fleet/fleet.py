@@ -21,7 +21,14 @@ from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
 
 from executive.bus import security
-from executive.bus.api.planning import STATE_GET, STATE_SET, STATE_UNSET, FactChange, StateQuery
+from executive.bus.api.planning import (
+    STATE_GET,
+    STATE_SET,
+    STATE_UNSET,
+    FactChange,
+    FleetRobot,
+    StateQuery,
+)
 from executive.bus.event_relay import EventRelay
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.lifecycle_manager import LifecycleManager
@@ -63,7 +70,7 @@ class Fleet:
     Args:
         fleet: the fleet.
         robots: each robot's description, by name (as :mod:`.validation` read them).
-        actors: each acting action's robot parameter.
+        actors: each acting action's robot parameter, by its position.
         outside: the objects of the robot type that are no robot of the fleet.
         mappings: the robots' own facts that reach the fleet's world.
         endpoint: where the fleet listens (default: its description's).
@@ -79,7 +86,7 @@ class Fleet:
         self,
         fleet: FleetDescription,
         robots: Mapping[str, RobotDescription],
-        actors: Mapping[str, str],
+        actors: Mapping[str, int],
         *,
         outside: Collection[str] = (),
         mappings: Sequence[FactMapping] = (),
@@ -159,6 +166,7 @@ class Fleet:
                 context,
                 lambda: runner,
                 events=relay,
+                status={"robots": self._robots},
                 actions=frozenset(self.actors),
                 unavailable=self.availability.unavailable_objects,
             )
@@ -205,6 +213,13 @@ class Fleet:
             fleet_facts=lambda predicate: [f for f in kb.facts() if f.name == predicate],
             change=change,
         )
+
+    def _robots(self) -> list[FleetRobot]:
+        """The fleet's robots and whether each can act (``status``)."""
+        return [
+            FleetRobot(name, why is None, why or "")
+            for name, why in sorted(self.availability.snapshot().items())
+        ]
 
     def _wait_for_robots(self) -> None:
         deadline = time.monotonic() + self.join_wait

@@ -5,6 +5,7 @@ level (``dura fleet run``) running each step on the robot it names."""
 from __future__ import annotations
 
 import contextlib
+import json
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
@@ -13,7 +14,7 @@ import pytest
 from executive.testing.fleet import FleetProcess
 from executive.testing.harness import RobotProcess
 from knowledge.records import Event
-from tests.conftest import ROOT, wait_for
+from tests.conftest import ROOT, run_dura, wait_for
 
 pytestmark = pytest.mark.slow
 
@@ -66,7 +67,11 @@ def steps_of(events: list[Event], kind: str, robot: str) -> list[str]:
 
 def test_two_robots_deliver_in_parallel_each_step_on_its_own_executive(tmp_path: Path) -> None:
     with depot(tmp_path, ["r1", "r2"]) as (fleet, (r1, r2)):
-        first = fleet.submit_goal("(crate_at parcel1 lab)")
+        # an operator's commands reach the fleet as they reach a robot: --fleet names it
+        added = run_dura("goal", "add", "(crate_at parcel1 lab)", "--fleet", "../fleet.yaml",
+                         "--endpoint", fleet.endpoint, "--json", cwd=fleet.folder)  # fmt: skip
+        assert added.returncode == 0, added.stderr
+        first = int(json.loads(added.stdout)["id"])
         second = fleet.submit_goal("(crate_at parcel2 office)")
         fleet.wait_for(first, "achieved", timeout=120)
         fleet.wait_for(second, "achieved", timeout=120)
@@ -83,6 +88,19 @@ def test_two_robots_deliver_in_parallel_each_step_on_its_own_executive(tmp_path:
         starts = {r: kinds.index(("START", steps_of(events, "START", r)[0])) for r in ended}
         ends = {r: kinds.index(("END", ended[r][-1])) for r in ended}
         assert starts["r1"] < ends["r2"] and starts["r2"] < ends["r1"]
+
+        shown = run_dura("plan", "show", "--json", cwd=fleet.folder)  # the fleet's run file
+        assert shown.returncode == 0, shown.stderr
+        plan = json.loads(shown.stdout)
+        assert plan["robots"] == [step["args"][0] for step in plan["plan"]["steps"]]
+        status = json.loads(run_dura("status", "--json", cwd=fleet.folder).stdout)
+        assert status["robots"] == [
+            {"robot": "r1", "available": True, "reason": ""},
+            {"robot": "r2", "available": True, "reason": ""},
+        ]
+        listed = json.loads(run_dura("events", "--json", "-n", "500", cwd=fleet.folder).stdout)
+        dispatched = [e for e in listed["events"] if e["kind"] == "DISPATCH"]
+        assert dispatched and all(e["data"]["robot"] == e["data"]["args"][0] for e in dispatched)
 
         # each robot's battery, as its own sensing rule measures it, is in the fleet's world
         def drained() -> set[str]:
