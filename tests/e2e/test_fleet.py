@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from executive.testing.fleet import FleetProcess
+from executive.testing.fleet import FleetProcess, fleet_variant
 from executive.testing.harness import RobotProcess
 from knowledge.records import Event
 from tests.conftest import ROOT, run_dura, wait_for
@@ -20,27 +20,6 @@ pytestmark = pytest.mark.slow
 
 EXAMPLE = ROOT / "examples" / "fleet"
 SCALE = 2.0  # robot time twice as fast as the wall clock: a drive takes 2.5 s
-
-
-def fleet_file(folder: Path, robots: Sequence[RobotProcess]) -> Path:
-    """The example fleet with these robots, where they run."""
-    lines = [
-        "fleet: depot",
-        f"domain: {EXAMPLE / 'depot.pddl'}",
-        f"problem: {EXAMPLE / 'problem.pddl'}",
-        "max_failures: 2",
-        "facts: {(battery_level): (battery ?robot)}",
-        "robots:",
-    ]
-    for robot in robots:
-        login = robot.folder / ".dura" / f"{robot.robot.name}.fleet.bus.json"
-        lines.append(
-            f"  {robot.robot.name}: {{description: {robot.description}, "
-            f"endpoint: '{robot.endpoint}', login: {login}}}"
-        )
-    path = folder / "fleet.yaml"
-    path.write_text("\n".join(lines) + "\n")
-    return path
 
 
 @contextlib.contextmanager
@@ -55,7 +34,7 @@ def depot(
             )
             for name in names
         ]
-        path = fleet_file(tmp_path, robots)
+        path = fleet_variant(EXAMPLE / "fleet.yaml", robots, tmp_path, max_failures=2)
         fleet = stack.enter_context(FleetProcess(path, tmp_path / "fleet", time_scale=SCALE))
         yield fleet, robots
 
@@ -145,3 +124,22 @@ def test_a_robot_killed_mid_step_has_its_goal_finished_by_another_and_takes_work
         events = fleet.events()
         assert f"drop({worker}, parcel2, office)" in steps_of(events, "END", worker)
         assert by_name[worker].events("TASK_SUCCEEDED")  # its new executive ran them
+
+
+def test_the_fleet_demo_finishes_the_lost_robots_deliveries_with_the_others(
+    tmp_path: Path,
+) -> None:
+    done = run_dura("demo", "--fleet", "--keep", str(tmp_path / "run"), "--json", timeout=240)
+    assert done.returncode == 0, done.stderr[-2000:]
+    report = json.loads(done.stdout)
+    assert report["ok"] is True
+    assert [g["state"] for g in report["goals"]] == ["achieved"] * 3
+    (lost,) = report["lost"]
+    assert {r["robot"]: r["available"] for r in report["robots"]} == {
+        name: name != lost for name in ("r1", "r2", "r3")
+    }
+    assert report["replans"] >= 1
+    steps = [e for e in report["events"] if e["kind"] in ("DISPATCH", "START", "END")]
+    assert steps and all(e["robot"] == e["data"]["args"][0] for e in steps)
+    dropped = [e["robot"] for e in steps if e["kind"] == "END" and e["subject"].startswith("drop")]
+    assert len(dropped) == 3 and lost not in dropped  # each delivered once, by the others
