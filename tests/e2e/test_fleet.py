@@ -143,3 +143,15 @@ def test_the_fleet_demo_finishes_the_lost_robots_deliveries_with_the_others(
     assert steps and all(e["robot"] == e["data"]["args"][0] for e in steps)
     dropped = [e["robot"] for e in steps if e["kind"] == "END" and e["subject"].startswith("drop")]
     assert len(dropped) == 3 and lost not in dropped  # each delivered once, by the others
+
+
+def test_a_goal_no_robot_can_reach_waits_for_a_robot_to_come_back(tmp_path: Path) -> None:
+    with depot(tmp_path, ["r1"]) as (fleet, (r1,)):
+        r1.kill()
+        assert wait_for(lambda: fleet.events("ROBOT_LOST") != [], 30)
+        goal = fleet.submit_goal("(crate_at parcel1 lab)")
+        fleet.wait_for(goal, "unreachable", timeout=60)  # no robot can act: no plan
+        assert fleet.events("DISPATCH") == []  # nothing was sent to a robot not there
+        r1.start()
+        fleet.wait_for(goal, "achieved", timeout=120)  # back: it takes the goal
+        assert r1.events("TASK_SUCCEEDED")
