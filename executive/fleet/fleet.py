@@ -50,20 +50,6 @@ log = logging.getLogger("dura.fleet")
 JOIN_WAIT = 10.0  # seconds the fleet waits for its robots before it first plans
 
 
-def fleet_robot(fleet: FleetDescription) -> RobotDescription:
-    """The fleet as the high level sees it: a "robot" with the fleet's name, domain,
-    world and planner, and no components of its own (its robots carry out the steps)."""
-    return RobotDescription(
-        name=fleet.name,
-        path=fleet.path,
-        domain=fleet.domain,
-        problem=fleet.problem,
-        planner=fleet.planner,
-        endpoint=fleet.endpoint,
-        knowledge_base=fleet.knowledge_base,
-    )
-
-
 class Fleet:
     """Everything the fleet's process runs, opened and closed together.
 
@@ -99,7 +85,7 @@ class Fleet:
         say: Callable[[str], None] = lambda line: None,
     ) -> None:
         self.fleet = fleet
-        self.robot = fleet_robot(fleet)
+        self.robot = fleet.as_robot()
         self.robots = dict(robots)
         self.actors = dict(actors)
         self.mappings = tuple(mappings)
