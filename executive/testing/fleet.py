@@ -35,7 +35,7 @@ from knowledge.yamlsource import load as load_yaml
 
 
 def fleet_variant(
-    description: Path, robots: Sequence[RobotProcess], folder: Path, **changes: Any
+    description: str | Path, robots: Sequence[RobotProcess], folder: Path, **changes: Any
 ) -> Path:
     """Write a copy of a fleet description into ``folder`` whose robots are ``robots``,
     where they run (their endpoints, and the fleet's logins their executives wrote), with
@@ -74,7 +74,7 @@ class FleetProcess(RobotClient):
 
     def __init__(
         self,
-        description: Path,
+        description: str | Path,
         folder: Path,
         endpoint: str | None = None,
         *,
