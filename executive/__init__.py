@@ -14,6 +14,8 @@ Its packages are layers: an upper one imports a lower one, never the reverse
 - :mod:`.runtime` — component processes: the launcher, host agents, translators;
 - :mod:`.tasks` — the task executor;
 - :mod:`.planning` — the high level: goals, plans and their execution;
+- :mod:`.fleet` — fleets: one plan for several robots, each step run by its own robot
+  (``dura fleet run``), over the high level of :mod:`.planning`;
 - :mod:`.dashboard` — the live web page and the pictures;
 - :mod:`.testing` — the pytest fixtures and the robot harness;
 - :mod:`.executive` — the composition root: the executive process, and a group of its

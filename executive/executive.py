@@ -22,6 +22,9 @@ steps on the executive's task executor over the bus (:mod:`executive.bus.api.ste
 And so can the task executor with the launcher (``--only tasks``: the components of the
 executive's computer, their verbs and resource monitor, and the plan steps the high
 level asks for over the bus). Both kinds of process build a group with the same builder.
+Wherever the task executor runs, it serves plan steps over the bus, also beside the
+executive's own high level: a fleet's high level (``dura fleet run``, logged in as the
+``fleet`` role) runs its steps for this robot there.
 """
 
 from __future__ import annotations
@@ -176,6 +179,7 @@ class Executive:
                 self.credentials_path, robot.name, components, robot.hosts
             )
             security.write_host_credentials(credentials, self.folder, robot.hosts)
+            security.write_fleet_credentials(credentials, self.folder)
             users = self.credentials_path.with_suffix(".users")
             self.progress(f"opening the bus on {self.endpoint}")
             self.bus = stack.enter_context(
@@ -264,8 +268,9 @@ class Executive:
             *ros2_group(context, self.ros2),
         ]
         if self.launcher is not None:
-            steps = PLANNING in self.without  # for the high level of the planning process
-            self._tasks_group = tasks_group(context, self.launcher, self.settings, steps=steps)
+            # the steps of a high level in another process: the planning process's, or a
+            # fleet's (dura fleet run), beside this process's own high level
+            self._tasks_group = tasks_group(context, self.launcher, self.settings, steps=True)
             self.tasks = self._tasks_group.executor
             services += self._tasks_group.services
         return services

@@ -52,6 +52,8 @@ ALLOWED: dict[str, set[str]] = {
         "knowledge",
     },
     "executive.dashboard": {"executive.bus", "executive.planning", "knowledge"},
+    # a fleet's high level runs the planning layer's, its steps over the bus
+    "executive.fleet": {"executive.bus", "executive.planning", "knowledge"},
     # the language server runs the checks of `dura validate` (its rule files' included)
     # and of `dura domain check`
     "executive.lsp": {
@@ -98,6 +100,7 @@ ALLOWED: dict[str, set[str]] = {
         "executive.dashboard",
         "executive.executive",
         "executive.lsp",
+        "executive.fleet",
         "monitoring",
         "knowledge",
     },

@@ -29,6 +29,8 @@ NAMED = frozenset(
         "PERMANENT_FAULT", "COMPONENT_RESET",
         # the computers of a robot (host agents)
         "HOST_JOINED", "HOST_LOST", "HOST_STOPPED",
+        # the robots of a fleet (dura fleet run)
+        "ROBOT_JOINED", "ROBOT_LOST",
         # monitoring
         "RULE_FIRED", "RULE_FAILED", "EXONERATION",
     }

@@ -170,7 +170,8 @@ def _replan(subject: str, data: Data, kind: str) -> str:
 def _step(subject: str, data: Data, kind: str) -> str:
     text = subject
     if data.get("plan") is not None and data.get("step") is not None:
-        text += f" (plan {data['plan']}, step {data['step']})"
+        robot = f", robot {data['robot']}" if data.get("robot") else ""  # a fleet's step
+        text += f" (plan {data['plan']}, step {data['step']}{robot})"
     if kind == "START" and data.get("undo"):
         # the start's effects, said as changes ("at start: not (robot_at dock)" read as
         # a condition the step broke)
@@ -288,6 +289,12 @@ def _host(subject: str, data: Data, kind: str) -> str:
     return f"host {subject} {how}" + (f": ended {listed(components)}" if components else "")
 
 
+def _robot(subject: str, data: Data, kind: str) -> str:
+    if kind == "ROBOT_JOINED":
+        return f"robot {subject} joined the fleet"
+    return _why(f"robot {subject} is unavailable", data.get("reason"))
+
+
 def _component(subject: str, data: Data, kind: str) -> str:
     text = subject + (f" (pid {data['pid']})" if data.get("pid") is not None else "")
     if data.get("signal") is not None:
@@ -330,6 +337,7 @@ _TEXTS: Mapping[str, Text] = {
     "CONFIGURATION": _configuration, "REPAIR": _repair, "FAULT": _fault,
     "PERMANENT_FAULT": _permanent_fault, "COMPONENT_RESET": _reset,
     "HOST_JOINED": _host, "HOST_LOST": _host, "HOST_STOPPED": _host,
+    "ROBOT_JOINED": _robot, "ROBOT_LOST": _robot,
     "RULE_FIRED": _rule, "RULE_FAILED": _rule,
 }  # fmt: skip
 """The readable form of each named kind."""

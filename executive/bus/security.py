@@ -17,6 +17,12 @@ router on every message that reaches it from a client:
   exoneration, subscribe and watch liveliness — but publish nothing and change no
   diagnosis model (only the executive and its services do), so no operator can forge a
   diagnosis, an observation or a state, nor make the diagnosis blind;
+- ``fleet`` (a fleet's high level, ``dura fleet run``, which plans for several robots):
+  ask this robot's task executor for plan steps and control them
+  (``executive/steps/{run,control,upcoming}``), hear how they go
+  (``executive/steps/progress``) and the robot's events, read the robot's world (``state/get``, ``status``) and
+  watch liveliness — nothing else: it cannot post goals, change facts, command components
+  or publish;
 - ``component.<name>`` (one user per component): publish the topics its description
   lists under ``publishes``, and only under its own name (``from/<name>/topic/<t>``: the
   caller id observers see is the login's, see :mod:`executive.bus.session`), subscribe
@@ -33,7 +39,8 @@ environment, the command line reads the file. For a client on another machine, c
 file (it is the robot's key: treat it like an SSH key). A host agent needs only its own
 login: the executive writes it alone into ``.dura/<robot>.<host>.bus.json`` (also
 user-only), the file to copy to that host; the launcher hands each component started
-there its login in the start request.
+there its login in the start request. The same for a fleet's login:
+``.dura/<robot>.fleet.bus.json``.
 """
 
 from __future__ import annotations
@@ -55,6 +62,7 @@ if TYPE_CHECKING:
 EXECUTIVE = "executive"
 SERVICE = "service"
 OPERATOR = "operator"
+FLEET = "fleet"
 COMPONENT = "component."
 HOST = "host."
 
@@ -131,6 +139,19 @@ def host_credentials_file(folder: Path, robot: str, host: str) -> Path:
     return folder / ".dura" / f"{robot}.{host}.bus.json"
 
 
+def fleet_credentials_file(folder: Path, robot: str) -> Path:
+    """Where the fleet's login lives (the file to copy to the fleet's computer)."""
+    return folder / ".dura" / f"{robot}.{FLEET}.bus.json"
+
+
+def write_fleet_credentials(credentials: Credentials, folder: Path) -> None:
+    """Write the fleet's login alone into its file (user-only), the file to copy."""
+    login = credentials.login(FLEET)
+    only = Credentials(credentials.robot, {login.user: login.password})
+    path = fleet_credentials_file(folder, credentials.robot)
+    _write_private(path, json.dumps(only.to_payload(), indent=2) + "\n")
+
+
 def write_host_credentials(credentials: Credentials, folder: Path, hosts: Iterable[str]) -> None:
     """Write each host agent's own login into its file (user-only), the file to copy."""
     for host in hosts:
@@ -175,7 +196,7 @@ def ensure_credentials(
     Raises:
         BusError: an existing file is unreadable, or belongs to another robot.
     """
-    wanted = [EXECUTIVE, SERVICE, OPERATOR, *(component_user(c) for c in components),
+    wanted = [EXECUTIVE, SERVICE, OPERATOR, FLEET, *(component_user(c) for c in components),
               *(host_user(h) for h in hosts)]  # fmt: skip
     existing: dict[str, str] = {}
     if path.exists():
@@ -240,14 +261,23 @@ def access_control(
               [f"{root}/alive/**"]),
         _rule("component calls", ["query"], [f"{root}/executive/api/state/set",
                                              f"{root}/executive/api/state/unset"]),
+        _rule("fleet steps", ["query"], [f"{root}/executive/steps/run",
+                                         f"{root}/executive/steps/control",
+                                         f"{root}/executive/steps/upcoming",
+                                         f"{root}/executive/api/state/get",
+                                         f"{root}/executive/api/status"]),
+        _rule("fleet hears", ["declare_subscriber"], [f"{root}/executive/steps/progress",
+                                                      f"{root}/events"]),
     ]  # fmt: skip
     subjects = [
         {"id": "trusted", "usernames": [EXECUTIVE, SERVICE]},
         {"id": "operators", "usernames": [OPERATOR]},
+        {"id": "fleet", "usernames": [FLEET]},
     ]
     policies = [
         {"rules": ["everything", "deliver"], "subjects": ["trusted"]},
         {"rules": ["deliver", "ask", "listen"], "subjects": ["operators"]},
+        {"rules": ["deliver", "watch", "fleet steps", "fleet hears"], "subjects": ["fleet"]},
     ]
     for name in components:
         own = f"own {name}"

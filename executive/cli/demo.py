@@ -59,6 +59,13 @@ def register(sub: Any) -> None:
         help="run the ROS 2 patrol robot (examples/ros2) instead: ROS 2 nodes, a managed "
         "node, an action and a service as tasks, a goal from ROS 2, on loopback DDS",
     )
+    p.add_argument(
+        "--fleet",
+        action="store_true",
+        help="run the depot fleet (examples/fleet) instead: three transport robots deliver "
+        "parcels in parallel, one robot's executive is killed mid-plan, the others finish "
+        "its deliveries",
+    )
     p.add_argument("--all-events", action="store_true", help="show every event")
     p.add_argument(
         "--dashboard",
@@ -78,6 +85,10 @@ def run(args: argparse.Namespace) -> int:
         from executive.cli import demo_ros2  # Cyclone DDS
 
         return demo_ros2.run(args)
+    if args.fleet:  # the fleet's example and harness
+        from executive.cli import demo_fleet
+
+        return demo_fleet.run(args)
     if not EXAMPLE.is_file():
         raise DuraError(f"the example robot is missing: {EXAMPLE} (run from a dura checkout)")
     if args.keep is not None:

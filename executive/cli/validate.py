@@ -1,4 +1,5 @@
-"""``dura validate ROBOT.yaml``: check a robot description, its PDDL domain and its observers."""
+"""``dura validate ROBOT.yaml``: check a robot description, its PDDL domain and its observers;
+or a fleet description against its domain and its robots (``dura validate fleet.yaml``)."""
 
 from __future__ import annotations
 
@@ -28,7 +29,8 @@ def register(sub: Any) -> None:
         help="check a robot description and its PDDL domain",
         description="Check a robot description, its PDDL domain and problem, the "
         "task-action mapping and the observer configurations; or a standalone observers "
-        "file (tug form: a list of observers, or 'setup: [...]'). Exit 0 if valid "
+        "file (tug form: a list of observers, or 'setup: [...]'); or a fleet description "
+        "(fleet.yaml) against its domain and each robot's description. Exit 0 if valid "
         "(warnings allowed), 1 if not, 2 on usage errors.",
     )
     p.add_argument("robot", metavar="ROBOT.yaml", type=Path, help="the robot description")
@@ -64,6 +66,10 @@ def check_rule_files(robot: RobotDescription, domain: DomainInfo) -> list[Findin
 
 def run(args: argparse.Namespace) -> int:
     use_reader_environment()
+    from executive.fleet.description import is_fleet_file
+
+    if is_fleet_file(args.robot):
+        return _fleet(args)
     observers = check_observer_file(args.robot)
     if observers is not None:
         specs, findings = observers
@@ -90,6 +96,23 @@ def run(args: argparse.Namespace) -> int:
             f"domain '{result.domain.name if result.domain else '?'}'"
         )
     return _report(args, findings, robot is not None, summary)
+
+
+def _fleet(args: argparse.Namespace) -> int:
+    from executive.fleet.validation import check_fleet
+
+    with LiveLine(shown=not args.json) as line:
+        line.doing(f"checking {shown(args.robot)}, its domain and its robots")
+        check = check_fleet(args.robot)
+    summary = ""
+    if check.fleet is not None:
+        summary = (
+            f"fleet '{check.fleet.name}', {plural(len(check.fleet.robots), 'robot')} "
+            f"({', '.join(check.fleet.robots)}), "
+            f"{plural(len(check.actors), 'action')} carried out by robots, "
+            f"domain '{check.domain.name if check.domain else '?'}'"
+        )
+    return _report(args, sorted(check.findings, key=_order), check.fleet is not None, summary)
 
 
 def _report(args: argparse.Namespace, findings: list[Finding], usable: bool, summary: str) -> int:

@@ -5,7 +5,8 @@ Two sources give the data: a plan found offline (:func:`offline_gantt`, times fr
 plan's start) and the running robot's plan with its execution (:func:`live_gantt`:
 planned and actual times from the event log, step states, each step's task and
 configuration, and the plans and replans before it on the same time axis, 0 being the
-current plan's start). :func:`render` draws either.
+current plan's start). :func:`render` draws either. A fleet's plan is drawn by robot:
+each robot's steps together, in the order they start, under its name.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ class GanttStep:
     state: str = "pending"
     ran: tuple[float, float | None] | None = None
     details: tuple[str, ...] = ()
+    robot: str = ""  # a fleet's plan: the robot that carries it out
 
     @property
     def end(self) -> float:
@@ -89,9 +91,12 @@ def live_gantt(
     events: Sequence[Event],
     tasks: Sequence[ExecutorTask],
     now: float,
+    *,
+    robots: Sequence[str] | None = None,
 ) -> Gantt:
     """The chart of the running robot's plan (a ``plan/show`` reply's ``plan`` and
-    ``execution``), its events (``events``, oldest first) and tasks (``task/list``)."""
+    ``execution``), its events (``events``, oldest first) and tasks (``task/list``); for a
+    fleet's plan, ``robots``: the reply's robot of each step (the chart is by robot)."""
     plan_id = plan.id
     origin = plan.created or now
     for event in events:
@@ -116,8 +121,10 @@ def live_gantt(
     # the newest task of a step (a restarted step has several)
     by_name = {t.name: t for t in sorted(tasks, key=lambda t: _number(t.id))}
     steps = []
-    for planned in plan.steps:
+    performers = list(robots or [])
+    for position, planned in enumerate(plan.steps):
         label = f"{planned.action}({', '.join(planned.args)})"
+        robot = performers[position] if position < len(performers) else ""
         state = _state(states.get(planned.index), plan.state.value)
         span = ran.get(planned.index)
         if span is None and state in ("dispatched", "running", "paused") and label in unended:
@@ -131,10 +138,14 @@ def live_gantt(
                 details.append(f"configuration: {uses}")
             if task.reason:
                 details.append(f"reason: {task.reason}")
+        if robot:
+            details.insert(1, f"robot {robot}")
         steps.append(
             GanttStep(planned.index, label, planned.start, planned.duration, state, span,
-                      tuple(details))
+                      tuple(details), robot)
         )  # fmt: skip
+    if any(s.robot for s in steps):  # by robot: each robot's steps together
+        steps.sort(key=lambda s: (s.robot or "~", s.start, s.index))
     marks = []
     for event in events:
         kind, at = event.kind, event.stamp - origin
@@ -188,10 +199,18 @@ def ticks(low: float, high: float, count: int = 8) -> list[float]:
     return [round(first + i * step, 9) for i in range(int((high - first) / step + 1e-9) + 1)]
 
 
+def _striped(steps: Sequence[GanttStep]) -> list[int]:
+    """The rows drawn on a stripe: every other row, or every other robot's rows."""
+    if not any(s.robot for s in steps):
+        return list(range(1, len(steps), 2))
+    robots = list(dict.fromkeys(s.robot for s in steps))
+    return [row for row, s in enumerate(steps) if robots.index(s.robot) % 2 == 1]
+
+
 def render(gantt: Gantt, width: float = WIDTH, *, titled: bool = True) -> str:
     """The chart as an SVG document (``titled``: with its title drawn on it; a page
     that shows the title itself draws none)."""
-    labels = [f"{s.index}  {s.label}" for s in gantt.steps]
+    labels = [f"{s.robot + '  ' if s.robot else ''}{s.index}  {s.label}" for s in gantt.steps]
     left = max(140.0, max((svg.text_width(t) for t in labels), default=0.0) + 24.0)
     right = width - 84.0  # room for the last step's state
     low = min([0.0, *(m.at for m in gantt.marks), *(s.ran[0] for s in gantt.steps if s.ran)])
@@ -210,7 +229,7 @@ def render(gantt: Gantt, width: float = WIDTH, *, titled: bool = True) -> str:
     if titled:
         body.append(svg.label(12, 20, gantt.title, font_size=14, font_weight="600"))
     axis_y = TOP + ROW * max(1, len(gantt.steps))
-    for row in range(1, len(gantt.steps), 2):  # stripes under the grid, the marks and the bars
+    for row in _striped(gantt.steps):  # stripes under the grid, the marks and the bars
         body.append(svg.element("rect", x=0, y=TOP + row * ROW, width=width, height=ROW,
                                 fill="#f7f8fa"))  # fmt: skip
     for t in ticks(low, high):
@@ -254,7 +273,7 @@ def render(gantt: Gantt, width: float = WIDTH, *, titled: bool = True) -> str:
         )  # fmt: skip
         body.append(
             svg.element("g", parts, class_="step", data_step=step.index, data_state=step.state,
-                        data_label=step.label)
+                        data_label=step.label, data_robot=step.robot or None)
         )  # fmt: skip
     if gantt.now is not None and any(s.ran for s in gantt.steps):
         body.append(

@@ -20,7 +20,8 @@ it never imports the task executor (steps run through the
   engine supports a problem (``auto``), or why none does; :mod:`.portfolio` — several
   engines at once;
 - :mod:`.problem` — unified-planning problems from the domain and the knowledge base
-  (with timed facts); :mod:`.metric` — what a plan optimises;
+  (with timed facts); :mod:`.metric` — what a plan optimises; :mod:`.unavailable` —
+  objects that cannot act now (a fleet's lost robots) left out of every step;
 - :mod:`.expression` — ground PDDL expressions: nodes, evaluation, reading; names and
   fact patterns;
 - :mod:`.stn`, :mod:`.partial_order` — plans as partial orders of steps;

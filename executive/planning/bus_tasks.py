@@ -16,7 +16,7 @@ from __future__ import annotations
 import contextlib
 import threading
 import uuid
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from executive.bus.api.steps import (
@@ -74,16 +74,27 @@ class BusTasks(TaskRunner):
             there fails, and the planner plans again; a step asked for while it is not
             there waits for it (at most :data:`SERVER_WAIT`), so that a task executor
             restarting does not use up the goal's plans.
+        on_server: told whether the server is there whenever that changes, before the
+            steps running there fail (a fleet marks the robot unavailable first, so that
+            the planner plans without it).
+        fleet: the fleet whose plans' steps these are (a fleet's high level), if any.
 
     Call :meth:`close` to stop listening for reports.
     """
 
     def __init__(
-        self, bus: Bus, interruptible: dict[str, bool], server: str = EXECUTIVE_ALIVE
+        self,
+        bus: Bus,
+        interruptible: dict[str, bool],
+        server: str = EXECUTIVE_ALIVE,
+        on_server: Callable[[bool], None] | None = None,
+        fleet: str | None = None,
     ) -> None:
         self.bus = bus
+        self.fleet = fleet
         self.interruptible = dict(interruptible)
         self.server = server
+        self.on_server = on_server
         self._reports: dict[str, StepReport] = {}
         self._lock = threading.Lock()
         self._served = threading.Event()  # the server's token is there
@@ -95,6 +106,8 @@ class BusTasks(TaskRunner):
         self._watch.undeclare()
 
     def _on_server(self, _key: str, alive: bool) -> None:
+        if self.on_server is not None:
+            self.on_server(alive)
         if alive:
             self._served.set()
             return
@@ -112,7 +125,7 @@ class BusTasks(TaskRunner):
         run = uuid.uuid4().hex
         with self._lock:
             self._reports[run] = report
-        request = StepRun(run, plan_id, spec_of(step))
+        request = StepRun(run, plan_id, spec_of(step), self.fleet)
         if self._served.is_set():
             self._send(request)
         else:  # the plan executor goes on meanwhile (a cancel of the step, another step)

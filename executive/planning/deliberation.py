@@ -11,7 +11,7 @@ goals; every event but the integrity goals' own makes the integrity rules look a
 from __future__ import annotations
 
 import functools
-from collections.abc import Mapping
+from collections.abc import Callable, Collection, Mapping
 from typing import Any
 
 from executive.bus.clock import Clock
@@ -47,6 +47,9 @@ class Deliberation:
         clock: robot time.
         subscribe: how sensing rules subscribe to their topics.
         diagnoses: the latest diagnosis result, if one came already.
+        actions: the actions whose steps ``runner`` carries out (default: the robot's
+            tasks; the others complete at once with their effects).
+        unavailable: the objects that cannot act now (a fleet's lost robots).
     """
 
     def __init__(
@@ -60,17 +63,27 @@ class Deliberation:
         clock: Clock,
         subscribe: Subscribe,
         diagnoses: Mapping[str, Any] | None = None,
+        actions: Collection[str] | None = None,
+        unavailable: Callable[[], Collection[str]] | None = None,
     ) -> None:
         kb, robot = context.kb, context.robot
         self.domain = warm.domain
         self.planner = planner
-        self.executor = PlanExecutor(kb, runner, robot.tasks, self._replan, limits, clock=clock)
+        self.executor = PlanExecutor(
+            kb,
+            runner,
+            robot.tasks if actions is None else actions,
+            self._replan,
+            limits,
+            clock=clock,
+        )
         self.goals = GoalPlanner(
             kb,
             self.domain,
             planner,
             self.executor,
             blocked=functools.partial(blocked_now, kb, robot),
+            unavailable=unavailable,
         )
         self.integrity = IntegrityGoals(kb, self.domain, warm.rules, clock=clock)
         if diagnoses:
@@ -111,6 +124,13 @@ class Deliberation:
     def status(self) -> PlannerStatus:
         """What the goal planner does now (never waits for it)."""
         return self.goals.status()
+
+    def replan(self, reason: str) -> None:
+        """Plan again now, although no step failed, and look again at the goals found
+        unreachable (the world changed so that the plan may no longer be carried out, or
+        a goal may be reached again: a fleet's robot was lost, or is back)."""
+        self.goals.world_changed(reason)
+        self.goals.wake(reason, replan=True)
 
     def _replan(self, reason: str) -> None:
         self.goals.replan(reason)

@@ -20,7 +20,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass
 
 from executive.bus.clock import Clock
@@ -49,6 +49,7 @@ class KeeperLinks:
         want: ask the goal planner for a round, with the reason.
         planning_facts: the facts the goal planner plans from (any thread).
         blocked: the actions that cannot run now, and why.
+        unavailable: the objects that cannot act now.
     """
 
     post: Callable[[Callable[[], None]], None]
@@ -56,6 +57,7 @@ class KeeperLinks:
     want: Callable[[str], None]
     planning_facts: Callable[[], list[Fact]]
     blocked: Callable[[], Mapping[str, str]]
+    unavailable: Callable[[], Collection[str]] = tuple
 
 
 class GoalKeeper:
@@ -191,9 +193,10 @@ class GoalKeeper:
         try:
             facts = tuple(self.links.planning_facts())
             blocked = dict(self.links.blocked())
+            unavailable = tuple(self.links.unavailable())
             timeout = min(self.planner.timeout, LOOK_TIMEOUT)
             for goal in goals:
-                world = live_world(objects, facts, self.kb, self.clock)
+                world = live_world(objects, facts, self.kb, self.clock, unavailable)
                 task = PlanningTask(self.domain.path, world, (goal,), frozenset(blocked))
                 results[goal.id] = (goal, self.planner.solve(task, timeout=timeout))
         except Exception:

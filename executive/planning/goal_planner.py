@@ -34,7 +34,7 @@ import logging
 import threading
 import time
 from collections import Counter
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 from executive.bus.reports import PlannerStatus, RoundPhase
@@ -89,6 +89,7 @@ class GoalPlanner:
         max_attempts: int = 5,
         pause_timeout: float | None = None,
         blocked: Callable[[], Mapping[str, str]] | None = None,
+        unavailable: Callable[[], Collection[str]] | None = None,
     ) -> None:
         self.kb = kb
         self.domain = domain
@@ -97,6 +98,7 @@ class GoalPlanner:
         self.max_attempts = max_attempts
         self.pause_timeout = pause_timeout
         self.blocked = blocked or dict  # action -> why its task cannot run now
+        self.unavailable = unavailable or tuple  # objects that cannot act now
         self._worker = Worker("goal planner", after_each=self._after_each)
         self._search = Worker("goal planner's search")
         self._stopping = threading.Event()
@@ -117,6 +119,7 @@ class GoalPlanner:
                 want=lambda reason: self._want(reason, False),
                 planning_facts=executor.planning_facts,
                 blocked=self.blocked,
+                unavailable=self.unavailable,
             ),
             executor.clock,
         )
@@ -298,7 +301,7 @@ class GoalPlanner:
         if not todo:
             self._conclude(round_, None, ())
             return
-        world = live_world(objects, facts, self.kb, self.executor.clock)
+        world = live_world(objects, facts, self.kb, self.executor.clock, self.unavailable())
         task = PlanningTask(self.domain.path, world, tuple(todo), frozenset(round_.blocked))
         round_.phase = RoundPhase.SEARCHING
         self._search.post(self._step(round_, lambda: self._solve(round_, task)))

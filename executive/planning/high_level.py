@@ -30,7 +30,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import threading
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from typing import Any
 
 from executive.bus.clock import Clock, system_clock
@@ -67,6 +67,9 @@ class HighLevel(Service):
         limits: when a running step times out.
         clock: robot time (default: this process's, from ``DURA_TIME_SCALE``).
         subscribe: how sensing rules subscribe to a topic key (default: on the bus).
+        actions: the actions whose steps ``runner`` carries out (default: the robot's
+            tasks).
+        unavailable: the objects that cannot act now (a fleet's lost robots).
     """
 
     name = "high-level"
@@ -82,6 +85,8 @@ class HighLevel(Service):
         limits: ExecutionLimits | None = None,
         clock: Clock | None = None,
         subscribe: Subscribe | None = None,
+        actions: Collection[str] | None = None,
+        unavailable: Callable[[], Collection[str]] | None = None,
     ) -> None:
         super().__init__(context)
         robot = context.robot
@@ -89,6 +94,8 @@ class HighLevel(Service):
         self.limits = limits
         self.clock = clock or system_clock()
         self.subscribe: Subscribe = subscribe or context.bus.subscribe
+        self.actions = actions
+        self.unavailable = unavailable
         self.planner = planner_for(robot.planner)
         self.warm_up = WarmUp(robot, context.kb, self.planner, on_failure=self.fail)
         self.goal_api = GoalApi(
@@ -171,6 +178,8 @@ class HighLevel(Service):
                         clock=self.clock,
                         subscribe=self.subscribe,
                         diagnoses=self._diagnoses,
+                        actions=self.actions,
+                        unavailable=self.unavailable,
                     )
                 # started outside the diagnoses' lock: starting subscribes on the bus,
                 # whose callback threads may be waiting for the lock (a diagnosis)
@@ -180,6 +189,12 @@ class HighLevel(Service):
                 self.fail(str(e) if isinstance(e, DuraError) else f"{type(e).__name__}: {e}")
                 return
             self._activated()
+
+    def replan(self, reason: str) -> None:
+        """Plan again now if it plans (a fleet's robot was lost or is back)."""
+        deliberation = self._deliberation
+        if deliberation is not None:
+            deliberation.replan(reason)
 
     # --- what it hears -------------------------------------------------------------------
 

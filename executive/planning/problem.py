@@ -40,6 +40,7 @@ from executive.planning.expression import (
 )
 from executive.planning.goals import GoalSpec
 from executive.planning.metric import TOTAL_COST, Metric
+from executive.planning.unavailable import restrict
 from knowledge.domain import parse, parse_problem, type_name
 from knowledge.errors import DomainError, located
 from knowledge.knowledge_base import KnowledgeBase
@@ -71,12 +72,14 @@ class TimedLiteral:
 
 @dataclass(frozen=True)
 class World:
-    """The objects (name → type) and facts a problem starts from, and the facts that
-    change on their own later (``timed``)."""
+    """The objects (name → type) and facts a problem starts from, the facts that
+    change on their own later (``timed``), and the objects that take part in no action
+    now (``unavailable``: a fleet's lost robots, :mod:`.unavailable`)."""
 
     objects: Mapping[str, str] = field(default_factory=dict)
     facts: tuple[Fact, ...] = ()
     timed: tuple[TimedLiteral, ...] = ()
+    unavailable: frozenset[str] = frozenset()  # objects that cannot act now (unavailable)
 
 
 def literals(timed: Iterable[TimedFact], now: float, clock: Clock) -> tuple[TimedLiteral, ...]:
@@ -86,10 +89,16 @@ def literals(timed: Iterable[TimedFact], now: float, clock: Clock) -> tuple[Time
 
 
 def live_world(
-    objects: Mapping[str, str], facts: Iterable[Fact], kb: KnowledgeBase, clock: Clock
+    objects: Mapping[str, str],
+    facts: Iterable[Fact],
+    kb: KnowledgeBase,
+    clock: Clock,
+    unavailable: Iterable[str] = (),
 ) -> World:
-    """The world to plan from now: objects, facts, and the knowledge base's timed facts."""
-    return World(objects, tuple(facts), literals(kb.timed_facts(), time.time(), clock))
+    """The world to plan from now: objects, facts, the knowledge base's timed facts, and
+    the objects that cannot act now."""
+    timed = literals(kb.timed_facts(), time.time(), clock)
+    return World(objects, tuple(facts), timed, frozenset(unavailable))
 
 
 # --- dura expressions -> UP ----------------------------------------------------------
@@ -253,6 +262,7 @@ def build(
         except Exception as e:
             raise DomainError(f"timed fact {timed}: {e}") from e
     _set_metric(problem, metric, costs)
+    restrict(problem, world.unavailable)
     for goal in goals:
         target = to_fnode(goal.expression, problem)
         problem.add_goal(target)

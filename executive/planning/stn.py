@@ -32,6 +32,7 @@ from executive.planning.partial_order import (
     Timepoint,
 )
 from executive.planning.problem import BOOKKEEPING, bindings, from_fnode
+from executive.planning.unavailable import is_availability
 from knowledge.errors import DomainError
 
 if TYPE_CHECKING:
@@ -154,11 +155,13 @@ def _ground(
     start_effects: list[Effect] = []
     end_effects: list[Effect] = []
     if hasattr(action, "preconditions"):  # instantaneous or classical: effects at the end
-        at_start = [from_fnode(c, problem, env) for c in action.preconditions]
+        at_start = [
+            from_fnode(c, problem, env) for c in action.preconditions if not is_availability(c)
+        ]
         end_effects = [e for x in action.effects for e in _effects(x, problem, env)]
     else:
         for interval, conditions in action.conditions.items():
-            ground = [from_fnode(c, problem, env) for c in conditions]
+            ground = [from_fnode(c, problem, env) for c in conditions if not is_availability(c)]
             lower, upper = interval.lower, interval.upper
             if lower == upper:
                 (at_start if lower.is_from_start() else at_end).extend(ground)

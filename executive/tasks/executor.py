@@ -121,6 +121,7 @@ class TaskExecutor(Service):
         # keeps a new task from being lost between a request and the worker's next picture
         self._lock = threading.Lock()
         self._arrivals: dict[str, Task] = {}
+        self._expected: dict[str, tuple[str, ...]] = {}  # by high level (own, a fleet's)
         self._snapshot = Snapshot()
         self._domain_info: DomainInfo | None = None
 
@@ -215,12 +216,18 @@ class TaskExecutor(Service):
         self._worker.post(take)
         return TaskHandle(self, task)
 
-    def expect(self, behaviors: Sequence[str]) -> None:
+    def expect(self, behaviors: Sequence[str], source: str = "") -> None:
         """The behaviors of the plan's steps still to come, in order (none: no plan):
-        what they need keeps running between the steps. Returns at once."""
+        what they need keeps running between the steps. ``source`` tells apart the high
+        levels whose steps run here (the robot's own, a fleet's): each one's replace only
+        its own. Returns at once."""
         enactor = self._running
-        upcoming = tuple(behaviors)
-        self._worker.post(lambda: enactor.expect(upcoming))
+
+        def expect() -> None:
+            self._expected[source] = tuple(behaviors)
+            enactor.expect(tuple(b for found in self._expected.values() for b in found))
+
+        self._worker.post(expect)
 
     def pause(self, task_id: str) -> None:
         enactor = self._running

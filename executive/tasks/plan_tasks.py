@@ -69,15 +69,16 @@ class PlanTasks(TaskRunner):
     """Runs plan steps on the task executor, and tells it which steps are to come (so
     that what they need keeps running between the steps)."""
 
-    def __init__(self, tasks: TaskExecutor, robot: RobotDescription) -> None:
+    def __init__(self, tasks: TaskExecutor, robot: RobotDescription, source: str = "") -> None:
         self.tasks = tasks
         self.robot = robot
+        self.source = source  # which high level's steps (the robot's own: "")
 
     def upcoming(self, plan_id: int | None, steps: Sequence[Step]) -> None:
         specs = [self.robot.tasks.get(s.action) for s in steps]
-        self.tasks.expect([spec.behavior for spec in specs if spec is not None])
+        self.tasks.expect([spec.behavior for spec in specs if spec is not None], self.source)
 
-    def run(self, step: Step, plan_id: int, report: StepReport) -> StepTask:
+    def run(self, step: Step, plan_id: int | None, report: StepReport) -> StepTask:
         spec = self.robot.tasks[step.action]
         behavior = self.robot.behaviors[spec.behavior]
         seen: set[TaskPhase] = set()

@@ -1,5 +1,7 @@
 """Plan steps asked for over the bus: the task executor's side of
-:mod:`executive.bus.api.steps`, for a high level in another process.
+:mod:`executive.bus.api.steps`, for a high level in another process (the robot's own,
+``dura run --only planning``, or a fleet's, ``dura fleet run``: the executive serves the
+steps beside its own high level).
 
 Each step runs through :class:`~executive.tasks.plan_tasks.PlanTasks`, exactly as it
 does for a high level in the executive's own process; its reports go out on
@@ -48,7 +50,7 @@ class StepService(Service):
 
     def __init__(self, context: Context, tasks: TaskExecutor) -> None:
         super().__init__(context)
-        self.plan_tasks = PlanTasks(tasks, context.robot)
+        self.plan_tasks = PlanTasks(tasks, context.robot, source="bus")
         self._steps: dict[str, StepTask] = {}  # by run id, until the plan cancels them
         self._lock = threading.Lock()
         self._declared: list[Any] = []
@@ -80,7 +82,9 @@ class StepService(Service):
                     ended.set()
                     self._steps.pop(run, None)
 
-        task = self.plan_tasks.run(step_of(request.step), request.plan_id, StepReport(post))
+        # a fleet's plan is none of this robot's: its task belongs to no plan here
+        plan_id = request.plan_id if request.fleet is None else None
+        task = self.plan_tasks.run(step_of(request.step), plan_id, StepReport(post))
         with self._lock:
             if not ended.is_set():
                 self._steps[run] = task

@@ -25,6 +25,8 @@ repair rules, with the recording's time as the clock, and returns the timeline
 - :mod:`.harness` — a robot run by a real ``dura run`` process, driven over the bus
   (:class:`~.harness.RobotProcess`, and :class:`~.harness.ServiceGroupProcess` for a
   service group in a process of its own);
+- :mod:`.fleet` — a fleet's high level run by a real ``dura fleet run`` process
+  (:class:`~.fleet.FleetProcess`), beside its robots' :class:`~.harness.RobotProcess`;
 - :mod:`.client` — what a test asks a running robot over the bus, answered with records
   (:class:`~.client.RobotClient`, the base of :class:`~.harness.RobotProcess`);
 - :mod:`.replay` — a recording replayed through a robot's monitoring;
@@ -44,12 +46,14 @@ from typing import TYPE_CHECKING, Any
 import pytest
 
 from executive.testing.client import GoalEnded, RobotClient, WaitTimedOut
+from executive.testing.fleet import FleetProcess, fleet_variant
 from executive.testing.harness import RobotProcess, ServiceGroupProcess, robot_variant
 
 if TYPE_CHECKING:
     from monitoring.timeline import Timeline
 
 __all__ = [
+    "FleetProcess",
     "GoalEnded",
     "RobotClient",
     "RobotProcess",
@@ -57,6 +61,7 @@ __all__ = [
     "WaitTimedOut",
     "dura_replay",
     "dura_robot",
+    "fleet_variant",
 ]
 
 

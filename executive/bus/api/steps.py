@@ -35,11 +35,14 @@ class StepSpec(Payload):
 
 @record
 class StepRun(Payload):
-    """Run a plan's step; ``run`` names it in the progress reports and controls."""
+    """Run a plan's step; ``run`` names it in the progress reports and controls.
+    ``fleet``: the fleet whose plan it is (``plan_id`` is the fleet's, not one of this
+    robot's plans); none for the robot's own high level."""
 
     run: Text
     plan_id: int
     step: StepSpec
+    fleet: Text | None = None
 
 
 class StepAction(enum.Enum):

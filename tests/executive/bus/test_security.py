@@ -59,7 +59,7 @@ def test_credentials_are_made_once_for_the_owner_only_and_grow_with_the_robot(
     path = tmp_path / ".dura" / "robot.bus.json"
     first = security.ensure_credentials(path, "robot", ["lidar"])
     assert stat.S_IMODE(path.stat().st_mode) == 0o600
-    assert set(first.passwords) == {"executive", "service", "operator", "component.lidar"}
+    assert set(first.passwords) == {"executive", "service", "operator", "fleet", "component.lidar"}
     again = security.ensure_credentials(path, "robot", ["lidar", "cam"])
     assert again.passwords["operator"] == first.passwords["operator"]
     assert "component.cam" in again.passwords
@@ -182,3 +182,31 @@ def test_a_component_stores_achievements_for_itself_only(
     ):
         COMPONENT_ACHIEVE.call(forger, Achievement("cam", "pose", 2), timeout=1.0)
     assert stored == [Achievement("lidar", "pose", 1)]
+
+
+def test_a_fleet_asks_for_steps_and_hears_them_but_posts_no_goal(
+    router: Bus, endpoint: str, credentials: Credentials
+) -> None:
+    router.serve("executive/steps/run", lambda request: {})
+    router.serve("executive/api/goal/add", lambda request: {"id": 1})
+    with Bus(
+        ROBOT, name="fleet.depot", endpoint=endpoint, login=credentials.login(security.FLEET)
+    ) as fleet:
+        progress: list[Message] = []
+        fleet.subscribe("executive/steps/progress", progress.append)
+        assert fleet.request("executive/steps/run") == {}
+        assert wait_for(lambda: router.wait_for_subscriber("executive/steps/progress"))
+        router.publish("executive/steps/progress", {"run": "a", "progress": "started"})
+        assert wait_for(lambda: len(progress) == 1)
+        with pytest.raises(BusError, match="no answer"):
+            fleet.request("executive/api/goal/add", timeout=1.0)
+
+
+def test_the_executive_writes_the_fleets_login_alone_for_the_owner_only(
+    tmp_path: Path, credentials: Credentials
+) -> None:
+    security.write_fleet_credentials(credentials, tmp_path)
+    path = security.fleet_credentials_file(tmp_path, ROBOT)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o600
+    written = security.read_credentials(path)
+    assert dict(written.passwords) == {"fleet": credentials.passwords["fleet"]}

@@ -157,3 +157,29 @@ def test_a_finished_plan_is_drawn_on_its_own_span_and_one_goal_is_said_so() -> N
 def test_the_page_s_chart_leaves_the_title_to_the_page() -> None:
     assert live().title not in texts(parse(gantt.render(live(), titled=False)))
     assert live().title in texts(parse(gantt.render(live())))
+
+
+def test_a_fleets_plan_is_drawn_by_robot_each_robots_steps_together() -> None:
+    plan: Plan = read(Plan, {
+        "id": 4, "state": "executing", "engine": "kairos", "goal_ids": [1, 2], "created": 1000.0,
+        "steps": [
+            {"index": 0, "action": "drive", "args": ["r2", "dock2", "store"], "start": 0.0,
+             "duration": 5.0},
+            {"index": 1, "action": "drive", "args": ["r1", "dock1", "store"], "start": 0.0,
+             "duration": 5.0},
+            {"index": 2, "action": "pick", "args": ["r2", "parcel2", "store"], "start": 5.0,
+             "duration": 3.0},
+            {"index": 3, "action": "pick", "args": ["r1", "parcel1", "store"], "start": 5.0,
+             "duration": 3.0},
+        ],
+    }, "plan")  # fmt: skip
+    chart = gantt.live_gantt(plan, ExecutionStatus(), [], [], now=1001.0,
+                             robots=["r2", "r1", "r2", "r1"])  # fmt: skip
+    assert [(s.robot, s.index) for s in chart.steps] == [("r1", 1), ("r1", 3), ("r2", 0), ("r2", 2)]
+    root = parse(gantt.render(chart))
+    rows = groups(root, "step")
+    assert [g.get("data-robot") for g in rows] == ["r1", "r1", "r2", "r2"]
+    assert "r1  1  drive(r1, dock1, store)" in texts(root)
+    assert "robot r2" in tooltip(rows[2])
+    # a robot's own plan has no robot column
+    assert all(g.get("data-robot") is None for g in groups(parse(gantt.render(live())), "step"))
