@@ -1,7 +1,8 @@
 """The ``dura`` command line: one module per command group, registered here.
 
 - a module per command of :data:`COMMANDS`, named as it (``register`` adds its parser,
-  which sets ``run``); :mod:`.demo_ros2` and :mod:`.demo_timeline` belong to ``demo``;
+  which sets ``run``); :mod:`.demo_ros2`, :mod:`.demo_fleet` and :mod:`.demo_timeline`
+  belong to ``demo``;
 - :mod:`.client` — how a command finds the running executive and asks it;
 - :mod:`.arguments` — argument types: a bad value is a usage error saying what is
   allowed;

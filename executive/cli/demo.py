@@ -53,11 +53,19 @@ def register(sub: Any) -> None:
         "one; on a terminal, the last line says what the robot does now.",
     )
     p.add_argument("--keep", type=Path, metavar="DIR", help="run in DIR and keep its files")
-    p.add_argument(
+    which = p.add_mutually_exclusive_group()
+    which.add_argument(
         "--ros2",
         action="store_true",
         help="run the ROS 2 patrol robot (examples/ros2) instead: ROS 2 nodes, a managed "
         "node, an action and a service as tasks, a goal from ROS 2, on loopback DDS",
+    )
+    which.add_argument(
+        "--fleet",
+        action="store_true",
+        help="run the example fleet (examples/fleet) instead: three transport robots, each "
+        "with its own executive, deliver parcels in parallel; one robot's executive is "
+        "killed mid-plan and the others finish its deliveries",
     )
     p.add_argument("--all-events", action="store_true", help="show every event")
     p.add_argument(
@@ -78,6 +86,10 @@ def run(args: argparse.Namespace) -> int:
         from executive.cli import demo_ros2  # Cyclone DDS
 
         return demo_ros2.run(args)
+    if args.fleet:
+        from executive.cli import demo_fleet
+
+        return demo_fleet.run(args)
     if not EXAMPLE.is_file():
         raise DuraError(f"the example robot is missing: {EXAMPLE} (run from a dura checkout)")
     if args.keep is not None:
