@@ -127,8 +127,10 @@ class Deliberation:
 
     def replan(self, reason: str) -> None:
         """Plan again now, although no step failed (the world changed so that the plan
-        may no longer be carried out: a fleet's robot was lost)."""
+        may no longer be carried out: a fleet's robot was lost), and look again at the
+        unreachable goals (a robot that is back may reach them)."""
         self.goals.wake(reason, replan=True)
+        self.goals.world_changed(reason)
 
     def _replan(self, reason: str) -> None:
         self.goals.replan(reason)
