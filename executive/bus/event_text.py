@@ -170,7 +170,8 @@ def _replan(subject: str, data: Data, kind: str) -> str:
 def _step(subject: str, data: Data, kind: str) -> str:
     text = subject
     if data.get("plan") is not None and data.get("step") is not None:
-        text += f" (plan {data['plan']}, step {data['step']})"
+        robot = f", robot {data['robot']}" if data.get("robot") else ""  # a fleet's step
+        text += f" (plan {data['plan']}, step {data['step']}{robot})"
     if kind == "START" and data.get("undo"):
         # the start's effects, said as changes ("at start: not (robot_at dock)" read as
         # a condition the step broke)

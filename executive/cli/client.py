@@ -4,6 +4,8 @@
 folder; commands run in the same folder find the executive there. ``--robot
 ROBOT.yaml`` (with ``--endpoint``, if the executive listens elsewhere) names it instead;
 in the folder where that robot's executive runs, ``--robot`` alone finds it there.
+``dura fleet run`` writes the same run file for a fleet, whose high level answers the
+same verbs; ``--fleet FLEET.yaml`` names a fleet as ``--robot`` names a robot.
 """
 
 from __future__ import annotations
@@ -36,6 +38,13 @@ def add_client_options(parser: Any) -> None:
         help="the robot whose executive to ask (default: the one 'dura run' runs in this folder)",
     )
     parser.add_argument(
+        "--fleet",
+        dest="fleet_file",
+        metavar="FLEET.yaml",
+        type=Path,
+        help="the fleet whose high level to ask (dura fleet run), instead of a robot",
+    )
+    parser.add_argument(
         "--endpoint",
         help="where that executive listens (default: where the one that runs in this folder "
         "does, if it is that robot's; else where the robot's description says)",
@@ -63,7 +72,10 @@ def remove_run_file() -> None:
 def _target(args: argparse.Namespace) -> tuple[str, str, Login | None]:
     """The robot's name, the endpoint of its executive and the operator's login: the
     executive that runs in this folder, unless ``--robot`` names another robot (then
-    at ``--endpoint``, else where its description says)."""
+    at ``--endpoint``, else where its description says), or ``--fleet`` a fleet."""
+    fleet_file = getattr(args, "fleet_file", None)
+    if fleet_file is not None:
+        return _fleet(args, fleet_file)
     if args.robot is not None:
         from knowledge.robot import read_robot  # YAML and the schema: only with --robot
 
@@ -79,6 +91,21 @@ def _target(args: argparse.Namespace) -> tuple[str, str, Login | None]:
         login = security.find_login(robot.name, security.OPERATOR, [Path.cwd()])
         return robot.name, args.endpoint or robot.endpoint, login
     return _running_here(args)
+
+
+def _fleet(args: argparse.Namespace, path: Path) -> tuple[str, str, Login | None]:
+    """The fleet's name, the endpoint of its high level and the operator's login there
+    (its credentials in this folder, else in the fleet description's)."""
+    from executive.fleet.description import load_fleet  # YAML and the schema: only here
+
+    fleet = load_fleet(path)
+    if args.endpoint is None and RUN_FILE.is_file():
+        with contextlib.suppress(DuraError):  # this folder's fleet, if it is this one
+            name, endpoint, login = _running_here(args)
+            if name == fleet.name:
+                return name, endpoint, login
+    login = security.find_login(fleet.name, security.OPERATOR, [Path.cwd(), fleet.path.parent])
+    return fleet.name, args.endpoint or fleet.endpoint, login
 
 
 def _running_here(args: argparse.Namespace) -> tuple[str, str, Login | None]:

@@ -75,10 +75,17 @@ def register(sub: Any) -> None:
     p.set_defaults(run=run)
 
 
+def _described(path: Path) -> RobotDescription:
+    """A robot description, or a fleet's (``dura fleet run``): its high level is shown."""
+    from executive.fleet.description import is_fleet_file, load_fleet
+
+    return load_fleet(path).as_robot() if is_fleet_file(path) else load_robot(path)
+
+
 def target(args: argparse.Namespace) -> tuple[RobotDescription, str]:
     """The robot description and the endpoint of the executive to show."""
     if args.robot is not None:
-        robot = load_robot(args.robot)
+        robot = _described(args.robot)
         return robot, args.endpoint or robot.endpoint
     try:
         found = json.loads(RUN_FILE.read_text())
@@ -90,7 +97,7 @@ def target(args: argparse.Namespace) -> tuple[RobotDescription, str]:
         ) from None
     except (OSError, ValueError, KeyError, TypeError) as e:
         raise DuraError(f"{RUN_FILE}: unreadable ({e}); name the robot with --robot") from e
-    return load_robot(description), args.endpoint or endpoint
+    return _described(description), args.endpoint or endpoint
 
 
 def run(args: argparse.Namespace) -> int:

@@ -53,19 +53,18 @@ def register(sub: Any) -> None:
         "one; on a terminal, the last line says what the robot does now.",
     )
     p.add_argument("--keep", type=Path, metavar="DIR", help="run in DIR and keep its files")
-    which = p.add_mutually_exclusive_group()
-    which.add_argument(
+    p.add_argument(
         "--ros2",
         action="store_true",
         help="run the ROS 2 patrol robot (examples/ros2) instead: ROS 2 nodes, a managed "
         "node, an action and a service as tasks, a goal from ROS 2, on loopback DDS",
     )
-    which.add_argument(
+    p.add_argument(
         "--fleet",
         action="store_true",
-        help="run the example fleet (examples/fleet) instead: three transport robots, each "
-        "with its own executive, deliver parcels in parallel; one robot's executive is "
-        "killed mid-plan and the others finish its deliveries",
+        help="run the depot fleet (examples/fleet) instead: three transport robots deliver "
+        "parcels in parallel, one robot's executive is killed mid-plan, the others finish "
+        "its deliveries",
     )
     p.add_argument("--all-events", action="store_true", help="show every event")
     p.add_argument(
@@ -86,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
         from executive.cli import demo_ros2  # Cyclone DDS
 
         return demo_ros2.run(args)
-    if args.fleet:
+    if args.fleet:  # the fleet's example and harness
         from executive.cli import demo_fleet
 
         return demo_fleet.run(args)

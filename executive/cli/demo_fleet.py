@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import sys
 import tempfile
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -23,19 +24,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from executive.bus.keys import EVENTS
 from executive.bus.schema import plain
 from executive.bus.wording import listed, plural, seconds
 from executive.cli.demo_timeline import Timeline, replans
 from executive.cli.output import BAR, print_json, section, table
-from executive.fleet.description import fleet_login_file
-from executive.testing.fleet import FleetProcess
+from executive.testing.fleet import FleetProcess, fleet_variant
 from executive.testing.harness import RobotProcess
 from knowledge.errors import DuraError
 from knowledge.records import Event, Goal, GoalState
-from knowledge.yamlsource import load as load_yaml
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "fleet"
 ROBOTS = ("r1", "r2", "r3")
@@ -50,8 +47,6 @@ RobotOf = Callable[[str, Sequence[str]], str | None]
 def run(args: argparse.Namespace) -> int:
     if not (EXAMPLE / "fleet.yaml").is_file():
         raise DuraError(f"the example fleet is missing: {EXAMPLE} (run from a dura checkout)")
-    if args.dashboard is not None:
-        raise DuraError("--dashboard serves one robot, not a fleet (dura demo --fleet)")
     if args.keep is not None:
         args.keep.mkdir(parents=True, exist_ok=True)
         return _demo(args, args.keep.resolve())
@@ -75,7 +70,7 @@ def _demo(args: argparse.Namespace, folder: Path) -> int:
         quiet=args.json, everything=args.all_events, robots=ROBOTS, robot_of=robot_of
     )
     try:
-        outcome = _scenario(folder, timeline)
+        outcome = _scenario(args, folder, timeline)
     finally:
         timeline.close()
     ok = all(g.state is GoalState.ACHIEVED for g in outcome.goals)
@@ -87,7 +82,7 @@ def _demo(args: argparse.Namespace, folder: Path) -> int:
     return 0 if ok else 1
 
 
-def _scenario(folder: Path, timeline: Timeline) -> Outcome:
+def _scenario(args: argparse.Namespace, folder: Path, timeline: Timeline) -> Outcome:
     """Run the deliveries on the example fleet in ``folder``, killing one robot."""
     timeline.say(
         "DEMO",
@@ -100,10 +95,12 @@ def _scenario(folder: Path, timeline: Timeline) -> Outcome:
     }
     with contextlib.ExitStack() as stack:
         start_robots(robots.values(), stack)
-        path = fleet_file(folder, robots.values())
+        path = fleet_variant(EXAMPLE / "fleet.yaml", list(robots.values()), folder)
         timeline.doing("starting the fleet's high level")
         fleet = stack.enter_context(FleetProcess(path, folder / "fleet", time_scale=SCALE))
         timeline.use(fleet.kb_path)
+        if args.dashboard is not None:
+            _serve(args, stack, path, fleet)
         fleet.bus.subscribe(EVENTS, timeline.on_event)
         joined = [e.subject for e in fleet.events("ROBOT_JOINED")]
         timeline.say(
@@ -133,6 +130,21 @@ def _scenario(folder: Path, timeline: Timeline) -> Outcome:
     return Outcome(goals, events, killed)
 
 
+def _serve(
+    args: argparse.Namespace, stack: contextlib.ExitStack, path: Path, fleet: FleetProcess
+) -> None:
+    """Serve the fleet's dashboard while the demo runs (its plan by robot)."""
+    from executive.dashboard.server import Dashboard  # the web stack only when asked
+    from executive.fleet.description import load_fleet
+
+    dashboard = stack.enter_context(
+        Dashboard.connect(load_fleet(path).as_robot(), fleet.endpoint, port=args.dashboard,
+                          folders=[fleet.folder])
+    )  # fmt: skip
+    print(f"dura demo: the fleet's dashboard on {dashboard.url}", flush=True,
+          file=sys.stderr if args.json else sys.stdout)  # fmt: skip
+
+
 def start_robots(robots: Iterable[RobotProcess], stack: contextlib.ExitStack) -> None:
     """Start the robots' executives side by side; each is stopped when ``stack`` closes
     (those that started, if one did not)."""
@@ -142,27 +154,6 @@ def start_robots(robots: Iterable[RobotProcess], stack: contextlib.ExitStack) ->
     with ThreadPoolExecutor(len(robots)) as pool:
         for started in [pool.submit(robot.start) for robot in robots]:
             started.result()
-
-
-def fleet_file(folder: Path, robots: Iterable[RobotProcess], problem: Path | None = None) -> Path:
-    """The example's fleet description (``fleet.yaml``) for these robots where they run
-    (their endpoints, the fleet's login each wrote into its folder), written into
-    ``folder``; ``problem`` replaces the example's."""
-    data = load_yaml(EXAMPLE / "fleet.yaml")
-    data["domain"] = str(EXAMPLE / data["domain"])
-    data["problem"] = str(problem or EXAMPLE / data["problem"])
-    data.pop("bus", None)  # FleetProcess chooses a free endpoint
-    data["robots"] = {
-        r.robot.name: {
-            "description": str(r.description),
-            "endpoint": r.endpoint,
-            "login": str(fleet_login_file(r.folder, r.robot.name)),
-        }
-        for r in robots
-    }
-    path = folder / "fleet.yaml"
-    path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
-    return path
 
 
 def robot_finder(path: Path) -> RobotOf:
@@ -285,7 +276,7 @@ def report(outcome: Outcome, timeline: Timeline, ok: bool, elapsed: float) -> di
     by = delivered_by(events, timeline)
     lost = lost_robots(events)
     robots = [
-        {"name": name, "available": name not in lost, "reason": lost.get(name),
+        {"robot": name, "available": name not in lost, "reason": lost.get(name),
          "ended": sum(e.kind == "END" for e in done),
          "failed": sum(e.kind == "FAIL" for e in done)}
         for name, done in robot_steps(events, timeline).items()

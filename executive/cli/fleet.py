@@ -78,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     running = Fleet(
         fleet,
         check.robots,
-        check.actors,
+        check.actor_index,
         outside=check.outside,
         mappings=check.mappings,
         endpoint=args.endpoint,

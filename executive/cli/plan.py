@@ -163,8 +163,11 @@ def run_show(args: argparse.Namespace) -> int:
         raise DuraError("no plan yet: no picture written")
     if args.svg is not None and reply.plan is not None:
         events = ask(args, api.EVENTS, api.EventQuery(limit=2000)).events
-        found = ask(args, tasks.TASK_LIST).tasks
-        chart = gantt.live_gantt(reply.plan, reply.execution, events, found, time.time())
+        # a fleet's tasks are its robots': it has none of its own
+        found = ask(args, tasks.TASK_LIST).tasks if reply.robots is None else []
+        chart = gantt.live_gantt(
+            reply.plan, reply.execution, events, found, time.time(), robots=reply.robots
+        )
         if write_svg(args.svg, gantt.render(chart)):
             return 0
     if args.json:
@@ -183,7 +186,12 @@ def run_show(args: argparse.Namespace) -> int:
          states.get(s.index, "-"), bar(s.start, s.duration, span)]
         for s in steps
     ]  # fmt: skip
-    table(["#", "start", "duration", "step", "state", "timeline"], rows)
+    headers = ["#", "start", "duration", "step", "state", "timeline"]
+    if reply.robots is not None:  # a fleet's plan: who carries out each step
+        robots = [*reply.robots, *[""] * len(rows)][: len(rows)]
+        rows = [[*row[:1], robot or "-", *row[1:]] for row, robot in zip(rows, robots, strict=True)]
+        headers.insert(1, "robot")
+    table(headers, rows)
     return 0
 
 

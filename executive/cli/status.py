@@ -38,7 +38,8 @@ def run_status(args: argparse.Namespace) -> int:
 
 def print_status(status: api.StatusReply, out: Any = None) -> None:
     out = out or sys.stdout
-    section(f"robot {status.robot}: goals", out, first=True)
+    whose = "fleet" if status.robots is not None else "robot"
+    section(f"{whose} {status.robot}: goals", out, first=True)
     table(GOAL_HEADERS, goal_rows(status.goals), out)
     plan = status.plan
     if plan is not None:
@@ -63,6 +64,13 @@ def print_status(status: api.StatusReply, out: Any = None) -> None:
         table(
             ["id", "task", "state", "uses"],
             [[t.id, t.name, t.state, ", ".join(sorted(t.functionalities))] for t in status.tasks],
+            out,
+        )
+    if isinstance(status.robots, list):
+        section("robots", out)
+        table(
+            ["robot", "available", "reason"],
+            [[r.robot, "yes" if r.available else "no", r.reason] for r in status.robots],
             out,
         )
     if isinstance(status.components, list):

@@ -180,7 +180,7 @@ def create_app(feed: Feed, access: Access) -> ASGIApp:
         if state.plan is None:
             return JSONResponse({"error": "no plan yet"}, status_code=404)
         chart = gantt.live_gantt(state.plan, state.execution, state.plan_events, state.tasks,
-                                 time.time())  # fmt: skip
+                                 time.time(), robots=state.robots)  # fmt: skip
         return Response(gantt.render(chart), media_type="image/svg+xml")
 
     async def graph_svg(request: Request) -> Response:

@@ -274,7 +274,7 @@ class Feed:
             state.set_goals(answer)
             self.changed("goals")
         elif query == PLAN:
-            state.set_plan(answer.plan, answer.execution)
+            state.set_plan(answer.plan, answer.execution, answer.robots)
             self.changed("plan")
         elif query == TASKS:
             state.set_tasks(answer)

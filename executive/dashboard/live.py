@@ -126,6 +126,7 @@ class LiveState:
         self.layout = graph.layout(robot)
         self.goals: list[Goal] = []
         self.plan: Plan | None = None
+        self.robots: list[str] | None = None  # a fleet's plan: the robot of each step
         self.execution = ExecutionStatus()
         self.tasks: list[ExecutorTask] = []
         self.lifecycles: dict[str, ComponentState] = {}
@@ -145,8 +146,10 @@ class LiveState:
     def set_goals(self, goals: list[Goal]) -> None:
         self.goals = goals
 
-    def set_plan(self, plan: Plan | None, execution: ExecutionStatus) -> None:
-        self.plan, self.execution = plan, execution
+    def set_plan(
+        self, plan: Plan | None, execution: ExecutionStatus, robots: list[str] | None = None
+    ) -> None:
+        self.plan, self.execution, self.robots = plan, execution, robots
 
     def set_tasks(self, tasks: list[ExecutorTask]) -> None:
         self.tasks = tasks
@@ -288,7 +291,9 @@ class LiveState:
     def plan_view(self, now: float) -> dict[str, Any]:
         if self.plan is None:
             return {"plan": None, "title": "no plan yet", "svg": "", "steps": []}
-        chart = gantt.live_gantt(self.plan, self.execution, self.plan_events, self.tasks, now)
+        chart = gantt.live_gantt(
+            self.plan, self.execution, self.plan_events, self.tasks, now, robots=self.robots
+        )
         return {
             "plan": self.plan.id,
             "state": self.plan.state.value,

@@ -31,7 +31,7 @@ from knowledge.conventions import (
     OrDefault,
     Required,
 )
-from knowledge.description import SAFE_NAME, SAFE_NAME_RULE, PlannerSpec
+from knowledge.description import SAFE_NAME, SAFE_NAME_RULE, PlannerSpec, RobotDescription
 from knowledge.errors import ConfigError
 from knowledge.finding import Finding, Report
 from knowledge.typed_reader import Entry, read
@@ -142,6 +142,20 @@ class FleetDescription:
     actions: Mapping[str, ActionRobot] = field(default_factory=dict)
     facts: Mapping[str, str] = field(default_factory=dict)
     lines: Mapping[str, int] = field(default_factory=dict, compare=False, repr=False)
+
+    def as_robot(self) -> RobotDescription:
+        """The fleet as the high level sees it: a "robot" with the fleet's name, domain,
+        world and planner, and no components of its own (its robots carry out the
+        steps)."""
+        return RobotDescription(
+            name=self.name,
+            path=self.path,
+            domain=self.domain,
+            problem=self.problem,
+            planner=self.planner,
+            endpoint=self.endpoint,
+            knowledge_base=self.knowledge_base,
+        )
 
     def robot_of_object(self, name: str) -> FleetRobot | None:
         """The robot a PDDL object stands for (``None``: it is no robot's)."""

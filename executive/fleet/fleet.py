@@ -21,7 +21,14 @@ from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
 
 from executive.bus import security
-from executive.bus.api.planning import STATE_GET, STATE_SET, STATE_UNSET, FactChange, StateQuery
+from executive.bus.api.planning import (
+    STATE_GET,
+    STATE_SET,
+    STATE_UNSET,
+    FactChange,
+    FleetRobot,
+    StateQuery,
+)
 from executive.bus.event_relay import EventRelay
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.lifecycle_manager import LifecycleManager
@@ -43,27 +50,13 @@ log = logging.getLogger("dura.fleet")
 JOIN_WAIT = 10.0  # seconds the fleet waits for its robots before it first plans
 
 
-def fleet_robot(fleet: FleetDescription) -> RobotDescription:
-    """The fleet as the high level sees it: a "robot" with the fleet's name, domain,
-    world and planner, and no components of its own (its robots carry out the steps)."""
-    return RobotDescription(
-        name=fleet.name,
-        path=fleet.path,
-        domain=fleet.domain,
-        problem=fleet.problem,
-        planner=fleet.planner,
-        endpoint=fleet.endpoint,
-        knowledge_base=fleet.knowledge_base,
-    )
-
-
 class Fleet:
     """Everything the fleet's process runs, opened and closed together.
 
     Args:
         fleet: the fleet.
         robots: each robot's description, by name (as :mod:`.validation` read them).
-        actors: each acting action's robot parameter.
+        actors: each acting action's robot parameter, by its position.
         outside: the objects of the robot type that are no robot of the fleet.
         mappings: the robots' own facts that reach the fleet's world.
         endpoint: where the fleet listens (default: its description's).
@@ -79,7 +72,7 @@ class Fleet:
         self,
         fleet: FleetDescription,
         robots: Mapping[str, RobotDescription],
-        actors: Mapping[str, str],
+        actors: Mapping[str, int],
         *,
         outside: Collection[str] = (),
         mappings: Sequence[FactMapping] = (),
@@ -92,7 +85,7 @@ class Fleet:
         say: Callable[[str], None] = lambda line: None,
     ) -> None:
         self.fleet = fleet
-        self.robot = fleet_robot(fleet)
+        self.robot = fleet.as_robot()
         self.robots = dict(robots)
         self.actors = dict(actors)
         self.mappings = tuple(mappings)
@@ -159,6 +152,7 @@ class Fleet:
                 context,
                 lambda: runner,
                 events=relay,
+                status={"robots": self._robots},
                 actions=frozenset(self.actors),
                 unavailable=self.availability.unavailable_objects,
             )
@@ -205,6 +199,13 @@ class Fleet:
             fleet_facts=lambda predicate: [f for f in kb.facts() if f.name == predicate],
             change=change,
         )
+
+    def _robots(self) -> list[FleetRobot]:
+        """The fleet's robots and whether each can act (``status``)."""
+        return [
+            FleetRobot(name, why is None, why or "")
+            for name, why in sorted(self.availability.snapshot().items())
+        ]
 
     def _wait_for_robots(self) -> None:
         deadline = time.monotonic() + self.join_wait

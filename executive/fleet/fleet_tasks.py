@@ -1,7 +1,8 @@
 """The fleet's runner of plan steps: each step to the task executor of the robot it names.
 
 A step's robot is the object bound to its action's robot parameter (the fleet's
-``actors``). A step for a robot that cannot act now fails at once with the reason, and
+``actors``: its position among the action's parameters); it names the robot in the
+plan's events and in ``dura plan show``. A step for a robot that cannot act now fails at once with the reason, and
 the planner plans again without that robot; so does a step whose robot vanishes while
 it runs (:class:`~executive.planning.bus_tasks.BusTasks`). Each outcome counts towards
 the robot's availability: failed steps in a row make it unavailable. The steps to come
@@ -36,7 +37,7 @@ class FleetTasks(TaskRunner):
     """Runs each plan step on its robot's task executor.
 
     Args:
-        actors: each acting action's robot parameter (without ``?``).
+        actors: each acting action's robot parameter, by its position.
         robots: the robot's name, by its PDDL object.
         links: each robot's link, by name.
         availability: which robots can act now (told each step's outcome).
@@ -44,7 +45,7 @@ class FleetTasks(TaskRunner):
 
     def __init__(
         self,
-        actors: Mapping[str, str],
+        actors: Mapping[str, int],
         robots: Mapping[str, str],
         links: Mapping[str, RobotLink],
         availability: Availability,
@@ -54,12 +55,15 @@ class FleetTasks(TaskRunner):
         self.links = dict(links)
         self.availability = availability
 
-    def robot_of(self, step: Step) -> str | None:
+    def performer(self, action: str, args: Sequence[str]) -> str | None:
         """The robot a step names (``None``: its action names none, or not a robot)."""
-        parameter = self.actors.get(step.action)
-        if parameter is None:
+        index = self.actors.get(action)
+        if index is None or index >= len(args):
             return None
-        return self.robots.get(step.bindings.get(parameter, ""))
+        return self.robots.get(args[index])
+
+    def robot_of(self, step: Step) -> str | None:
+        return self.performer(step.action, step.args)
 
     def run(self, step: Step, plan_id: int, report: StepReport) -> StepTask:
         robot = self.robot_of(step)

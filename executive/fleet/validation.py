@@ -44,6 +44,14 @@ class FleetCheck:
     mappings: tuple[FactMapping, ...] = ()  # a robot's facts in the fleet's world
 
     @property
+    def actor_index(self) -> dict[str, int]:
+        """Each acting action's robot parameter, by its position among the parameters."""
+        if self.domain is None:
+            return {}
+        actions = self.domain.actions
+        return {a: actions[a].parameter_names.index(p) for a, p in self.actors.items()}
+
+    @property
     def outside(self) -> frozenset[str]:
         """The problem's objects of the robot type that are no robot of the fleet."""
         if self.fleet is None or self.domain is None:

@@ -126,11 +126,11 @@ class Deliberation:
         return self.goals.status()
 
     def replan(self, reason: str) -> None:
-        """Plan again now, although no step failed (the world changed so that the plan
-        may no longer be carried out: a fleet's robot was lost), and look again at the
-        unreachable goals (a robot that is back may reach them)."""
-        self.goals.wake(reason, replan=True)
+        """Plan again now, although no step failed, and look again at the goals found
+        unreachable (the world changed so that the plan may no longer be carried out, or
+        a goal may be reached again: a fleet's robot was lost, or is back)."""
         self.goals.world_changed(reason)
+        self.goals.wake(reason, replan=True)
 
     def _replan(self, reason: str) -> None:
         self.goals.replan(reason)

@@ -25,7 +25,7 @@ from executive.planning.goals import submit
 from knowledge.errors import DuraError
 from knowledge.records import Event
 
-SECTIONS = ("tasks", "components")  # what other services add to ``status``
+SECTIONS = ("tasks", "components", "robots")  # what other services add to ``status``
 MAX_EVENTS = 10_000  # the most events one request returns
 
 
@@ -107,7 +107,13 @@ class GoalApi:
 
     def _plan_show(self, request: Empty) -> api.PlanReply:
         plan = self.context.kb.latest_plan()
-        return api.PlanReply(plan, self._execution())
+        current = self.current()
+        robots: list[str] | None = None
+        if plan is not None and current is not None:
+            runner = current.executor.runner
+            found = [runner.performer(s.action, s.args) for s in plan.steps]
+            robots = [r or "" for r in found] if any(found) else None
+        return api.PlanReply(plan, self._execution(), robots)
 
     def _plan_dry_run(self, request: api.DryRun) -> api.DryRunReply:
         """Plan for the open goals and those asked about on the live state; nothing
@@ -152,6 +158,7 @@ class GoalApi:
             faults=[c for c in kb.components() if c.fault_count or c.permanent_fault],
             tasks=self._section("tasks"),
             components=self._section("components"),
+            robots=self._section("robots"),
             planning=current.status() if current is not None else _STARTING,
         )
 

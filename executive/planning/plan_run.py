@@ -74,9 +74,10 @@ class PlanRun:
         kb = self._c.kb
         if run is None:
             return kb.log_event(kind, f"plan {self.plan_id}", data)
+        performer = self._c.runner.performer(run.step.action, run.step.args)
         data = {"plan": self.plan_id, "step": run.step.index, "action": run.step.action,
                 "args": list(run.step.args), **({} if run.id is None else {"run": run.id}),
-                **data}  # fmt: skip
+                **({} if performer is None else {"robot": performer}), **data}  # fmt: skip
         with kb.transaction():
             if state and self.plan_id is not None:
                 kb.set_step_state(self.plan_id, run.step.index, state)

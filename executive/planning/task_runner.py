@@ -70,6 +70,12 @@ class TaskRunner(ABC):
     def run(self, step: Step, plan_id: int, report: StepReport) -> StepTask:
         """Start carrying out a step and return at once; report through ``report``."""
 
+    def performer(self, action: str, args: Sequence[str]) -> str | None:
+        """Who carries out a step of ``action`` with ``args``, for the record (the plan's
+        events and ``dura plan show``): a fleet's robot; ``None`` by default (the robot
+        itself)."""
+        return None
+
     def upcoming(self, plan_id: int | None, steps: Sequence[Step]) -> None:
         """The steps of the current plan not dispatched yet (none: no plan, or it
         ended), told whenever they change: a runner may keep ready what they need.

@@ -46,12 +46,14 @@ from typing import TYPE_CHECKING, Any
 import pytest
 
 from executive.testing.client import GoalEnded, RobotClient, WaitTimedOut
+from executive.testing.fleet import FleetProcess, fleet_variant
 from executive.testing.harness import RobotProcess, ServiceGroupProcess, robot_variant
 
 if TYPE_CHECKING:
     from monitoring.timeline import Timeline
 
 __all__ = [
+    "FleetProcess",
     "GoalEnded",
     "RobotClient",
     "RobotProcess",
@@ -59,6 +61,7 @@ __all__ = [
     "WaitTimedOut",
     "dura_replay",
     "dura_robot",
+    "fleet_variant",
 ]
 
 

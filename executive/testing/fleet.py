@@ -6,7 +6,8 @@ of its own (its knowledge base, bus credentials and output; a free loopback endp
 and waits until it plans; goals, plans, facts and events are then asked of it as of a
 robot (:class:`~executive.testing.client.RobotClient`). Its robots run their own
 executives beside it (:class:`~executive.testing.harness.RobotProcess`), which write the
-fleet's login into their folders: the fleet description names those files.
+fleet's login into their folders: the fleet description names those files
+(:func:`fleet_variant` writes one for the robots a test runs).
 """
 
 from __future__ import annotations
@@ -16,17 +17,48 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
+
+import yaml
 
 from executive.bus import security
 from executive.bus.clock import SCALE_VARIABLE, Clock
 from executive.bus.keys import EXECUTIVE_ALIVE
 from executive.bus.session import Bus
 from executive.testing.client import RobotClient
-from executive.testing.harness import START_TIMEOUT, free_endpoint, terminate
+from executive.testing.harness import START_TIMEOUT, RobotProcess, free_endpoint, terminate
 from knowledge.description import RobotDescription
 from knowledge.errors import BusError, DuraError
 from knowledge.yamlsource import load as load_yaml
+
+
+def fleet_variant(
+    description: str | Path, robots: Sequence[RobotProcess], folder: Path, **changes: Any
+) -> Path:
+    """Write a copy of a fleet description into ``folder`` whose robots are ``robots``,
+    where they run (their endpoints, and the fleet's logins their executives wrote), with
+    its domain and problem paths made absolute and the top-level ``changes`` made
+    (``max_failures=2``). Returns the copy's path."""
+    description = Path(description).resolve()
+    data = dict(load_yaml(description) or {})
+    for key in ("domain", "problem"):
+        if data.get(key):
+            data[key] = str((description.parent / str(data[key])).resolve())
+    data["robots"] = {
+        r.robot.name: {
+            "description": str(r.description),
+            "endpoint": r.endpoint,
+            "login": str(security.fleet_credentials_file(r.folder, r.robot.name).resolve()),
+        }
+        for r in robots
+    }
+    data.update(changes)
+    folder.mkdir(parents=True, exist_ok=True)
+    copy = folder / description.name
+    copy.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+    return copy
 
 
 class FleetProcess(RobotClient):
@@ -42,7 +74,7 @@ class FleetProcess(RobotClient):
 
     def __init__(
         self,
-        description: Path,
+        description: str | Path,
         folder: Path,
         endpoint: str | None = None,
         *,

@@ -33,8 +33,8 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from executive.cli.demo_fleet import EXAMPLE, fleet_file, start_robots
-from executive.testing.fleet import FleetProcess
+from executive.cli.demo_fleet import EXAMPLE, start_robots
+from executive.testing.fleet import FleetProcess, fleet_variant
 from executive.testing.harness import RobotProcess, robot_variant
 from knowledge.records import Event
 from tests.benchmarks.runtime import percentiles
@@ -85,7 +85,9 @@ def depot(folder: Path, count: int, parcels: int, scale: float) -> Iterator[
     problem.write_text(depot_problem(names, parcels), encoding="utf-8")
     with contextlib.ExitStack() as stack:
         start_robots(robots.values(), stack)
-        path = fleet_file(folder, robots.values(), problem)
+        path = fleet_variant(
+            EXAMPLE / "fleet.yaml", list(robots.values()), folder, problem=str(problem)
+        )
         fleet = FleetProcess(path, folder / "fleet", time_scale=scale, join_wait=60.0)
         yield stack.enter_context(fleet), robots
 
@@ -125,7 +127,7 @@ def measure(count: int, runs: int, scale: float, folder: Path) -> Figures:
             goal = fleet.submit_goal(f"(crate_at p{run} lab)")
             started = first_start(fleet, after)
             figures.first_step.append(started.stamp - asked)
-            worker = str(started.data["args"][0])  # drive(?r, ...): the robot comes first
+            worker = str(started.data["robot"])
             after = newest(fleet)
             killed = time.time()
             robots[worker].kill()

@@ -26,7 +26,7 @@ def test_the_fleet_demo_delivers_every_parcel_after_one_robot_is_killed(tmp_path
     assert [g["state"] for g in report["goals"]] == ["achieved"] * 3
     killed = report["killed"]
     assert report["lost"] == [killed]
-    robots = {r["name"]: r for r in report["robots"]}
+    robots = {r["robot"]: r for r in report["robots"]}
     assert sorted(robots) == ["r1", "r2", "r3"]
     assert not robots[killed]["available"] and robots[killed]["failed"] >= 1
     events = report["events"]

@@ -5,41 +5,21 @@ level (``dura fleet run``) running each step on the robot it names."""
 from __future__ import annotations
 
 import contextlib
+import json
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import pytest
 
-from executive.testing.fleet import FleetProcess
+from executive.testing.fleet import FleetProcess, fleet_variant
 from executive.testing.harness import RobotProcess
 from knowledge.records import Event
-from tests.conftest import ROOT, wait_for
+from tests.conftest import ROOT, run_dura, wait_for
 
 pytestmark = pytest.mark.slow
 
 EXAMPLE = ROOT / "examples" / "fleet"
 SCALE = 2.0  # robot time twice as fast as the wall clock: a drive takes 2.5 s
-
-
-def fleet_file(folder: Path, robots: Sequence[RobotProcess]) -> Path:
-    """The example fleet with these robots, where they run."""
-    lines = [
-        "fleet: depot",
-        f"domain: {EXAMPLE / 'depot.pddl'}",
-        f"problem: {EXAMPLE / 'problem.pddl'}",
-        "max_failures: 2",
-        "facts: {(battery_level): (battery ?robot)}",
-        "robots:",
-    ]
-    for robot in robots:
-        login = robot.folder / ".dura" / f"{robot.robot.name}.fleet.bus.json"
-        lines.append(
-            f"  {robot.robot.name}: {{description: {robot.description}, "
-            f"endpoint: '{robot.endpoint}', login: {login}}}"
-        )
-    path = folder / "fleet.yaml"
-    path.write_text("\n".join(lines) + "\n")
-    return path
 
 
 @contextlib.contextmanager
@@ -54,7 +34,7 @@ def depot(
             )
             for name in names
         ]
-        path = fleet_file(tmp_path, robots)
+        path = fleet_variant(EXAMPLE / "fleet.yaml", robots, tmp_path, max_failures=2)
         fleet = stack.enter_context(FleetProcess(path, tmp_path / "fleet", time_scale=SCALE))
         yield fleet, robots
 
@@ -66,7 +46,11 @@ def steps_of(events: list[Event], kind: str, robot: str) -> list[str]:
 
 def test_two_robots_deliver_in_parallel_each_step_on_its_own_executive(tmp_path: Path) -> None:
     with depot(tmp_path, ["r1", "r2"]) as (fleet, (r1, r2)):
-        first = fleet.submit_goal("(crate_at parcel1 lab)")
+        # an operator's commands reach the fleet as they reach a robot: --fleet names it
+        added = run_dura("goal", "add", "(crate_at parcel1 lab)", "--fleet", "../fleet.yaml",
+                         "--endpoint", fleet.endpoint, "--json", cwd=fleet.folder)  # fmt: skip
+        assert added.returncode == 0, added.stderr
+        first = int(json.loads(added.stdout)["id"])
         second = fleet.submit_goal("(crate_at parcel2 office)")
         fleet.wait_for(first, "achieved", timeout=120)
         fleet.wait_for(second, "achieved", timeout=120)
@@ -83,6 +67,19 @@ def test_two_robots_deliver_in_parallel_each_step_on_its_own_executive(tmp_path:
         starts = {r: kinds.index(("START", steps_of(events, "START", r)[0])) for r in ended}
         ends = {r: kinds.index(("END", ended[r][-1])) for r in ended}
         assert starts["r1"] < ends["r2"] and starts["r2"] < ends["r1"]
+
+        shown = run_dura("plan", "show", "--json", cwd=fleet.folder)  # the fleet's run file
+        assert shown.returncode == 0, shown.stderr
+        plan = json.loads(shown.stdout)
+        assert plan["robots"] == [step["args"][0] for step in plan["plan"]["steps"]]
+        status = json.loads(run_dura("status", "--json", cwd=fleet.folder).stdout)
+        assert status["robots"] == [
+            {"robot": "r1", "available": True, "reason": ""},
+            {"robot": "r2", "available": True, "reason": ""},
+        ]
+        listed = json.loads(run_dura("events", "--json", "-n", "500", cwd=fleet.folder).stdout)
+        dispatched = [e for e in listed["events"] if e["kind"] == "DISPATCH"]
+        assert dispatched and all(e["data"]["robot"] == e["data"]["args"][0] for e in dispatched)
 
         # each robot's battery, as its own sensing rule measures it, is in the fleet's world
         def drained() -> set[str]:
@@ -127,3 +124,34 @@ def test_a_robot_killed_mid_step_has_its_goal_finished_by_another_and_takes_work
         events = fleet.events()
         assert f"drop({worker}, parcel2, office)" in steps_of(events, "END", worker)
         assert by_name[worker].events("TASK_SUCCEEDED")  # its new executive ran them
+
+
+def test_the_fleet_demo_finishes_the_lost_robots_deliveries_with_the_others(
+    tmp_path: Path,
+) -> None:
+    done = run_dura("demo", "--fleet", "--keep", str(tmp_path / "run"), "--json", timeout=240)
+    assert done.returncode == 0, done.stderr[-2000:]
+    report = json.loads(done.stdout)
+    assert report["ok"] is True
+    assert [g["state"] for g in report["goals"]] == ["achieved"] * 3
+    (lost,) = report["lost"]
+    assert {r["robot"]: r["available"] for r in report["robots"]} == {
+        name: name != lost for name in ("r1", "r2", "r3")
+    }
+    assert report["replans"] >= 1
+    steps = [e for e in report["events"] if e["kind"] in ("DISPATCH", "START", "END")]
+    assert steps and all(e["robot"] == e["data"]["args"][0] for e in steps)
+    dropped = [e["robot"] for e in steps if e["kind"] == "END" and e["subject"].startswith("drop")]
+    assert len(dropped) == 3 and lost not in dropped  # each delivered once, by the others
+
+
+def test_a_goal_no_robot_can_reach_waits_for_a_robot_to_come_back(tmp_path: Path) -> None:
+    with depot(tmp_path, ["r1"]) as (fleet, (r1,)):
+        r1.kill()
+        assert wait_for(lambda: fleet.events("ROBOT_LOST") != [], 30)
+        goal = fleet.submit_goal("(crate_at parcel1 lab)")
+        fleet.wait_for(goal, "unreachable", timeout=60)  # no robot can act: no plan
+        assert fleet.events("DISPATCH") == []  # nothing was sent to a robot not there
+        r1.start()
+        fleet.wait_for(goal, "achieved", timeout=120)  # back: it takes the goal
+        assert r1.events("TASK_SUCCEEDED")

@@ -98,6 +98,16 @@ class Unanswered:
 
 
 @record
+class FleetRobot:
+    """One robot of a fleet as its high level sees it: whether it can act now, and why
+    not (``status`` of ``dura fleet run``)."""
+
+    robot: str
+    available: bool
+    reason: str = ""
+
+
+@record
 class GoalAdd(Payload):
     """A goal expression with its priority, deadline (seconds from now) and source;
     ``keep``: a maintenance goal, re-posted whenever it stops holding."""
@@ -147,10 +157,13 @@ class GoalHistory(Payload):
 
 @record
 class PlanReply(Payload):
-    """The newest plan (stored) and how its execution stands."""
+    """The newest plan (stored) and how its execution stands; for a fleet's plan,
+    ``robots``: the robot that carries out each step, in the order of the plan's steps
+    ("" for a step no robot carries out; not sent for a robot's own plan)."""
 
     plan: Plan | None
     execution: ExecutionStatus
+    robots: list[str] | None = None
 
 
 @record
@@ -276,7 +289,7 @@ class NoDiagnosis:
 class StatusReply(KeyAccess, Payload):
     """Everything at a glance. ``diagnoses`` is the newest diagnosis result, if any.
     ``tasks`` and ``components`` come from the task executor and the launcher, or say
-    why that service did not answer. ``planning`` says whether the goal planner is
+    why that service did not answer; ``robots``, for a fleet, from its links. ``planning`` says whether the goal planner is
     computing a plan, since when and why."""
 
     robot: str
@@ -288,6 +301,7 @@ class StatusReply(KeyAccess, Payload):
     tasks: list[ExecutorTask] | Unanswered | None = None
     components: list[ComponentEntry] | Unanswered | None = None
     planning: PlannerStatus | None = None
+    robots: list[FleetRobot] | Unanswered | None = None  # a fleet's robots
 
     @property
     def diagnosis(self) -> DiagnosisInfo | None:

@@ -13,7 +13,7 @@ from executive.bus.schema import read
 from executive.dashboard import gantt
 from executive.planning.partial_order import PartialOrderPlan, Precedence, Step, Timepoint
 from knowledge.records import Event, Plan, PlanState
-from tests.executive.dashboard.pictures import SVG, groups, parse, texts, tooltip
+from tests.executive.dashboard.pictures import groups, parse, texts, tooltip
 
 PLAN: Plan = read(Plan, {
     "id": 2, "state": "executing", "engine": "kairos", "goal_ids": [1, 3], "created": 1000.0,
@@ -159,42 +159,27 @@ def test_the_page_s_chart_leaves_the_title_to_the_page() -> None:
     assert live().title in texts(parse(gantt.render(live())))
 
 
-FLEET_PLAN: Plan = read(Plan, {
-    "id": 3, "state": "executing", "engine": "kairos", "goal_ids": [1, 2], "created": 1000.0,
-    "steps": [
-        {"index": 0, "action": "drive", "args": ["r2", "dock2", "store"], "start": 0.0,
-         "duration": 5.0},
-        {"index": 1, "action": "drive", "args": ["r1", "dock1", "store"], "start": 0.0,
-         "duration": 5.0},
-        {"index": 2, "action": "pick", "args": ["r1", "parcel1", "store"], "start": 5.0,
-         "duration": 3.0},
-        {"index": 3, "action": "open_door", "args": ["store"], "start": 5.0, "duration": 1.0},
-    ],
-}, "plan")  # fmt: skip
-
-
-def test_a_fleets_plan_is_drawn_with_a_row_per_robot_each_step_in_its_robots_row() -> None:
-    robots = ["r2", "r1", "r1", ""]  # the plan/show reply's robots, in the plan's order
-    chart = gantt.live_gantt(FLEET_PLAN, ExecutionStatus(), [], [], now=1000.0, robots=robots)
-    assert [s.robot for s in chart.steps] == robots
-    assert "robot r1" in chart.steps[2].details
-    assert [(label, [s.index for s in steps]) for label, steps in gantt.rows(chart)] == [
-        ("r1", [1, 2]),
-        ("r2", [0]),
-        ("-", [3]),  # a step no robot carries out
-    ]
+def test_a_fleets_plan_is_drawn_by_robot_each_robots_steps_together() -> None:
+    plan: Plan = read(Plan, {
+        "id": 4, "state": "executing", "engine": "kairos", "goal_ids": [1, 2], "created": 1000.0,
+        "steps": [
+            {"index": 0, "action": "drive", "args": ["r2", "dock2", "store"], "start": 0.0,
+             "duration": 5.0},
+            {"index": 1, "action": "drive", "args": ["r1", "dock1", "store"], "start": 0.0,
+             "duration": 5.0},
+            {"index": 2, "action": "pick", "args": ["r2", "parcel2", "store"], "start": 5.0,
+             "duration": 3.0},
+            {"index": 3, "action": "pick", "args": ["r1", "parcel1", "store"], "start": 5.0,
+             "duration": 3.0},
+        ],
+    }, "plan")  # fmt: skip
+    chart = gantt.live_gantt(plan, ExecutionStatus(), [], [], now=1001.0,
+                             robots=["r2", "r1", "r2", "r1"])  # fmt: skip
+    assert [(s.robot, s.index) for s in chart.steps] == [("r1", 1), ("r1", 3), ("r2", 0), ("r2", 2)]
     root = parse(gantt.render(chart))
-    assert [t.text for t in root.iter(f"{SVG}text") if t.get("class") == "robot"] == [
-        "r1",
-        "r2",
-        "-",
-    ]
-    steps = groups(root, "step")
-    assert [s.get("data-robot") for s in steps] == ["r1", "r1", "r2", None]
-    # the steps of a robot share its row: the same height in the picture
-    heights = [float(next(s.iter(f"{SVG}rect")).get("y") or 0) for s in steps]
-    assert heights[0] == heights[1] < heights[2] < heights[3]
-    # and a robot's own plan keeps its row per step
-    own = gantt.live_gantt(FLEET_PLAN, ExecutionStatus(), [], [], now=1000.0)
-    drawn = parse(gantt.render(own)).iter(f"{SVG}text")
-    assert len(gantt.rows(own)) == 4 and not [t for t in drawn if t.get("class") == "robot"]
+    rows = groups(root, "step")
+    assert [g.get("data-robot") for g in rows] == ["r1", "r1", "r2", "r2"]
+    assert "r1  1  drive(r1, dock1, store)" in texts(root)
+    assert "robot r2" in tooltip(rows[2])
+    # a robot's own plan has no robot column
+    assert all(g.get("data-robot") is None for g in groups(parse(gantt.render(live())), "step"))
