@@ -73,7 +73,7 @@ def _demo(args: argparse.Namespace, folder: Path) -> int:
         outcome = _scenario(args, folder, timeline)
     finally:
         timeline.close()
-    ok = all(g.state is GoalState.ACHIEVED for g in outcome.goals)
+    ok = bool(outcome.goals) and all(g.state is GoalState.ACHIEVED for g in outcome.goals)
     elapsed = time.time() - timeline.start
     if args.json:
         print_json(report(outcome, timeline, ok, elapsed))
