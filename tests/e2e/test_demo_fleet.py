@@ -1,27 +1,76 @@
 """``dura demo --fleet`` as a user runs it: three real executives, their components and
 the fleet's high level with a real planner; the robots deliver in parallel, the one
-killed mid-plan is lost and planned around, the others deliver every parcel, once."""
+killed mid-plan is lost and planned around, the others deliver every parcel, once; the
+fleet's dashboard, served meanwhile, draws its plan by robot."""
 
 from __future__ import annotations
 
 import json
+import os
+import re
+import subprocess
+import sys
+import threading
+import urllib.request
 from pathlib import Path
+from typing import IO
 
 import pytest
 
 from executive.cli.demo_timeline import replans
 from knowledge.knowledge_base import KnowledgeBase
-from tests.conftest import run_dura
+from tests.conftest import ROOT, wait_for
 
 pytestmark = pytest.mark.slow
 
 STEPS = ("DISPATCH", "START", "ADOPT", "END", "FAIL", "CANCEL")
 
 
+class Dashboard:
+    """The dashboard's address as the demo prints it (on stderr with --json), and the
+    robots its plan picture has drawn while the demo ran."""
+
+    def __init__(self, stderr: IO[str] | None) -> None:
+        self.url = ""
+        self.lines: list[str] = []
+        self.robots: set[str] = set()
+        self._reader = threading.Thread(target=self._read, args=(stderr,), daemon=True)
+        self._reader.start()
+
+    def _read(self, stderr: IO[str] | None) -> None:
+        for line in stderr or ():
+            self.lines.append(line)
+            found = re.search(r"dashboard on http://(\S+)", line)
+            if found:
+                self.url = found.group(1)  # host:port/?token=...
+
+    def look(self) -> bool:
+        """Whether the plan picture draws steps of two robots or more (by robot)."""
+        address, _, token = self.url.partition("/?token=")
+        try:
+            with urllib.request.urlopen(
+                f"http://{address}/api/plan.svg?token={token}", timeout=5
+            ) as r:
+                picture = r.read().decode()
+        except OSError:  # no plan yet (404), or the demo has ended
+            return False
+        self.robots |= set(re.findall(r'data-robot="(\w+)"', picture))
+        return len(self.robots) >= 2
+
+
 def test_the_fleet_demo_delivers_every_parcel_after_one_robot_is_killed(tmp_path: Path) -> None:
-    done = run_dura("demo", "--fleet", "--keep", str(tmp_path / "run"), "--json", timeout=300)
-    assert done.returncode == 0, done.stderr
-    report = json.loads(done.stdout)
+    argv = [sys.executable, "-m", "executive.cli", "demo", "--fleet", "--keep",
+            str(tmp_path / "run"), "--json", "--dashboard", "0"]  # fmt: skip
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    with subprocess.Popen(argv, cwd=ROOT, env=env, text=True, stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE) as demo:  # fmt: skip
+        page = Dashboard(demo.stderr)
+        assert wait_for(lambda: page.url, 120), "".join(page.lines)
+        # the fleet's plan by robot, while the robots work
+        assert wait_for(page.look, 60), page.robots
+        out, _ = demo.communicate(timeout=300)
+    assert demo.returncode == 0, "".join(page.lines)
+    report = json.loads(out)
     assert report["ok"]
     assert [g["state"] for g in report["goals"]] == ["achieved"] * 3
     killed = report["killed"]
