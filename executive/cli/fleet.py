@@ -45,6 +45,13 @@ def register(sub: Any) -> None:
         default=10.0,
         help="seconds to wait for the robots before the first plan (default 10)",
     )
+    r.add_argument(
+        "--lease",
+        type=seconds(),
+        default=3.0,
+        metavar="SECONDS",
+        help="silence after which a robot out of reach counts as lost (default 3)",
+    )
     add_json_flag(r)
     r.set_defaults(run=run)
 
@@ -84,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
         endpoint=args.endpoint,
         kb_path=args.db,
         join_wait=args.join_wait,
+        lease=args.lease,
         on_failure=failed,
         say=say,
     )

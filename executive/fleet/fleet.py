@@ -63,6 +63,7 @@ class Fleet:
         kb_path: its knowledge base (default: ``./.dura/<fleet>.db``).
         folder: the working folder whose ``.dura/`` holds the fleet's bus credentials.
         join_wait: seconds to wait for the robots before the first plan.
+        lease: seconds of silence after which a robot out of reach counts as lost.
         on_failure: called with the reason when the fleet cannot go on.
         on_open: called once the bus API answers (``dura fleet run`` writes its run file).
         say: told one line at each change of a robot, for the operator.
@@ -80,6 +81,7 @@ class Fleet:
         kb_path: Path | None = None,
         folder: Path | None = None,
         join_wait: float = JOIN_WAIT,
+        lease: float | None = None,
         on_failure: Callable[[str], None] | None = None,
         on_open: Callable[[], None] | None = None,
         say: Callable[[str], None] = lambda line: None,
@@ -94,6 +96,7 @@ class Fleet:
         self.folder = folder or Path.cwd()
         self.credentials_path = security.credentials_file(self.folder, fleet.name)
         self.join_wait = join_wait
+        self.lease = lease
         self.on_failure = on_failure
         self.on_open = on_open
         self.say = say
@@ -142,6 +145,7 @@ class Fleet:
                     on_alive=self._alive,
                     say=self.say,
                     on_event=facts.heard if facts is not None else None,
+                    lease=self.lease,
                 )
                 if facts is not None:
                     facts.start()

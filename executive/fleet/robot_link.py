@@ -36,6 +36,8 @@ class RobotLink:
         on_alive: told ``(robot, there)`` whenever its executive comes or goes.
         say: told one line at each change, for the operator.
         on_event: told ``(kind, subject)`` of each event the robot logs.
+        lease: seconds of silence after which the link to the robot counts as lost (its
+            executive out of reach: a robot whose network broke is noticed then).
     """
 
     def __init__(
@@ -48,6 +50,7 @@ class RobotLink:
         on_alive: Callable[[str, bool], None],
         say: Callable[[str], None] = lambda line: None,
         on_event: Callable[[str, str], None] | None = None,
+        lease: float | None = None,
     ) -> None:
         self.robot = robot
         self.name = robot.name
@@ -57,6 +60,7 @@ class RobotLink:
         self.on_alive = on_alive
         self.say = say
         self.on_event = on_event
+        self.lease = lease
         self.runner: BusTasks | None = None  # once connected
         self.bus: Bus | None = None
         self._stop = threading.Event()
@@ -76,7 +80,8 @@ class RobotLink:
     def _connect(self) -> None:
         def connect() -> Bus:
             login = security.read_credentials(self.login_file).login(security.FLEET)
-            return Bus(self.name, name=f"fleet.{self.fleet}", endpoint=self.endpoint, login=login)
+            return Bus(self.name, name=f"fleet.{self.fleet}", endpoint=self.endpoint,
+                       login=login, lease=self.lease)  # fmt: skip
 
         bus = connect_when_there(connect, self.endpoint, self._stop, self._waiting)
         if bus is None:

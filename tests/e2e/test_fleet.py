@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from executive.testing.fleet import FleetProcess, fleet_variant
-from executive.testing.harness import RobotProcess
+from executive.testing.harness import RobotProcess, robot_variant
 from knowledge.records import Event
 from tests.conftest import ROOT, run_dura, wait_for
 
@@ -155,3 +155,28 @@ def test_a_goal_no_robot_can_reach_waits_for_a_robot_to_come_back(tmp_path: Path
         r1.start()
         fleet.wait_for(goal, "achieved", timeout=120)  # back: it takes the goal
         assert r1.events("TASK_SUCCEEDED")
+
+
+def test_a_robot_whose_steps_keep_failing_is_set_aside_and_another_takes_its_goal(
+    tmp_path: Path,
+) -> None:
+    broken = {"behaviors": {"drive_to": {"command": ["python", "-c", "raise SystemExit(3)"],
+                                         "max_restarts": 0}}}  # fmt: skip
+    r1_description = robot_variant(EXAMPLE / "r1.yaml", tmp_path / "broken", broken)
+    with (
+        RobotProcess(r1_description, tmp_path / "r1", time_scale=SCALE) as r1,
+        RobotProcess(EXAMPLE / "r2.yaml", tmp_path / "r2", time_scale=SCALE) as r2,
+    ):
+        path = fleet_variant(EXAMPLE / "fleet.yaml", [r1, r2], tmp_path, max_failures=2)
+        with FleetProcess(path, tmp_path / "fleet", time_scale=SCALE) as fleet:
+            r2.stop()  # only r1 can act: the plan is its
+            assert wait_for(lambda: fleet.events("ROBOT_LOST") != [], 30)
+            goal = fleet.submit_goal("(crate_at parcel1 lab)")
+            set_aside = fleet.wait_for_event("ROBOT_LOST", "r1", timeout=120)
+            assert set_aside.data["reason"].startswith("its last 2 steps failed")
+            assert len(steps_of(fleet.events(), "FAIL", "r1")) == 2
+            r2.start()
+            fleet.wait_for(goal, "achieved", timeout=120)
+            events = fleet.events()
+            assert steps_of(events, "END", "r1") == []
+            assert "drop(r2, parcel1, lab)" in steps_of(events, "END", "r2")
