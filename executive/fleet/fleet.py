@@ -108,6 +108,7 @@ class Fleet:
         )
         self.high_level: HighLevel | None = None
         self.links: dict[str, RobotLink] = {}
+        self._facts_of: dict[str, RobotFacts] = {}  # each robot's facts, if any map
         self._stack = contextlib.ExitStack()
         self._kb: KnowledgeBase | None = None
 
@@ -148,6 +149,7 @@ class Fleet:
                     lease=self.lease,
                 )
                 if facts is not None:
+                    self._facts_of[name] = facts
                     facts.start()
                     stack.callback(facts.stop)
             objects = {self.fleet.robots[name].pddl_object: name for name in self.robots}
@@ -222,6 +224,9 @@ class Fleet:
         """A robot's executive came or went (on the link's bus thread)."""
         if there:
             self.availability.joined(robot)
+            facts = self._facts_of.get(robot)
+            if facts is not None:
+                facts.joined()
         else:
             self.availability.lost(robot, "its executive vanished")
 

@@ -2,8 +2,8 @@
 
 The fleet description maps facts of a robot's own world to facts of the fleet's
 (``facts: {"(robot_at ?p)": "(at ?robot ?p)", "(battery_level)": "(battery ?robot)"}``;
-``?robot`` is the robot's object). Whenever a robot's executive sets or unsets a
-mapped fact (its sensing rules, its own plans, ``dura state set`` on it: the events it
+``?robot`` is the robot's object). When a robot joins, and whenever its executive sets
+or unsets a mapped fact (its sensing rules, its own plans, ``dura state set`` on it: the events it
 publishes), the fleet reads that predicate of the robot's world again and makes the
 fleet's facts of that robot follow: set what is new, unset what the robot no longer
 holds, as ``dura state set`` would (the fleet's goal planner hears of it).
@@ -127,6 +127,11 @@ class RobotFacts:
 
     def stop(self) -> None:
         self._worker.stop()
+
+    def joined(self) -> None:
+        """The robot joined (again): follow every mapping."""
+        for mapping in self.mappings:
+            self._worker.post(lambda m=mapping: self.follow(m))  # type: ignore[misc]
 
     def heard(self, kind: str, subject: str) -> None:
         """An event of the robot: a change of a mapped predicate is followed."""

@@ -64,6 +64,14 @@ def test_the_fleets_facts_of_a_robot_follow_its_own_when_it_changes_them() -> No
         ("(at r1 lab)", False),
         ("(= (battery r1) 75)", False),
     ]
+    # when the robot joins, every mapping is followed (here: its battery changed since)
+    fleet[:] = [Fact("at", ("r1", "lab")), Fact("battery", ("r1",), 75.0)]
+    robot[1] = Fact("battery_level", (), 60.0)
+    changes.clear()
+    facts.start()
+    facts.joined()
+    facts.stop()
+    assert changes == [("(= (battery r1) 60)", False)]
 
 
 def test_a_robot_is_available_while_its_executive_is_there_and_its_steps_do_not_keep_failing() -> (
