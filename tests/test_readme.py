@@ -92,6 +92,7 @@ PAGES = [README, *(ROOT / "docs" / page for page in (
     "how-to/testing.md",
     "reference/cli.md",
     "development.md",
+    "how-to/fleets.md",
 ))]  # fmt: skip
 FOLLOW = 2.0  # seconds a command that runs until Ctrl-C runs
 SETTLE = 60.0  # seconds a command that changes nothing is asked again until it matches
@@ -333,6 +334,7 @@ def demo_is_consistent(done: subprocess.CompletedProcess[str]) -> None:
 
 CHECKS: dict[str, Callable[[subprocess.CompletedProcess[str]], None]] = {
     "dura demo": demo_is_consistent,
+    "dura demo --fleet": demo_is_consistent,
 }
 
 

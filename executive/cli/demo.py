@@ -53,13 +53,14 @@ def register(sub: Any) -> None:
         "one; on a terminal, the last line says what the robot does now.",
     )
     p.add_argument("--keep", type=Path, metavar="DIR", help="run in DIR and keep its files")
-    p.add_argument(
+    which = p.add_mutually_exclusive_group()
+    which.add_argument(
         "--ros2",
         action="store_true",
         help="run the ROS 2 patrol robot (examples/ros2) instead: ROS 2 nodes, a managed "
         "node, an action and a service as tasks, a goal from ROS 2, on loopback DDS",
     )
-    p.add_argument(
+    which.add_argument(
         "--fleet",
         action="store_true",
         help="run the depot fleet (examples/fleet) instead: three transport robots deliver "

@@ -23,7 +23,7 @@ import shutil
 import sys
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, TextIO
 
@@ -49,7 +49,7 @@ SHOWN = {
     "START", "END", "FAIL", "REPLAN", "CANCEL",
     "COMPONENT_READY", "COMPONENT_EXITED", "COMPONENT_FAILED", "FAULT", "PERMANENT_FAULT",
     "INTEGRITY_GOAL", "CONFIGURATION", "TASK_FAILED", "TASK_PAUSED", "TASK_RESUMED",
-    "REPAIR", "TASK_RESTARTED", "RULE_FIRED", "RULE_FAILED",
+    "REPAIR", "TASK_RESTARTED", "RULE_FIRED", "RULE_FAILED", "ROBOT_JOINED", "ROBOT_LOST",
 }  # fmt: skip
 
 
@@ -84,10 +84,24 @@ class Timeline:
         quiet: print nothing (``--json``); everything is still kept.
         everything: show every event, not only those in ``SHOWN``.
         out: where to print.
+        robots: a fleet's robots: each line then names the robot of its plan step (or
+            the robot it is about), and each plan is shown by robot.
+        robot_of: the robot that carries out an action with these arguments (``None``:
+            none of them), for ``robots``.
     """
 
-    def __init__(self, *, quiet: bool, everything: bool, out: TextIO | None = None) -> None:
+    def __init__(
+        self,
+        *,
+        quiet: bool,
+        everything: bool,
+        out: TextIO | None = None,
+        robots: Sequence[str] = (),
+        robot_of: Callable[[str, Sequence[str]], str | None] = lambda action, args: None,
+    ) -> None:
         self.start = time.time()
+        self.robots = tuple(robots)
+        self.robot_of = robot_of
         self.out = out or sys.stdout
         self.quiet = quiet
         self.everything = everything
@@ -248,7 +262,16 @@ class Timeline:
             return
         if not self.everything and (kind not in SHOWN or self._repeated(item)):
             return
-        self._line(stamp, kind, self._introducing(item, describe(item)))
+        self._line(stamp, kind, self._introducing(item, describe(item)), self.robot(item))
+
+    def robot(self, event: Event) -> str | None:
+        """The fleet's robot an event is about: its plan step's, or the robot it names."""
+        if event.subject in self.robots:
+            return event.subject
+        action, args = event.data.get("action"), event.data.get("args")
+        if isinstance(action, str) and isinstance(args, list):
+            return self.robot_of(action, [str(a) for a in args])
+        return None
 
     def _introducing(self, event: Event, text: str) -> str:
         """A line that names each task with its step the first time (``task 4
@@ -295,11 +318,18 @@ class Timeline:
         shown = plain(stored) if stored is not None else {"id": plan_id}
         self.plans.append({**shown, "goals": data.get("goals", []), "replaces": replaces,
                            "why": why})  # fmt: skip
+        heads: list[str] = ["#", "start", "step", "timeline"]
+        if self.robots:  # by robot, each robot's steps in the order they start
+            heads.insert(0, "robot")
+            steps = tuple(
+                sorted(steps, key=lambda s: (self.robot_of(s.action, s.args) or "", s.start))
+            )
         rows = io.StringIO()
         table(
-            ["#", "start", "step", "timeline"],
+            heads,
             [
-                [s.index, f"{s.start:.1f}", f"{s.action}({', '.join(s.args)})",
+                [*([self.robot_of(s.action, s.args)] if self.robots else []), s.index,
+                 f"{s.start:.1f}", f"{s.action}({', '.join(s.args)})",
                  bar(s.start, s.duration, span)]
                 for s in steps
             ],
@@ -323,7 +353,10 @@ class Timeline:
 
     # --- output -------------------------------------------------------------------------
 
-    def _line(self, stamp: float, kind: str, text: str) -> None:
+    def _line(self, stamp: float, kind: str, text: str, robot: str | None = None) -> None:
+        if self.robots:  # a column for the robot
+            width = max(len(r) for r in self.robots)
+            text = f"{robot or '':<{width}}  {text}"
         self._write(f"{stamp - self.start:6.1f}s  {kind:<{WIDTH}}  {text}".rstrip())
 
     def _write(self, text: str) -> None:

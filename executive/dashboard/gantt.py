@@ -6,13 +6,13 @@ plan's start) and the running robot's plan with its execution (:func:`live_gantt
 planned and actual times from the event log, step states, each step's task and
 configuration, and the plans and replans before it on the same time axis, 0 being the
 current plan's start). :func:`render` draws either. A fleet's plan is drawn by robot:
-each robot's steps together, in the order they start, under its name.
+a row per robot, each of its steps a bar in that row.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -199,20 +199,23 @@ def ticks(low: float, high: float, count: int = 8) -> list[float]:
     return [round(first + i * step, 9) for i in range(int((high - first) / step + 1e-9) + 1)]
 
 
-def _striped(steps: Sequence[GanttStep]) -> list[int]:
-    """The rows drawn on a stripe: every other row, or every other robot's rows."""
-    if not any(s.robot for s in steps):
-        return list(range(1, len(steps), 2))
-    robots = list(dict.fromkeys(s.robot for s in steps))
-    return [row for row, s in enumerate(steps) if robots.index(s.robot) % 2 == 1]
+def rows(gantt: Gantt) -> list[tuple[str, tuple[GanttStep, ...]]]:
+    """The chart's rows, each with its label: a row per step, or for a fleet's plan a row
+    per robot with its steps (those no robot carries out in a row ``-``)."""
+    if not any(s.robot for s in gantt.steps):
+        return [(f"{s.index}  {s.label}", (s,)) for s in gantt.steps]
+    robots = sorted({s.robot for s in gantt.steps}, key=lambda r: (not r, r))
+    return [(robot or "-", tuple(s for s in gantt.steps if s.robot == robot)) for robot in robots]
 
 
 def render(gantt: Gantt, width: float = WIDTH, *, titled: bool = True) -> str:
     """The chart as an SVG document (``titled``: with its title drawn on it; a page
-    that shows the title itself draws none)."""
-    labels = [f"{s.robot + '  ' if s.robot else ''}{s.index}  {s.label}" for s in gantt.steps]
-    left = max(140.0, max((svg.text_width(t) for t in labels), default=0.0) + 24.0)
-    right = width - 84.0  # room for the last step's state
+    that shows the title itself draws none); a fleet's plan by robot."""
+    lines = rows(gantt)
+    by_robot = any(s.robot for s in gantt.steps)
+    left = max(140.0 if not by_robot else 60.0,
+               max((svg.text_width(t) for t, _ in lines), default=0.0) + 24.0)  # fmt: skip
+    right = width - (84.0 if not by_robot else 24.0)  # room for the last step's state
     low = min([0.0, *(m.at for m in gantt.marks), *(s.ran[0] for s in gantt.steps if s.ran)])
     ends = [s.end for s in gantt.steps]
     ends += [s.ran[1] for s in gantt.steps if s.ran and s.ran[1] is not None]
@@ -224,12 +227,12 @@ def render(gantt: Gantt, width: float = WIDTH, *, titled: bool = True) -> str:
     def x(t: float) -> float:
         return left + (t - low) * scale
 
-    height = TOP + ROW * max(1, len(gantt.steps)) + BOTTOM
+    height = TOP + ROW * max(1, len(lines)) + BOTTOM
     body: list[str] = []
     if titled:
         body.append(svg.label(12, 20, gantt.title, font_size=14, font_weight="600"))
-    axis_y = TOP + ROW * max(1, len(gantt.steps))
-    for row in _striped(gantt.steps):  # stripes under the grid, the marks and the bars
+    axis_y = TOP + ROW * max(1, len(lines))
+    for row in range(1, len(lines), 2):  # stripes under the grid, the marks and the bars
         body.append(svg.element("rect", x=0, y=TOP + row * ROW, width=width, height=ROW,
                                 fill="#f7f8fa"))  # fmt: skip
     for t in ticks(low, high):
@@ -248,33 +251,14 @@ def render(gantt: Gantt, width: float = WIDTH, *, titled: bool = True) -> str:
             svg.element("g", [svg.title(f"{mark.at:+.1f} s  {mark.text}"), line, tag],
                         class_="mark", data_kind=mark.kind)
         )  # fmt: skip
-    for row, (step, text) in enumerate(zip(gantt.steps, labels, strict=True)):
+    for row, (text, steps) in enumerate(lines):
         y = TOP + row * ROW
-        fill = svg.colour(step.state)
-        parts = [svg.title("\n".join(step.details or (step.label,)))]
-        parts.append(svg.label(12, y + 17, text))
-        bar_width = max(3.0, (step.duration or 0.0) * scale)
-        parts.append(
-            svg.element("rect", x=x(step.start), y=y + 5, width=bar_width, height=ROW - 10, rx=3,
-                        fill=fill, fill_opacity=0.45, stroke=fill, class_="planned")
-        )  # fmt: skip
-        last = x(step.start) + bar_width
-        if step.ran is not None:
-            begin, end = step.ran
-            stop = end if end is not None else (gantt.now if gantt.now is not None else begin)
-            last = max(last, x(stop))
-            parts.append(
-                svg.element("rect", x=x(begin), y=y + 9, width=max(3.0, (stop - begin) * scale),
-                            height=ROW - 18, rx=2, fill=fill, class_="ran")
-            )  # fmt: skip
-        parts.append(
-            svg.label(last + 6, y + 17, step.state, font_size=10,
-                      fill=svg.MUTED)
-        )  # fmt: skip
-        body.append(
-            svg.element("g", parts, class_="step", data_step=step.index, data_state=step.state,
-                        data_label=step.label, data_robot=step.robot or None)
-        )  # fmt: skip
+        if by_robot:
+            body.append(svg.label(12, y + 17, text, font_weight="600", class_="robot"))
+        for step in steps:
+            body.append(
+                _step(step, y, x, scale=scale, now=gantt.now, text=None if by_robot else text)
+            )
     if gantt.now is not None and any(s.ran for s in gantt.steps):
         body.append(
             svg.element("line", x1=x(gantt.now), y1=TOP - 4, x2=x(gantt.now), y2=axis_y,
@@ -288,3 +272,41 @@ def render(gantt: Gantt, width: float = WIDTH, *, titled: bool = True) -> str:
         body.append(svg.label(legend_x + 14, height - 11, state, font_size=10, fill=svg.MUTED))
         legend_x += 24 + svg.text_width(state, 10)
     return svg.document(width, height, body, name="gantt", caption=gantt.title)
+
+
+def _step(
+    step: GanttStep,
+    y: float,
+    x: Callable[[float], float],
+    *,
+    scale: float,
+    now: float | None,
+    text: str | None,
+) -> str:
+    """One step at row ``y``: its planned bar and, once dispatched, when it ran; ``text``:
+    the row's label and its state after the bar (a row of its own), else (a robot's
+    row) its label in its bar, if it fits."""
+    fill = svg.colour(step.state)
+    parts = [svg.title("\n".join(step.details or (step.label,)))]
+    if text is not None:
+        parts.append(svg.label(12, y + 17, text))
+    bar_width = max(3.0, (step.duration or 0.0) * scale)
+    parts.append(
+        svg.element("rect", x=x(step.start), y=y + 5, width=bar_width, height=ROW - 10, rx=3,
+                    fill=fill, fill_opacity=0.45, stroke=fill, class_="planned")
+    )  # fmt: skip
+    last = x(step.start) + bar_width
+    if step.ran is not None:
+        begin, end = step.ran
+        stop = end if end is not None else (now if now is not None else begin)
+        last = max(last, x(stop))
+        parts.append(
+            svg.element("rect", x=x(begin), y=y + 9, width=max(3.0, (stop - begin) * scale),
+                        height=ROW - 18, rx=2, fill=fill, class_="ran")
+        )  # fmt: skip
+    if text is not None:
+        parts.append(svg.label(last + 6, y + 17, step.state, font_size=10, fill=svg.MUTED))
+    elif svg.text_width(step.label, 10) + 6 <= bar_width:
+        parts.append(svg.label(x(step.start) + 3, y + 17, step.label, font_size=10))
+    return svg.element("g", parts, class_="step", data_step=step.index, data_state=step.state,
+                       data_label=step.label, data_robot=step.robot or None)  # fmt: skip

@@ -1,170 +1,171 @@
-"""Benchmark of fleets: how soon a goal reaches a robot, and how soon a lost robot's work
-starts again elsewhere, for fleets of 2, 5 and 10 robots beside one robot alone.
+"""Benchmark of fleets: a goal to its first step, and a lost robot's work to another,
+for fleets of 1 (the baseline), 2, 5 and 10 robots in the same run.
 
-    python -m tests.benchmarks.fleet [--sizes 1 2 5 10] [--samples N] [--scale S]
+    python -m tests.benchmarks.fleet [--runs N] [--robots 1,2,5,10] [--scale S]
 
-Each robot is the example's (``examples/fleet/r1.yaml`` renamed; simulated hardware),
-run by its own ``dura run`` process with its own bus login, beside the fleet's ``dura
-fleet run``; the depot's problem is made for the fleet's size (a dock per robot, a
-store, a lab, a parcel per sample). Two figures, each over ``--samples`` runs:
+Each fleet is the example depot (``examples/fleet``) with N transport robots, each a
+real executive (``dura run``) with its simulated components, on this machine, and the
+fleet's high level (``dura fleet run``) beside them; robot time runs ``--scale`` times
+as fast as the wall clock. Each run asks for one more parcel in the lab and times, in
+milliseconds, from the fleet's event log:
 
-- **goal → step**: from ``dura goal add`` (the fleet's verb) to the first step of the
-  plan started on its robot (the fleet's ``START`` event: the robot's task executor
-  reported it running). Planning for more robots costs the planner more.
-- **lost → restarted**: from the SIGKILL of the executive of the robot whose step runs
-  to the next step started on another robot (liveliness lost, step failed, robot set
-  aside, new plan, its first step started). With one robot there is no other: the row
-  "1" restarts that robot's executive at once and measures until its step starts
-  again there (recovery by restart, the baseline a fleet improves on).
+- **goal -> first step**: from the goal's submission to the start of the first step of
+  its plan on the robot the step names (the robot's task executor said it started);
+- **lost -> restarted**: the executive of that robot is SIGKILLed at once, and the time
+  runs to the start of a step of the goal's new plan on another robot. With one robot
+  there is no other: its executive is started again at once, and the time runs to its
+  step restarted on it once it is back (the baseline a fleet improves on).
 
-It prints p50 and p95 (of few samples: p95 is near the worst) per size, in seconds of
-wall time, with the robot time scale it ran at.
+The killed robot is started again before the next run, and the run waits until the
+goal is achieved, so each run starts with every robot there and idle. The load average
+(1 minute) is printed before and after each fleet: 10 robots are 10 executives and 40
+component processes on this machine.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
-import statistics
+import os
 import tempfile
 import time
 from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
+from executive.cli.demo_fleet import EXAMPLE, start_robots
 from executive.testing.fleet import FleetProcess, fleet_variant
 from executive.testing.harness import RobotProcess, robot_variant
 from knowledge.records import Event
-from tests.conftest import ROOT
+from tests.benchmarks.runtime import percentiles
+from tests.conftest import ROOT, wait_for
 
-EXAMPLE = ROOT / "examples" / "fleet"
+
+@dataclass
+class Figures:
+    """The samples of one fleet size, in seconds, and the load around them."""
+
+    robots: int
+    first_step: list[float] = field(default_factory=list)
+    restarted: list[float] = field(default_factory=list)
+    load: tuple[float, float] = (0.0, 0.0)  # 1-minute load average before, after
 
 
-def problem(count: int, parcels: int) -> str:
-    """The depot for ``count`` robots: a dock each, a store with the parcels, a lab."""
-    robots = [f"r{i}" for i in range(1, count + 1)]
-    docks = [f"dock{i}" for i in range(1, count + 1)]
-    crates = [f"parcel{i}" for i in range(1, parcels + 1)]
-    init = [f"(at {r} {d}) (hands_free {r}) (= (battery {r}) 100)"
-            for r, d in zip(robots, docks, strict=True)]  # fmt: skip
+def depot_problem(names: Sequence[str], parcels: int) -> str:
+    """The depot with these robots, each at a dock of its own, and parcels in the store."""
+    docks = [f"dock{i + 1}" for i in range(len(names))]
+    crates = [f"p{i + 1}" for i in range(parcels)]
+    init = [f"(at {r} {d}) (hands_free {r}) (= (battery {r}) 100)" for r, d in zip(names, docks, strict=True)]  # fmt: skip
     init += [f"(road {d} store) (road store {d})" for d in docks]
     init += ["(road store lab) (road lab store) (road store office) (road office store)"]
     init += [f"(crate_at {c} store)" for c in crates]
     return (
-        f"(define (problem depot-{count}) (:domain depot)\n"
-        f"  (:objects {' '.join(robots)} - robot {' '.join(docks)} store lab office - place\n"
-        f"            {' '.join(crates)} - crate)\n"
+        f"(define (problem depot-{len(names)}) (:domain depot)\n"
+        f"  (:objects {' '.join(names)} - robot {' '.join(docks)} store lab office - place "
+        f"{' '.join(crates)} - crate)\n"
         f"  (:init {' '.join(init)})\n  (:goal (and)))\n"
     )
 
 
 @contextlib.contextmanager
-def fleet_of(
-    count: int, parcels: int, folder: Path, scale: float
-) -> Iterator[tuple[FleetProcess, dict[str, RobotProcess]]]:
-    """``count`` robots' executives and the fleet's process, in ``folder``."""
-    with contextlib.ExitStack() as stack:
-        robots: dict[str, RobotProcess] = {}
-        for i in range(1, count + 1):
-            name = f"r{i}"
-            description = robot_variant(EXAMPLE / "r1.yaml", folder / "descriptions" / name,
-                                        {"robot": name})  # fmt: skip
-            description = description.rename(description.with_name(f"{name}.yaml"))
-            robots[name] = stack.enter_context(
-                RobotProcess(description, folder / name, time_scale=scale)
-            )
-        made = folder / "problem.pddl"
-        made.write_text(problem(count, parcels))
-        description = fleet_variant(EXAMPLE / "fleet.yaml", list(robots.values()), folder,
-                                    problem=str(made))  # fmt: skip
-        fleet = stack.enter_context(
-            FleetProcess(description, folder / "fleet", time_scale=scale, join_wait=60.0)
+def depot(folder: Path, count: int, parcels: int, scale: float) -> Iterator[
+    tuple[FleetProcess, dict[str, RobotProcess]]
+]:  # fmt: skip
+    """N robots' executives, each in its own folder, and the fleet beside them."""
+    names = [f"r{i + 1}" for i in range(count)]
+    robots = {
+        name: RobotProcess(
+            robot_variant(EXAMPLE / "r1.yaml", folder / "descriptions" / name, {"robot": name}),
+            folder / name,
+            time_scale=scale,
         )
-        yield fleet, robots
+        for name in names
+    }
+    problem = folder / "problem.pddl"
+    problem.write_text(depot_problem(names, parcels), encoding="utf-8")
+    with contextlib.ExitStack() as stack:
+        start_robots(robots.values(), stack)
+        path = fleet_variant(
+            EXAMPLE / "fleet.yaml", list(robots.values()), folder, problem=str(problem)
+        )
+        fleet = FleetProcess(path, folder / "fleet", time_scale=scale, join_wait=60.0)
+        yield stack.enter_context(fleet), robots
 
 
 def newest(fleet: FleetProcess) -> int:
-    events = fleet.events(limit=1)
-    return events[-1].id if events else 0
+    """The id of the fleet's newest event."""
+    return fleet.events(limit=1)[-1].id
 
 
-def started(fleet: FleetProcess, after: int, unlike: str = "") -> Event:
-    """The first step started after event ``after`` (by a robot other than ``unlike``)."""
-    while True:
-        event = fleet.wait_for_event("START", after=after, timeout=120)
-        if event.data.get("robot") and event.data.get("robot") != unlike:
-            return event
-        after = event.id
-
-
-def measure(count: int, samples: int, scale: float) -> tuple[list[float], list[float]]:
-    """The goal → step and lost → restarted latencies of a fleet of ``count`` robots."""
-    to_step: list[float] = []
-    restarted: list[float] = []
-    with (
-        tempfile.TemporaryDirectory(prefix=f"dura-fleet-{count}-") as folder,
-        fleet_of(count, 2 * samples, Path(folder), scale) as (fleet, robots),
-    ):
-        parcel = 0
-        for _ in range(samples):
-            parcel += 1
-            after = newest(fleet)
-            began = time.time()
-            goal = fleet.submit_goal(f"(crate_at parcel{parcel} lab)")
-            to_step.append(started(fleet, after).stamp - began)
-            fleet.wait_for(goal, "achieved", timeout=180)
-        for _ in range(samples):
-            parcel += 1
-            after = newest(fleet)
-            goal = fleet.submit_goal(f"(crate_at parcel{parcel} lab)")
-            first = started(fleet, after)
-            victim = str(first.data["robot"])
-            began = time.time()
-            robots[victim].kill()
-            if count == 1:  # no other robot: the executive restarts, the step with it
-                robots[victim].start()
-                restarted.append(started(fleet, first.id).stamp - began)
-            else:
-                restarted.append(started(fleet, first.id, unlike=victim).stamp - began)
-                robots[victim].start()
-            fleet.wait_for(goal, "achieved", timeout=180)
-            all_back(fleet)
-    return to_step, restarted
-
-
-def all_back(fleet: FleetProcess, timeout: float = 60.0) -> None:
-    """Wait until every robot of the fleet can act again (a restarted one has joined)."""
+def first_start(fleet: FleetProcess, after: int, but: str = "", timeout: float = 120.0) -> Event:
+    """The first START of a plan step logged after event ``after`` (on a robot other
+    than ``but``)."""
     deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        robots = fleet.status().robots
-        if isinstance(robots, list) and all(r.available for r in robots):
-            return
-        time.sleep(0.2)
+    while True:
+        for e in fleet.events("START"):
+            if e.id > after and (not but or f"({but}," not in e.subject):
+                return e
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"no step started within {timeout:g} s:\n{fleet.log_tail()}")
+        time.sleep(0.05)
 
 
-def percentile(values: Sequence[float], q: float) -> float:
-    ordered = sorted(values)
-    return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))]
+def rejoin(fleet: FleetProcess, robot: RobotProcess) -> None:
+    """Start a killed robot's executive again and wait until the fleet has it back."""
+    joined = len(fleet.events("ROBOT_JOINED"))
+    robot.start()
+    assert wait_for(lambda: len(fleet.events("ROBOT_JOINED")) > joined, 60), fleet.log_tail()
 
 
-def main(argv: Sequence[str] | None = None) -> None:
+def measure(count: int, runs: int, scale: float, folder: Path) -> Figures:
+    figures = Figures(count)
+    before = os.getloadavg()[0]
+    with depot(folder, count, runs, scale) as (fleet, robots):
+        for run in range(1, runs + 1):
+            after = newest(fleet)
+            asked = time.time()
+            goal = fleet.submit_goal(f"(crate_at p{run} lab)")
+            started = first_start(fleet, after)
+            figures.first_step.append(started.stamp - asked)
+            worker = str(started.data["robot"])
+            after = newest(fleet)
+            killed = time.time()
+            robots[worker].kill()
+            if count == 1:
+                robots[worker].start()
+                again = first_start(fleet, after)
+            else:
+                again = first_start(fleet, after, but=worker)
+            figures.restarted.append(again.stamp - killed)
+            fleet.wait_for(goal, "achieved", timeout=180)
+            if count > 1:
+                rejoin(fleet, robots[worker])
+    figures.load = (before, os.getloadavg()[0])
+    return figures
+
+
+def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sizes", type=int, nargs="+", default=[1, 2, 5, 10])
-    parser.add_argument("--samples", type=int, default=5)
-    parser.add_argument("--scale", type=float, default=10.0, help="robot time scale (10)")
-    args = parser.parse_args(argv)
-    rows = []
-    for count in args.sizes:
-        to_step, restarted = measure(count, args.samples, args.scale)
-        rows.append((count, to_step, restarted))
-        print(f"{count} robots: done", flush=True)
-    print(f"\nfleet latencies, seconds of wall time (robot time x{args.scale:g}, "
-          f"{args.samples} samples each)")  # fmt: skip
-    print(f"{'robots':>6}  {'goal->step p50':>14}  {'p95':>6}  {'lost->restarted p50':>19}  "
-          f"{'p95':>6}")  # fmt: skip
-    for count, to_step, restarted in rows:
-        print(f"{count:>6}  {statistics.median(to_step):>14.2f}  {percentile(to_step, 0.95):>6.2f}"
-              f"  {statistics.median(restarted):>19.2f}  {percentile(restarted, 0.95):>6.2f}"
-              + ("  (one robot: its executive restarted)" if count == 1 else ""))  # fmt: skip
+    parser.add_argument("--runs", type=int, default=5, help="goals (and kills) per fleet")
+    parser.add_argument("--robots", default="1,2,5,10", help="fleet sizes (1: the baseline)")
+    parser.add_argument("--scale", type=float, default=4.0, help="robot time speed-up")
+    args = parser.parse_args()
+    os.environ["PYTHONPATH"] = str(ROOT)
+    sizes = [int(n) for n in args.robots.split(",")]
+    results = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for count in sizes:
+            results.append(measure(count, args.runs, args.scale, Path(tmp) / f"fleet{count}"))
+    print(f"fleet goal -> first step on its robot, and robot lost -> its work restarted "
+          f"(robot time x{args.scale:g}; {os.cpu_count()} cores)")  # fmt: skip
+    print(f"{'robots':<16} {'n':>3} {'goal p50 ms':>12} {'goal p95 ms':>12} "
+          f"{'lost p50 ms':>12} {'lost p95 ms':>12} {'load':>11}")  # fmt: skip
+    for f in results:
+        g50, g95 = percentiles(f.first_step)
+        l50, l95 = percentiles(f.restarted)
+        name = f"{f.robots} (baseline)" if f.robots == 1 else str(f.robots)
+        print(f"{name:<16} {len(f.first_step):>3} {g50 * 1000:>12.0f} {g95 * 1000:>12.0f} "
+              f"{l50 * 1000:>12.0f} {l95 * 1000:>12.0f} {f.load[0]:>5.1f}-{f.load[1]:<5.1f}")  # fmt: skip
 
 
 if __name__ == "__main__":

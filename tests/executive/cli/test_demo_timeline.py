@@ -131,3 +131,31 @@ def test_each_task_is_named_with_its_step_the_first_time_a_line_names_it() -> No
         "take_picture(lab) (plan 1, step 1, task 2)",
         "task 2 succeeded: stop lidar; nothing runs",
     ]
+
+
+def test_a_fleets_timeline_names_the_robot_of_each_step_and_of_each_robot_event() -> None:
+    out = io.StringIO()
+    timeline = Timeline(
+        quiet=False,
+        everything=False,
+        out=out,
+        robots=["r1", "r2"],
+        robot_of=lambda action, args: args[0] if args and args[0] in ("r1", "r2") else None,
+    )
+    timeline.start = T0
+    log = Log()
+    log(0.1, "GOAL_ADDED", "goal 1", expression="(crate_at parcel1 lab)")
+    log(0.2, "START", "drive(r1, dock1, store)", plan=1, step=0, action="drive",
+        args=["r1", "dock1", "store"])  # fmt: skip
+    log(0.3, "ROBOT_LOST", "r2", reason="its executive vanished")
+    for event in log.events:
+        timeline.on_event(message(plain(event)))
+    timeline.close()
+    texts = [
+        re.split(r"\s{2,}", line.strip(), maxsplit=2)[1:] for line in out.getvalue().splitlines()
+    ]
+    assert texts == [
+        ["GOAL_ADDED", "goal 1: (crate_at parcel1 lab)"],
+        ["START", "r1  drive(r1, dock1, store) (plan 1, step 0)"],
+        ["ROBOT_LOST", "r2  robot r2 is unavailable: its executive vanished"],
+    ]

@@ -13,7 +13,7 @@ from executive.bus.schema import read
 from executive.dashboard import gantt
 from executive.planning.partial_order import PartialOrderPlan, Precedence, Step, Timepoint
 from knowledge.records import Event, Plan, PlanState
-from tests.executive.dashboard.pictures import groups, parse, texts, tooltip
+from tests.executive.dashboard.pictures import SVG, groups, parse, texts, tooltip
 
 PLAN: Plan = read(Plan, {
     "id": 2, "state": "executing", "engine": "kairos", "goal_ids": [1, 3], "created": 1000.0,
@@ -179,7 +179,22 @@ def test_a_fleets_plan_is_drawn_by_robot_each_robots_steps_together() -> None:
     root = parse(gantt.render(chart))
     rows = groups(root, "step")
     assert [g.get("data-robot") for g in rows] == ["r1", "r1", "r2", "r2"]
-    assert "r1  1  drive(r1, dock1, store)" in texts(root)
+    # a row per robot: its name, and each of its steps a bar in that row, labelled in it
+    assert [t.text for t in root.iter(f"{SVG}text") if t.get("class") == "robot"] == ["r1", "r2"]
+    assert "drive(r1, dock1, store)" in texts(rows[0])
+    heights = [float(next(g.iter(f"{SVG}rect")).get("y") or 0) for g in rows]
+    assert heights[0] == heights[1] < heights[2] == heights[3]
     assert "robot r2" in tooltip(rows[2])
     # a robot's own plan has no robot column
     assert all(g.get("data-robot") is None for g in groups(parse(gantt.render(live())), "step"))
+
+
+def test_a_fleets_step_no_robot_carries_out_has_a_row_of_its_own() -> None:
+    plan = dataclasses.replace(PLAN, steps=PLAN.steps[:2])
+    chart = gantt.live_gantt(plan, ExecutionStatus(), [], [], now=1001.0, robots=["r1", ""])
+    assert [(label, [s.index for s in steps]) for label, steps in gantt.rows(chart)] == [
+        ("r1", [0]),
+        ("-", [1]),
+    ]
+    own = gantt.rows(live())  # a robot's own plan: a row per step
+    assert [label for label, _ in own] == [f"{s.index}  {s.label}" for s in live().steps]
