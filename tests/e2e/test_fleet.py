@@ -126,25 +126,6 @@ def test_a_robot_killed_mid_step_has_its_goal_finished_by_another_and_takes_work
         assert by_name[worker].events("TASK_SUCCEEDED")  # its new executive ran them
 
 
-def test_the_fleet_demo_finishes_the_lost_robots_deliveries_with_the_others(
-    tmp_path: Path,
-) -> None:
-    done = run_dura("demo", "--fleet", "--keep", str(tmp_path / "run"), "--json", timeout=240)
-    assert done.returncode == 0, done.stderr[-2000:]
-    report = json.loads(done.stdout)
-    assert report["ok"] is True
-    assert [g["state"] for g in report["goals"]] == ["achieved"] * 3
-    (lost,) = report["lost"]
-    assert {r["robot"]: r["available"] for r in report["robots"]} == {
-        name: name != lost for name in ("r1", "r2", "r3")
-    }
-    assert report["replans"] >= 1
-    steps = [e for e in report["events"] if e["kind"] in ("DISPATCH", "START", "END")]
-    assert steps and all(e["robot"] == e["data"]["args"][0] for e in steps)
-    dropped = [e["robot"] for e in steps if e["kind"] == "END" and e["subject"].startswith("drop")]
-    assert len(dropped) == 3 and lost not in dropped  # each delivered once, by the others
-
-
 def test_a_goal_no_robot_can_reach_waits_for_a_robot_to_come_back(tmp_path: Path) -> None:
     with depot(tmp_path, ["r1"]) as (fleet, (r1,)):
         r1.kill()
