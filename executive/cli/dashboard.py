@@ -102,12 +102,14 @@ def target(args: argparse.Namespace) -> tuple[RobotDescription, str]:
 
 def run(args: argparse.Namespace) -> int:
     from executive.dashboard.server import Dashboard  # the web stack loads only when needed
+    from executive.fleet.description import is_fleet_file
 
     robot, endpoint = target(args)
     stop = stop_on_signals()
     allow = tuple(args.allow_host)
+    fleet = is_fleet_file(robot.path)
     with Dashboard.connect(
-        robot, endpoint, host=args.host, port=args.port, allow=allow
+        robot, endpoint, host=args.host, port=args.port, allow=allow, fleet=fleet
     ) as dashboard:
         print(
             f"dura: dashboard of robot '{robot.name}' on {dashboard.url} (executive at "

@@ -139,7 +139,7 @@ def _serve(
 
     dashboard = stack.enter_context(
         Dashboard.connect(load_fleet(path).as_robot(), fleet.endpoint, port=args.dashboard,
-                          folders=[fleet.folder])
+                          folders=[fleet.folder], fleet=True)
     )  # fmt: skip
     print(f"dura demo: the fleet's dashboard on {dashboard.url}", flush=True,
           file=sys.stderr if args.json else sys.stdout)  # fmt: skip

@@ -53,6 +53,7 @@ COMPONENTS, OBSERVATIONS_NOW, EVENTS_NOW, DIAGNOSIS = (
     "diagnosis",
 )
 EVERYTHING = (GOALS, PLAN, TASKS, FAULTS, COMPONENTS, OBSERVATIONS_NOW, EVENTS_NOW, DIAGNOSIS)
+FLEET = (GOALS, PLAN, EVENTS_NOW)  # a fleet's high level: its robots serve the rest
 
 
 def sse(name: str, data: Any) -> str:
@@ -154,7 +155,7 @@ class Feed:
 
     def ask(self, *queries: str) -> None:
         """Ask the executive again for these replies (soon, together)."""
-        self._stale.update(queries)
+        self._stale.update(q for q in queries if not self.state.fleet or q in FLEET)
         self._wake.set()
 
     def changed(self, *views: str) -> None:

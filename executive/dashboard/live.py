@@ -121,8 +121,9 @@ def _numbers(values: Any) -> dict[str, float]:
 class LiveState:
     """The robot as the page shows it (see the module docstring)."""
 
-    def __init__(self, robot: RobotDescription) -> None:
+    def __init__(self, robot: RobotDescription, *, fleet: bool = False) -> None:
         self.robot = robot
+        self.fleet = fleet  # a fleet's high level: its robots have the components
         self.layout = graph.layout(robot)
         self.goals: list[Goal] = []
         self.plan: Plan | None = None
@@ -275,7 +276,12 @@ class LiveState:
         """One of :data:`VIEWS` as a JSON object."""
         now = time.time() if now is None else now
         if name == "status":
-            return {"robot": self.robot.name, "alive": self.alive, "problem": self.problem}
+            return {
+                "robot": self.robot.name,
+                "alive": self.alive,
+                "problem": self.problem,
+                "fleet": self.fleet,
+            }
         if name == "goals":
             return {"goals": plain(self.goals)}
         if name == "plan":

@@ -40,6 +40,8 @@ class Dashboard:
         password: the operator's bus password; required to listen beyond loopback.
         allow: host names a request may call it by, beyond loopback names and IP
             addresses (and this machine's names, when it listens beyond loopback).
+        fleet: ``robot`` is a fleet's (``dura fleet run``): its goals, plan by robot and
+            events are shown; components and observations are its robots' own.
 
     Raises:
         DashboardError: listening beyond loopback without credentials.
@@ -54,6 +56,7 @@ class Dashboard:
         port: int = DEFAULT_PORT,
         password: str | None = None,
         allow: tuple[str, ...] = (),
+        fleet: bool = False,
     ) -> None:
         if not is_loopback(host) and password is None:
             raise DashboardError(
@@ -65,7 +68,7 @@ class Dashboard:
         self.host = host
         names = allow if is_loopback(host) else (*allow, *_own_names())
         self.access = Access(host, password, names)
-        self.feed = Feed(bus, LiveState(robot))
+        self.feed = Feed(bus, LiveState(robot, fleet=fleet))
         self._socket = _listen(host, port)
         self.port = int(self._socket.getsockname()[1])
         config = uvicorn.Config(
@@ -91,6 +94,7 @@ class Dashboard:
         port: int = DEFAULT_PORT,
         folders: list[Path] | None = None,
         allow: tuple[str, ...] = (),
+        fleet: bool = False,
     ) -> Dashboard:
         """A dashboard with a bus session of its own, as the robot's operator (the
         credentials in ``.dura/`` of ``folders``, default the working folder and the
@@ -104,7 +108,7 @@ class Dashboard:
         login = find_login(robot.name, OPERATOR, folders)
         bus = Bus(robot.name, name="dashboard", endpoint=endpoint, login=login)
         try:
-            dashboard = cls(robot, bus, host=host, port=port, allow=allow,
+            dashboard = cls(robot, bus, host=host, port=port, allow=allow, fleet=fleet,
                             password=None if login is None else login.password)  # fmt: skip
         except BaseException:
             bus.close()

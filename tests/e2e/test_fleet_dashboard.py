@@ -21,7 +21,9 @@ def test_the_fleets_page_draws_its_plan_with_a_row_per_robot(tmp_path: Path) -> 
     with depot(tmp_path, ["r1", "r2"]) as (fleet, _):
         robot = load_fleet(fleet.description).as_robot()
         with (
-            Dashboard.connect(robot, fleet.endpoint, port=0, folders=[fleet.folder]) as page,
+            Dashboard.connect(
+                robot, fleet.endpoint, port=0, folders=[fleet.folder], fleet=True
+            ) as page,
             Browser() as browser,
         ):
             browser.open(page.url)
@@ -39,3 +41,12 @@ def test_the_fleets_page_draws_its_plan_with_a_row_per_robot(tmp_path: Path) -> 
             )
             assert steps and all(f"({robot}," in label for robot, label in steps)
             assert {robot for robot, _ in steps} == {"r1", "r2"}
+            # the fleet has no components or observers of its own: those views are its
+            # robots' (their dashboards), and the fleet asks its high level nothing else
+            shown = browser.evaluate(
+                "['goals-view', 'plan-view', 'events-view', 'components-view', "
+                "'observations-view'].map(v => document.getElementById(v).offsetParent "
+                "!== null)"
+            )
+            assert shown == [True, True, True, False, False]
+            assert browser.evaluate("document.getElementById('link').textContent") == "live"

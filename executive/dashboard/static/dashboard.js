@@ -64,6 +64,7 @@ function fill(tbody, rows) {
 function showStatus(data) {
   $("robot").textContent = data.robot;
   document.title = `dura ${data.robot}`;
+  document.body.classList.toggle("fleet", Boolean(data.fleet));  // its robots' own views hide
   page.alive = data.alive;
   page.problem = data.problem;
   showLink();
