@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import enum
 import importlib
+import itertools
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -68,6 +69,31 @@ DEFAULT_ENGINE = AUTO
 ENGINES = (AUTO, PORTFOLIO, "kairos", "aries", "fast-downward", "tamer")
 METRIC = re.compile(r"(minimize|maximize)\s+(makespan|\(.*\))", re.DOTALL)
 PYTHONS = ("python", "python3")  # in a command: the executive's own interpreter
+# a topic pattern: names, '*' (any one name) or '**' (any names, none too) joined by '/'
+_PART = r"(?:[A-Za-z_][A-Za-z0-9_]*|\*\*?)"
+SAFE_TOPIC_PATTERN = re.compile(rf"/?{_PART}(?:/{_PART})*")
+SAFE_TOPIC_PATTERN_RULE = (
+    "must be a topic name or a pattern: names, '*' (any one name) or '**' (any names) "
+    "joined by '/', with no '**' beside another '*' or '**'"
+)
+
+
+def is_topic_pattern(text: str) -> bool:
+    """Whether a text of ``may_subscribe`` is a topic name or pattern (Zenoh's canonical
+    form: no ``**`` beside another wildcard)."""
+    parts = text.strip("/").split("/")
+    wild = ("*", "**")
+    beside = any("**" in (a, b) and a in wild and b in wild for a, b in itertools.pairwise(parts))
+    return SAFE_TOPIC_PATTERN.fullmatch(text) is not None and not beside
+
+
+def topic_matches(pattern: str, topic: str) -> bool:
+    """Whether a topic pattern of ``may_subscribe`` stands for a topic name (``*`` one
+    name, ``**`` any names, none too)."""
+    wildcard = {"*": "/[^/]+", "**": "(?:/[^/]+)*"}
+    parts = pattern.strip("/").split("/")
+    expression = "".join(wildcard.get(part, "/" + re.escape(part)) for part in parts)
+    return re.fullmatch(expression, "/" + topic.strip("/")) is not None
 
 
 class Kind(enum.Enum):
@@ -118,6 +144,7 @@ class ComponentSpec:
     requires: Texts = ()
     publishes: Texts = ()
     subscribes: Texts = ()
+    may_subscribe: Texts = ()  # more topics it may read, not its inputs: names, '*', '**'
     params: Mapping[str, Any] = field(default_factory=dict)
     observers: Annotated[
         tuple[Annotated[ObserverSpec, Open()], ...], Label("observer in {what}")

@@ -19,8 +19,11 @@ from knowledge.description import (
     SAFE_NAME,
     SAFE_NAME_RULE,
     SAFE_TOPIC,
+    SAFE_TOPIC_PATTERN_RULE,
     SAFE_TOPIC_RULE,
     RobotDescription,
+    is_topic_pattern,
+    topic_matches,
 )
 from knowledge.domain import DomainInfo, parse_problem, read_domain, type_name
 from knowledge.errors import DomainError, did_you_mean
@@ -88,6 +91,13 @@ def check_names(robot: RobotDescription, report: Report) -> None:
                         c.line_of(key),
                         f"topic '{topic}' of {c.kind.value} '{c.name}' must not start with 'AB'",
                     )
+        for pattern in c.may_subscribe:
+            if not is_topic_pattern(pattern):
+                report.error(
+                    c.line_of("may_subscribe"),
+                    f"may_subscribe '{pattern}' of {c.kind.value} '{c.name}' "
+                    f"{SAFE_TOPIC_PATTERN_RULE}",
+                )
 
 
 def check_capabilities(robot: RobotDescription, report: Report) -> None:
@@ -133,6 +143,13 @@ def check_topics(robot: RobotDescription, report: Report) -> None:
     """Warn about subscriptions nobody publishes to."""
     published = {t for c in robot.components.values() for t in c.publishes}
     for c in robot.components.values():
+        for pattern in c.may_subscribe:
+            if is_topic_pattern(pattern) and not any(topic_matches(pattern, t) for t in published):
+                report.warning(
+                    c.line_of("may_subscribe"),
+                    f"{c.kind.value} '{c.name}' may subscribe to '{pattern}', which no topic "
+                    f"a component publishes matches{did_you_mean(pattern, sorted(published))}",
+                )
         for topic in c.subscribes:
             if topic not in published:
                 report.warning(

@@ -26,8 +26,8 @@ router on every message that reaches it from a client:
 - ``component.<name>`` (one user per component): publish the topics its description
   lists under ``publishes``, and only under its own name (``from/<name>/topic/<t>``: the
   caller id observers see is the login's, see :mod:`executive.bus.session`), subscribe
-  to the topics it ``subscribes``, publish its own results and feedback, answer its own
-  commands, declare its own liveliness token, watch liveliness, and call the few verbs
+  to the topics it ``subscribes`` and those its ``may_subscribe`` opens, publish its
+  own results and feedback, answer its own commands, declare its own liveliness token, watch liveliness, and call the few verbs
   a component needs: its own achievements (``.../component/achieve/<name>``) and facts.
 
 The rules are made from the robot description each time the executive starts: a
@@ -85,10 +85,12 @@ ALL = [
 
 @dataclass(frozen=True)
 class Topics:
-    """The topics a component may publish and subscribe (its description's)."""
+    """The topics a component may publish and subscribe (its description's):
+    ``may_subscribe`` are more it may read, names or patterns (``*``, ``**``)."""
 
     publishes: tuple[str, ...] = ()
     subscribes: tuple[str, ...] = ()
+    may_subscribe: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -293,7 +295,8 @@ def access_control(
         )  # fmt: skip
         rules.append(_rule(f"{own} calls", ["query"],
                            [f"{root}/executive/api/component/achieve/{name}"]))  # fmt: skip
-        heard = [f"{root}/from/*/topic/{t.strip('/')}" for t in allowed.subscribes]
+        heard = [f"{root}/from/*/topic/{t.strip('/')}"
+                 for t in dict.fromkeys((*allowed.subscribes, *allowed.may_subscribe))]  # fmt: skip
         if heard:
             rules.append(_rule(f"{own} subscribes", ["declare_subscriber"], heard))
         rules.append(_rule(f"{own} commands", ["declare_queryable", "reply"],
@@ -337,7 +340,7 @@ def access_control(
 def topics_of(robot: RobotDescription) -> dict[str, Topics]:
     """What each component of a robot may publish and subscribe, from its description."""
     return {
-        name: Topics(tuple(spec.publishes), tuple(spec.subscribes))
+        name: Topics(tuple(spec.publishes), tuple(spec.subscribes), tuple(spec.may_subscribe))
         for name, spec in robot.components.items()
     }
 

@@ -67,7 +67,7 @@ def run_events(args: argparse.Namespace) -> int:
             # stream has every event logged after the newest one read here
             bus.subscribe(EVENTS, lambda m: _arrived(m, arrived))
             newest = api.EVENTS.call(bus, api.EventQuery(limit=1)).events
-        past = api.EVENTS.call(bus, api.EventQuery(limit=args.lines, kind=args.kind)).events
+        past = api.newest_events(bus, args.lines, args.kind)
         if args.json and not args.follow:
             print_json({"events": plain(past)})
             return 0

@@ -15,7 +15,7 @@ from executive.bus.api import tasks
 from executive.bus.schema import plain
 from executive.bus.wording import goals_named, plural
 from executive.cli.arguments import seconds
-from executive.cli.client import add_client_options, ask
+from executive.cli.client import add_client_options, ask, connect
 from executive.cli.output import add_json_flag, bar, print_json, shown, table
 from executive.cli.progress import LiveLine
 from executive.dashboard import gantt
@@ -162,7 +162,8 @@ def run_show(args: argparse.Namespace) -> int:
     if args.svg is not None and reply.plan is None:
         raise DuraError("no plan yet: no picture written")
     if args.svg is not None and reply.plan is not None:
-        events = ask(args, api.EVENTS, api.EventQuery(limit=2000)).events
+        with connect(args) as bus:
+            events = api.newest_events(bus, 2000)
         # a fleet's tasks are its robots': it has none of its own
         found = ask(args, tasks.TASK_LIST).tasks if reply.robots is None else []
         chart = gantt.live_gantt(

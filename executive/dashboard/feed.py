@@ -263,7 +263,7 @@ class Feed:
         if query == OBSERVATIONS_NOW:
             return monitoring.OBSERVER_LATEST.call(bus).observations
         if query == EVENTS_NOW:
-            return planning.EVENTS.call(bus, planning.EventQuery(limit=HISTORY)).events
+            return planning.newest_events(bus, HISTORY)
         if query == DIAGNOSIS:
             return planning.STATUS.call(bus).diagnosis
         raise ValueError(query)

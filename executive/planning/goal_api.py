@@ -14,7 +14,9 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from executive.bus.api import planning as api
+from executive.bus.message import MAX_PAYLOAD, encode
 from executive.bus.reports import DiagnosisInfo, ExecutionStatus, PlannerStatus
+from executive.bus.schema import plain
 from executive.bus.service import Context
 from executive.bus.verb import Empty
 from executive.planning.blocked_tasks import blocked_now
@@ -27,6 +29,7 @@ from knowledge.records import Event
 
 SECTIONS = ("tasks", "components", "robots")  # what other services add to ``status``
 MAX_EVENTS = 10_000  # the most events one request returns
+EVENTS_BUDGET = MAX_PAYLOAD * 3 // 4  # bytes of events in one reply: under the bus's limit
 
 
 class GoalApi:
@@ -138,11 +141,13 @@ class GoalApi:
     def _events(self, request: api.EventQuery) -> api.EventsReply:
         events = self.context.kb.events(
             after=request.after,
+            before=request.before,
             kind=request.kind,
             limit=min(request.limit, MAX_EVENTS),
             oldest=request.oldest,
         )
-        return api.EventsReply(events)
+        kept = fitting(events, newest=not request.oldest)
+        return api.EventsReply(kept, more=len(kept) < len(events))
 
     def _status(self, request: Empty) -> api.StatusReply:
         kb = self.context.kb
@@ -183,3 +188,16 @@ _STARTING = PlannerStatus(starting=True)  # the planner is warming up
 def _names_goal(event: Event, goal_id: int) -> bool:
     goals = event.data.get("goals") if isinstance(event.data, dict) else None
     return isinstance(goals, list) and goal_id in goals
+
+
+def fitting(events: list[Event], *, newest: bool) -> list[Event]:
+    """As many of ``events`` as one reply carries (:data:`EVENTS_BUDGET`): the newest of
+    them, or the oldest (none if the first alone is larger)."""
+    kept: list[Event] = []
+    size = 0
+    for event in reversed(events) if newest else events:
+        size += len(encode(plain(event))) + 1
+        if size > EVENTS_BUDGET:
+            break
+        kept.append(event)
+    return kept[::-1] if newest else kept

@@ -180,7 +180,8 @@ class Component:
     @final
     def subscribe(self, topic: str, handler: Callable[[Message], None]) -> None:
         """Call ``handler(message)`` for each message on ``topic/<topic>`` while running (a
-        topic the description lists under ``subscribes``; the bus refuses the others).
+        topic the description lists under ``subscribes`` or opens with ``may_subscribe``;
+        the bus refuses the others).
 
         ``message`` is a :class:`~executive.sdk.Message`: ``message.payload`` is
         the dict that was published (``message["celsius"]`` reads one field of it),

@@ -20,7 +20,7 @@ from knowledge.knowledge_base import KnowledgeBase
 
 log = logging.getLogger("dura.task_executor")
 
-KEPT_ENDED = 200  # ended tasks kept in memory (and listed); the knowledge base has all
+KEPT_ENDED = 50  # ended tasks kept in memory (and listed); the knowledge base has all
 
 
 class TaskLedger:

@@ -16,6 +16,7 @@ import math
 import time
 from collections.abc import Collection, Iterable, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import clingo
@@ -105,7 +106,7 @@ class Scheduler:
                 ScheduleStatus.TIMEOUT, cancelled=cancelled, solve_time=time.perf_counter() - began
             )
         answer = outcome.answers[-1]
-        scheduled = {str(t) for (t,) in answer.get("scheduled")}
+        scheduled = {instance.name(t) for (t,) in answer.get("scheduled")}
         assignments = _assignments(instance, answer, scheduled)
         left_out = sorted(instance.requests.keys() - scheduled, key=ids.index)
         cancelled.update(explain(left_out, instance.requests, assignments, availability))
@@ -134,20 +135,23 @@ class Scheduler:
         arrival = {t: i for i, t in enumerate(instance.requests)}
         ranked = sorted(arrival, key=lambda t: (instance.release[t], arrival[t]))
         active: set[str] = set()
-        for rank, t in enumerate(ranked):
-            r = instance.requests[t]
+        for rank, name in enumerate(ranked):
+            r, t = instance.requests[name], instance.number[name]
             out += [
                 atom("request", t),
                 atom("behavior", t, r.behavior),
                 atom("rank", t, rank),
-                atom("duration", t, instance.duration[t]),
-                atom("release", t, instance.release[t]),
+                atom("duration", t, instance.duration[name]),
+                atom("release", t, instance.release[name]),
             ]
             out += [atom("needs", t, c) for c in r.needs]
-            out += [atom("together", t, u) for u in r.together]
-            out += [atom("together", u, t) for u in r.together]
-            if t in instance.deadline:
-                out.append(atom("deadline", t, instance.deadline[t]))
+            # a partner not among them (never here: the precheck cancels its group) is a
+            # number no request has, which is never scheduled
+            together = [instance.number.get(u, len(instance.requests)) for u in r.together]
+            out += [atom("together", t, u) for u in together]
+            out += [atom("together", u, t) for u in together]
+            if name in instance.deadline:
+                out.append(atom("deadline", t, instance.deadline[name]))
             if r.running:
                 out.append(atom("running", t))
                 out += [atom("current", t, c, f) for c, f in r.configuration.items()]
@@ -158,13 +162,29 @@ class Scheduler:
 
 @dataclass(frozen=True)
 class _Instance:
-    """The requests the solver sees, their times in ticks."""
+    """The requests the solver sees, their times in ticks. The solver knows a request
+    by its number (its place among them), not by its id: clingo keeps every symbol it
+    ever made for the life of the process, and numbers that come back in every schedule
+    make no new ones, where every task's own id would grow the executive by kilobytes."""
 
     tick: float
     requests: dict[str, Request]
     duration: dict[str, int]
     release: dict[str, int]
     deadline: dict[str, int]  # waiting requests only: a running task just runs
+
+    @cached_property
+    def number(self) -> dict[str, int]:
+        """The solver's number of each request."""
+        return {name: n for n, name in enumerate(self.requests)}
+
+    @cached_property
+    def _names(self) -> list[str]:
+        return list(self.requests)
+
+    def name(self, number: object) -> str:
+        """The request the solver's number stands for."""
+        return self._names[int(str(number))]
 
     @classmethod
     def of(cls, requests: Sequence[Request], tick: float) -> _Instance:
@@ -198,9 +218,10 @@ def _assignments(instance: _Instance, answer: Answer, scheduled: set[str]) -> di
     after: dict[str, set[str]] = {t: set() for t in scheduled}
     order: nx.DiGraph = nx.DiGraph()
     order.add_nodes_from(range(len(members)))
-    for first, then in answer.get("before"):
-        after[str(then)].add(str(first))
-        order.add_edge(group_of[str(first)], group_of[str(then)])
+    for numbers in answer.get("before"):
+        first, then = (instance.name(n) for n in numbers)
+        after[then].add(first)
+        order.add_edge(group_of[first], group_of[then])
     start: dict[int, int] = {}
     for group in nx.topological_sort(order):
         start[group] = max(
@@ -209,7 +230,7 @@ def _assignments(instance: _Instance, answer: Answer, scheduled: set[str]) -> di
         )
     providers: dict[str, dict[str, str]] = {t: {} for t in scheduled}
     for t, c, f in answer.get("use"):
-        providers[str(t)][str(c)] = str(f)
+        providers[instance.name(t)][str(c)] = str(f)
     arrival = {t: i for i, t in enumerate(instance.requests)}
     out = []
     for t in scheduled:

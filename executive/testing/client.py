@@ -135,8 +135,9 @@ class RobotClient(ABC):
     # --- events and status ---------------------------------------------------------------
 
     def events(self, kind: str | None = None, limit: int = 10_000) -> list[Event]:
-        """The event log, oldest first (only events of ``kind`` if given)."""
-        return planning.EVENTS.call(self.bus, planning.EventQuery(limit=limit, kind=kind)).events
+        """The newest ``limit`` events of the log, oldest first (only events of ``kind``
+        if given)."""
+        return planning.newest_events(self.bus, limit, kind)
 
     def wait_for_event(
         self, kind: str, subject: str = "", *, after: int = 0, timeout: float = 60.0
@@ -150,9 +151,14 @@ class RobotClient(ABC):
         deadline = time.monotonic() + timeout
         while True:
             query = planning.EventQuery(after=after, limit=10_000, kind=kind, oldest=True)
-            for event in planning.EVENTS.call(self.bus, query).events:
+            reply = planning.EVENTS.call(self.bus, query)
+            for event in reply.events:
                 if subject in event.subject:
                     return event
+            if reply.events:  # none of these: read on after them
+                after = reply.events[-1].id
+            if reply.more:
+                continue
             if time.monotonic() > deadline:
                 raise WaitTimedOut(
                     f"no {kind} event{f' about {subject}' if subject else ''} within "

@@ -36,12 +36,17 @@ class EventLog(Database):
         limit: int | None = None,
         oldest: bool = False,
         kinds: Collection[str] = (),
+        before: int = 0,
     ) -> list[Event]:
-        """Events with an id above ``after``, oldest first: the newest ``limit`` ones, or
-        with ``oldest`` the oldest ``limit`` ones (to page forward through the log);
-        only those of ``kind``, or of one of ``kinds``, if given."""
+        """Events with an id above ``after`` (and below ``before``, unless 0), oldest
+        first: the newest ``limit`` ones, or with ``oldest`` the oldest ``limit`` ones (to
+        page forward through the log); only those of ``kind``, or of one of ``kinds``,
+        if given."""
         sql = "SELECT * FROM events WHERE id > ?"
         params: list[Any] = [after]
+        if before:
+            sql += " AND id < ?"
+            params.append(before)
         wanted = [*([kind] if kind is not None else []), *kinds]
         if wanted:
             sql += f" AND kind IN ({','.join('?' * len(wanted))})"

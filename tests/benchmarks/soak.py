@@ -1,21 +1,28 @@
 """Soak: N goals one after another on a real executive of the use case; what grows.
 
-    python -m tests.benchmarks.soak [--goals N] [--warm-up N] [--time-scale S]
+    python -m tests.benchmarks.soak [--goals N | --minutes M] [--every SECONDS]
+                                    [--warm-up N] [--time-scale S]
 
 Each goal sends the robot to another place, ``(robot_at lab)``, ``(robot_at office)``,
-``(robot_at dock)`` in turn, and waits until it is achieved; nothing is injected. After
+``(robot_at dock)`` in turn, and waits until it is achieved; nothing is injected. With
+``--every`` a goal is sent at most that often (the issue's robot takes one every ~10 s;
+without it, one right after another); with ``--minutes`` goals are sent until that
+time has passed instead of ``--goals``. After
 the warm-up, the executive's process (and its planner worker, measured apart) is
 sampled after every goal: resident memory, threads, open files, and the knowledge
 base's size (its file: the WAL beside it is bounded by SQLite's checkpoints). The table
 gives each at the end of the warm-up and at the end, and the growth per goal; false
 repairs are the faults counted and the repair rules fired with nothing injected (0 is
-the only right answer).
+the only right answer). The executive's resident memory is also shown along the run
+(plateau or not), and the machine's load average (the machine may be shared: a high
+load may cost observers their rates).
 """
 
 from __future__ import annotations
 
 import argparse
 import itertools
+import os
 import tempfile
 import time
 from dataclasses import dataclass
@@ -38,6 +45,7 @@ class Sample:
     threads: int
     files: int
     kb: int
+    load: float
 
 
 def sample(robot: RobotProcess, goals: int) -> Sample:
@@ -51,6 +59,7 @@ def sample(robot: RobotProcess, goals: int) -> Sample:
         process.num_threads(),
         process.num_fds(),
         kb,
+        os.getloadavg()[0],
     )
 
 
@@ -71,6 +80,8 @@ def _rss(process: psutil.Process) -> int:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--goals", type=int, default=60, help="goals after the warm-up")
+    parser.add_argument("--minutes", type=float, help="send goals for this long instead")
+    parser.add_argument("--every", type=float, default=0.0, help="seconds between goals")
     parser.add_argument("--warm-up", type=int, default=10, help="goals before measuring")
     parser.add_argument("--time-scale", type=float, default=10.0, help="robot time speed-up")
     args = parser.parse_args()
@@ -82,7 +93,13 @@ def main() -> None:
         samples: list[Sample] = []
         places = itertools.cycle(PLACES)
         missed = 0
-        for n in range(1, args.warm_up + args.goals + 1):
+        until = began + args.minutes * 60 if args.minutes else None
+        for n in itertools.count(1):
+            if until is None and n > args.warm_up + args.goals:
+                break
+            if until is not None and time.monotonic() >= until and n > args.warm_up + 1:
+                break
+            sent = time.monotonic()
             goal = robot.submit_goal(f"(robot_at {next(places)})")
             try:
                 robot.wait_for(goal, timeout=120)
@@ -90,6 +107,7 @@ def main() -> None:
                 missed += 1
             if n >= args.warm_up:
                 samples.append(sample(robot, n))
+            time.sleep(max(0.0, sent + args.every - time.monotonic()))
         repairs = [f"{e.kind} {e.subject}: {e.data.get('reason', e.data.get('faulty', ''))}"
                    for kind in ("FAULT", "RULE_FIRED") for e in robot.events(kind)]  # fmt: skip
         faults = sum(r.startswith("FAULT") for r in repairs)
@@ -103,14 +121,19 @@ def main() -> None:
         ("open files", first.files, last.files),
         ("knowledge base (KiB)", first.kb >> 10, last.kb >> 10),
     ]
+    loads = [s.load for s in samples]
     print(f"{count} goals after a warm-up of {args.warm_up}, time scale {args.time_scale:g}, "
-          f"{time.monotonic() - began:.0f} s")  # fmt: skip
+          f"{time.monotonic() - began:.0f} s, load average {sum(loads) / len(loads):.1f} "
+          f"(at most {max(loads):.1f})")  # fmt: skip
     print(f"{'what':<26} {'after warm-up':>14} {'at the end':>12} {'per goal':>10}")
     for name, before, after in rows:
         print(f"{name:<26} {before:>14} {after:>12} {(after - before) / count:>+10.2f}")
     print(f"{'false repairs':<26} {'':>14} {faults + fired:>12}  ({faults} faults, "
           f"{fired} rules fired)")  # fmt: skip
     print(f"{'goals not achieved':<26} {'':>14} {missed:>12}")
+    tenth = max(1, len(samples) // 10)
+    trend = ", ".join(f"{s.goals}: {s.rss >> 10}" for s in samples[::tenth])
+    print(f"executive RSS (KiB) along the run, after goal N: {trend}")
     for repair in repairs[:10]:
         print(f"  {repair}")
 

@@ -108,6 +108,20 @@ BROKEN_ROBOTS = [
         "topic 'ABimage' of functionality 'cam' must not start with 'AB'",
     ),
     BrokenRobot(
+        "bad may_subscribe pattern",
+        "publishes: [image]",
+        "publishes: [image]\n    may_subscribe: ['**/**']",
+        "may_subscribe: ['**/**']",
+        "may_subscribe '**/**' of functionality 'cam' must be a topic name or a pattern",
+    ),
+    BrokenRobot(
+        "may_subscribe with a space",
+        "publishes: [image]",
+        "publishes: [image]\n    may_subscribe: [odom, 'camera info']",
+        "may_subscribe: [odom",
+        "may_subscribe 'camera info' of functionality 'cam' must be a topic name or a pattern",
+    ),
+    BrokenRobot(
         "unknown key",
         "    shareable: false",
         "    sharable: false",

@@ -57,6 +57,18 @@ def test_a_subscription_nobody_publishes_is_a_warning_not_an_error(tmp_path: Pat
     )
 
 
+def test_a_may_subscribe_pattern_no_topic_matches_is_a_warning(tmp_path: Path) -> None:
+    opened = "publishes: [image]\n    may_subscribe: ['**/scans', '*/*', odom, 'scan_filtered/**']"
+    result = validate(BrokenRobot("", "publishes: [image]", opened, "", "").write(tmp_path))
+    assert result.ok
+    lines = [w.message for w in result.warnings]
+    assert lines == [
+        "functionality 'cam' may subscribe to '**/scans', which no topic a component "
+        "publishes matches (did you mean 'scan'?)",
+        "functionality 'cam' may subscribe to '*/*', which no topic a component publishes matches",
+    ], lines
+
+
 def test_an_action_without_a_task_is_a_warning_against_the_domain(tmp_path: Path) -> None:
     case = BrokenRobot(
         "", "  take_picture:\n    behavior", "  take_pictures:\n    behavior", "", ""

@@ -12,7 +12,7 @@ domain (:class:`DomainType`, :class:`DomainSignature`, :class:`DomainAction`).
 from __future__ import annotations
 
 from dataclasses import field
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 from executive.bus.api.free_form import GoalFields
 from executive.bus.keys import api
@@ -29,6 +29,9 @@ from knowledge.conventions import Above, AtMost
 from knowledge.record_class import record
 from knowledge.records import ComponentRecord, Event, Fact, Goal, KeyAccess, Plan, TimedFact
 from knowledge.transitions import GoalState
+
+if TYPE_CHECKING:
+    from executive.bus.session import Bus
 
 Count = Annotated[int, Between(0, 2**63 - 1)]
 LIMIT = 10**9  # no count, priority or number of seconds a person means is larger
@@ -263,21 +266,26 @@ class DomainReply(Payload):
 
 @record
 class EventQuery(Payload):
-    """Events after a sequence number, of one kind (all without), oldest first: the
-    newest ``limit`` of them, or with ``oldest`` the oldest ``limit`` (to page forward
-    through the log without a gap)."""
+    """Events after a sequence number (and before one, unless ``before`` is 0), of one
+    kind (all without), oldest first: the newest ``limit`` of them, or with ``oldest``
+    the oldest ``limit`` (to page forward through the log without a gap)."""
 
     after: Count = 0
     limit: Count = 100
     kind: str | None = None
     oldest: bool = False
+    before: Count = 0
 
 
 @record
 class EventsReply(Payload):
-    """Events of the log, oldest first."""
+    """Events of the log, oldest first. ``more``: some of those asked for were left
+    out to keep the reply under the bus's payload limit (the oldest of them, or with
+    ``oldest`` the newest): ask again before the first one (``before``), or after the
+    last one (``after``). :func:`newest_events` does it."""
 
     events: list[Event]
+    more: bool = False
 
 
 @record
@@ -324,3 +332,18 @@ OBJECT_REMOVE = Verb(api("object/remove"), ObjectName, StateReply)
 DOMAIN_SHOW = Verb(api("domain/show"), Empty, DomainReply)
 EVENTS = Verb(api("events"), EventQuery, EventsReply)
 STATUS = Verb(api("status"), Empty, StatusReply)
+
+
+def newest_events(bus: Bus, limit: int, kind: str | None = None) -> list[Event]:
+    """The newest ``limit`` events of the log (of ``kind`` only, if given), oldest first,
+    however large: asked for page by page while a reply says there is more."""
+    events: list[Event] = []
+    before = 0
+    while len(events) < limit:
+        query = EventQuery(limit=limit - len(events), kind=kind, before=before)
+        reply = EVENTS.call(bus, query)
+        events[:0] = reply.events
+        if not reply.more or not reply.events:
+            break
+        before = reply.events[0].id
+    return events

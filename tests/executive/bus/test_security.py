@@ -18,13 +18,15 @@ from executive.bus.security import Credentials, Login
 from executive.bus.session import Bus, session_config
 from executive.bus.verb import Empty
 from knowledge.errors import BusError
+from knowledge.robot import load_robot
 from tests.conftest import wait_for
+from tests.knowledge.robot_cases import BrokenRobot
 
 ROBOT = "guarded"
 COMPONENTS = ("lidar", "cam")
 TOPICS = {  # as a robot description would list them
     "lidar": security.Topics(publishes=("scan",), subscribes=("cmd_vel",)),
-    "cam": security.Topics(publishes=("image",), subscribes=("scan",)),
+    "cam": security.Topics(publishes=("image",), subscribes=("scan",), may_subscribe=("diag/**",)),
 }
 
 
@@ -161,6 +163,45 @@ def test_a_component_hears_only_the_topics_it_subscribes(
         assert wait_for(lambda: got)
         time.sleep(0.2)
     assert [m.key for m in got] == ["topic/cmd_vel"]
+
+
+def test_the_description_may_open_more_topics_to_a_component(
+    router: Bus, endpoint: str, credentials: Credentials
+) -> None:
+    """cam's ``may_subscribe: [diag/**]`` opens every topic under diag, and only to cam."""
+    got: dict[str, list[str]] = {"lidar": [], "cam": []}
+    logins = {name: credentials.login(security.component_user(name)) for name in got}
+    with (
+        Bus(ROBOT, name="lidar", endpoint=endpoint, login=logins["lidar"]) as lidar,
+        Bus(ROBOT, name="cam", endpoint=endpoint, login=logins["cam"]) as cam,
+    ):
+        for name, bus in (("lidar", lidar), ("cam", cam)):
+            for topic in ("topic/diag/cpu", "topic/diag/motors/left", "topic/image"):
+                bus.subscribe(topic, lambda m, n=name: got[n].append(m.key))
+        lidar.subscribe("topic/cmd_vel", lambda m: got["lidar"].append(m.key))
+        cam.subscribe("topic/scan", lambda m: got["cam"].append(m.key))
+        assert router.wait_for_subscriber("topic/cmd_vel")
+        assert router.wait_for_subscriber("topic/scan")
+        for topic in ("diag/cpu", "diag/motors/left", "image", "cmd_vel", "scan"):
+            router.publish(f"topic/{topic}", {"n": 1})  # in order, to each session
+        assert wait_for(lambda: got["lidar"] and len(got["cam"]) >= 3)
+        time.sleep(0.2)
+    assert got["lidar"] == ["topic/cmd_vel"]
+    assert sorted(got["cam"]) == ["topic/diag/cpu", "topic/diag/motors/left", "topic/scan"]
+
+
+def test_a_description_opens_more_topics_with_may_subscribe(tmp_path: Path) -> None:
+    opened = "publishes: [image]\n    may_subscribe: [odom, '**']"
+    path = BrokenRobot("", "publishes: [image]", opened, "", "").write(tmp_path)
+    topics = security.topics_of(load_robot(path))
+    assert topics["cam"].may_subscribe == ("odom", "**")
+    assert [n for n, t in topics.items() if t.may_subscribe] == ["cam"]
+    rules = security.access_control("usecase", ["cam"], topics=topics)["rules"]
+    heard = next(r for r in rules if r["id"] == "own cam subscribes")
+    assert heard["key_exprs"] == [
+        "dura/usecase/from/*/topic/odom",
+        "dura/usecase/from/*/topic/**",
+    ]
 
 
 def test_a_component_stores_achievements_for_itself_only(

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from executive.tasks.schedule import Request, ScheduleResult, ScheduleStatus
 from executive.tasks.scheduler import Scheduler
+from knowledge.asp import Asp
 from knowledge.availability import Availability
 from knowledge.description import FunctionalitySpec
 from tests.executive.tasks.scheduling_cases import functionality, generate, request, usecase
@@ -413,3 +414,26 @@ def test_a_time_limit_shorter_than_grounding_still_gives_the_first_schedule() ->
         assert result.assignments == {}
     else:
         assert_valid(problem.functionalities, problem.requests, problem.faulty, result)
+
+
+def test_the_solver_never_sees_a_tasks_id(monkeypatch: pytest.MonkeyPatch) -> None:
+    """clingo keeps every symbol it made for the life of the process: a task's own id in
+    the facts would grow the executive with every task ever scheduled."""
+    given: list[str] = []
+    add_facts = Asp.add_facts
+
+    def seen(self: Asp, atoms: Any, **kwargs: Any) -> None:
+        atoms = list(atoms)
+        given.extend(str(a) for a in atoms)
+        add_facts(self, atoms, **kwargs)
+
+    monkeypatch.setattr(Asp, "add_facts", seen)
+    first, then = move_to("task-4711"), move_to("task-4712", deadline=60.0)
+    picture = take_picture("task-4713", together=("task-4711",))
+    result = scheduler().schedule([first, then, picture])
+    assert result.status is ScheduleStatus.OPTIMAL
+    starts = {name: a.start for name, a in result.assignments.items()}
+    assert starts == {"task-4711": 0.0, "task-4712": 10.0, "task-4713": 0.0}
+    assert result.assignments["task-4712"].after == {"task-4711"}
+    assert given
+    assert not [fact for fact in given if "task-47" in fact]
