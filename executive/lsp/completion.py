@@ -43,6 +43,7 @@ _VALUES = {
     "requires": "capability",
     "publishes": "topic",
     "subscribes": "topic",
+    "may_subscribe": "topic",  # or a pattern: the topics are a start
     "topic": "topic",
     "behavior": "component",
     "component": "component",

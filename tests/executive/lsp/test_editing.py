@@ -71,6 +71,15 @@ async def test_completion_in_the_robot_description_offers_keys_and_names(
     assert "behavior" not in labels
     labels = await _labels(client, robot, text, "  timeout: 30", 2)
     assert {"engine", "timeout"} <= set(labels)
+    more = text.replace(
+        "    subscribes: [scan]", "    subscribes: [scan]\n    may_subscribe: []", 1
+    )
+    change_file(client, robot, more)
+    labels = await _labels(
+        client, robot, more, "    may_subscribe: []", len("    may_subscribe: [")
+    )
+    assert {"scan", "scan_filtered", "image", "odom"} <= set(labels)
+    change_file(client, robot, text)
     typed = text.replace("  take_picture:\n    behavior", "  mo\n  take_picture:\n    behavior")
     change_file(client, robot, typed)
     labels = await _labels(client, robot, typed, "  mo\n", 4)
