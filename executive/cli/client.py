@@ -100,8 +100,22 @@ def described_robot(args: argparse.Namespace) -> RobotDescription:
     """
     if args.robot is not None:
         return _read(args.robot)
+    return _read(Path(run_file("description")["description"]))
+
+
+def run_file(*fields: str) -> dict[str, Any]:
+    """The run file of the executive ``dura run`` runs in this folder, with ``fields``.
+
+    Raises:
+        DuraError: there is none, or it is unreadable or lacks one of ``fields``.
+    """
     try:
-        description = Path(json.loads(RUN_FILE.read_text())["description"])
+        found = json.loads(RUN_FILE.read_text())
+        if not isinstance(found, dict):
+            raise TypeError("not a JSON object")
+        missing = [f for f in fields if f not in found]
+        if missing:
+            raise KeyError(missing[0])
     except FileNotFoundError:
         raise DuraError(
             f"no executive runs in this folder (no {RUN_FILE}): start one with "
@@ -109,7 +123,7 @@ def described_robot(args: argparse.Namespace) -> RobotDescription:
         ) from None
     except (OSError, ValueError, KeyError, TypeError) as e:
         raise DuraError(f"{RUN_FILE}: unreadable ({e}); name the robot with --robot") from e
-    return _read(description)
+    return found
 
 
 def _read(path: Path) -> RobotDescription:
@@ -139,17 +153,9 @@ def _fleet(args: argparse.Namespace, path: Path) -> tuple[str, str, Login | None
 
 def _running_here(args: argparse.Namespace) -> tuple[str, str, Login | None]:
     """The executive ``dura run`` runs in this folder, from its run file."""
-    try:
-        found = json.loads(RUN_FILE.read_text())
-        name, endpoint = str(found["robot"]), str(found["endpoint"])
-        credentials = found.get("credentials")
-    except FileNotFoundError:
-        raise DuraError(
-            f"no executive runs in this folder (no {RUN_FILE}): start one with "
-            "'dura run ROBOT.yaml' or name its robot with --robot ROBOT.yaml"
-        ) from None
-    except (OSError, ValueError, KeyError, TypeError) as e:
-        raise DuraError(f"{RUN_FILE}: unreadable ({e}); name the robot with --robot") from e
+    found = run_file("robot", "endpoint")
+    name, endpoint = str(found["robot"]), str(found["endpoint"])
+    credentials = found.get("credentials")
     if isinstance(credentials, str) and not os.environ.get(security.ENV_CREDENTIALS):
         return (
             name,

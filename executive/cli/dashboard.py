@@ -3,15 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Any
 
-from executive.cli.client import RUN_FILE
+from executive.cli.client import run_file
 from executive.cli.stopping import stop_on_signals, wait
 from executive.dashboard.access import DEFAULT_HOST, DEFAULT_PORT
 from knowledge.description import RobotDescription
-from knowledge.errors import DuraError
 from knowledge.robot import load_robot
 
 
@@ -87,16 +85,8 @@ def target(args: argparse.Namespace) -> tuple[RobotDescription, str]:
     if args.robot is not None:
         robot = _described(args.robot)
         return robot, args.endpoint or robot.endpoint
-    try:
-        found = json.loads(RUN_FILE.read_text())
-        description, endpoint = Path(found["description"]), str(found["endpoint"])
-    except FileNotFoundError:
-        raise DuraError(
-            f"no executive runs in this folder (no {RUN_FILE}): start one with "
-            "'dura run ROBOT.yaml' or name its robot with --robot ROBOT.yaml"
-        ) from None
-    except (OSError, ValueError, KeyError, TypeError) as e:
-        raise DuraError(f"{RUN_FILE}: unreadable ({e}); name the robot with --robot") from e
+    found = run_file("description", "endpoint")
+    description, endpoint = Path(found["description"]), str(found["endpoint"])
     return _described(description), args.endpoint or endpoint
 
 
