@@ -17,20 +17,7 @@ from typing import Any
 from executive.fleet.availability import Availability
 from executive.fleet.robot_link import RobotLink
 from executive.planning.partial_order import Step
-from executive.planning.task_runner import Progress, StepReport, StepTask, TaskRunner
-
-
-class _Unrun(StepTask):
-    """A step no robot took (its failure is reported)."""
-
-    def pause(self) -> None:
-        pass
-
-    def resume(self) -> None:
-        pass
-
-    def cancel(self) -> None:
-        pass
+from executive.planning.task_runner import Progress, StepReport, StepTask, TaskRunner, UnrunStep
 
 
 class FleetTasks(TaskRunner):
@@ -69,14 +56,14 @@ class FleetTasks(TaskRunner):
         robot = self.robot_of(step)
         if robot is None:
             report.failed(f"step {step.label} names no robot of the fleet")
-            return _Unrun()
+            return UnrunStep()
         why = self.availability.reason(robot)
         runner = self.links[robot].runner
         if why is None and runner is None:
             why = "the fleet has not reached its executive"
         if why is not None or runner is None:
             report.failed(f"robot '{robot}' is unavailable: {why}")
-            return _Unrun()
+            return UnrunStep()
         availability = self.availability
 
         def relay(_: StepReport, progress: Progress, value: Any) -> None:

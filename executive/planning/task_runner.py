@@ -63,6 +63,20 @@ class StepTask(ABC):
         """Stop for good; no report is expected afterwards."""
 
 
+class UnrunStep(StepTask):
+    """A step that never began: its task could not be asked for, or no one could carry
+    it out (the runner reports its failure); there is nothing to pause or cancel."""
+
+    def pause(self) -> None:
+        pass
+
+    def resume(self) -> None:
+        pass
+
+    def cancel(self) -> None:
+        pass
+
+
 class TaskRunner(ABC):
     """Carries out plan steps: the task executor, or a scripted runner in unit tests."""
 

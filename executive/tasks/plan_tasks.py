@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from executive.planning.partial_order import Step
-from executive.planning.task_runner import StepReport, StepTask, TaskRunner
+from executive.planning.task_runner import StepReport, StepTask, TaskRunner, UnrunStep
 from executive.tasks.executor import TaskExecutor
 from executive.tasks.task import TaskEnd, TaskHandle, TaskPhase
 from knowledge.description import RobotDescription
@@ -50,19 +50,6 @@ class _StepTask(StepTask):
 
     def cancel(self) -> None:
         self.handle.cancel("the plan no longer needs it")
-
-
-class _Unrun(StepTask):
-    """A step whose task could not even be asked for (its failure is reported)."""
-
-    def pause(self) -> None:
-        pass
-
-    def resume(self) -> None:
-        pass
-
-    def cancel(self) -> None:
-        pass
 
 
 class PlanTasks(TaskRunner):
@@ -101,7 +88,7 @@ class PlanTasks(TaskRunner):
             goal = behavior_goal(self.robot, step)
         except ConfigError as e:
             report.failed(str(e))  # the planner plans again, with the reason
-            return _Unrun()
+            return UnrunStep()
         handle = self.tasks.start_task(
             behavior.name,
             goal,
