@@ -15,8 +15,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import threading
-import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -25,12 +23,9 @@ import yaml
 
 from executive.bus import security
 from executive.bus.clock import SCALE_VARIABLE, Clock
-from executive.bus.keys import EXECUTIVE_ALIVE
-from executive.bus.session import Bus
-from executive.testing.client import RobotClient
-from executive.testing.harness import START_TIMEOUT, RobotProcess, free_endpoint, terminate
+from executive.testing.harness import START_TIMEOUT, ExecutiveProcess, RobotProcess, free_endpoint
 from knowledge.description import RobotDescription
-from knowledge.errors import BusError, DuraError
+from knowledge.errors import DuraError
 from knowledge.yamlsource import load as load_yaml
 
 
@@ -61,7 +56,7 @@ def fleet_variant(
     return copy
 
 
-class FleetProcess(RobotClient):
+class FleetProcess(ExecutiveProcess):
     """The high level of one fleet, as a child process.
 
     Args:
@@ -92,16 +87,11 @@ class FleetProcess(RobotClient):
         self.join_wait = join_wait
         self.kb_path = self.folder / f"{name}.db"
         self.output = self.folder / "fleet.log"
-        self._process: subprocess.Popen[bytes] | None = None
-        self._bus: Bus | None = None
-        self._running = threading.Event()
+        super().__init__()
 
-    def __enter__(self) -> FleetProcess:
-        self.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
+    @property
+    def what(self) -> str:
+        return f"the fleet '{self.robot.name}'"
 
     def start(self, timeout: float = START_TIMEOUT) -> None:
         """Start the fleet and wait until it plans (its liveliness token is there)."""
@@ -115,60 +105,6 @@ class FleetProcess(RobotClient):
             self._process = subprocess.Popen(
                 argv, cwd=self.folder, stdout=out, stderr=subprocess.STDOUT, env=env
             )
-        deadline = time.monotonic() + timeout
-        while True:
-            if self._process.poll() is not None:
-                code = self._process.returncode
-                self._close()
-                raise DuraError(f"the fleet exited with {code} at start:\n{self.log_tail()}")
-            try:
-                if self._bus is None:
-                    login = security.find_login(self.robot.name, security.OPERATOR, [self.folder])
-                    self._bus = Bus(
-                        self.robot.name, name="harness", endpoint=self.endpoint, login=login
-                    )
-                    self._bus.watch_alive(EXECUTIVE_ALIVE, self._on_alive)
-                self.request("goal/list", timeout=2.0)
-                if self._running.wait(0.1):
-                    return
-                raise BusError("the fleet is starting")
-            except BusError:
-                if time.monotonic() > deadline:
-                    self.stop()
-                    raise DuraError(
-                        f"the fleet did not answer within {timeout:g} s:\n{self.log_tail()}"
-                    ) from None
-                time.sleep(0.1)
-
-    def _on_alive(self, key: str, alive: bool) -> None:
-        if alive:
-            self._running.set()
-        else:
-            self._running.clear()
-
-    def stop(self, timeout: float = 30.0) -> int | None:
-        """Stop the fleet as Ctrl-C does (SIGTERM); returns its exit code."""
-        process = self._process
-        if process is None:
-            return None
-        terminate(process, timeout)
-        self._close()
-        return process.returncode
-
-    def _close(self) -> None:
-        if self._bus is not None:
-            self._bus.close()
-        self._bus, self._process = None, None
-        self._running.clear()
-
-    def log_tail(self, lines: int = 20) -> str:
-        try:
-            return "\n".join(self.output.read_text(errors="replace").splitlines()[-lines:])
-        except OSError:
-            return ""
-
-    @property
-    def bus(self) -> Bus:
-        if self._bus is None:
-            raise DuraError(f"the fleet '{self.robot.name}' does not run")
-        return self._bus
+        code = self._started("goal/list", timeout)
+        if code is not None:
+            raise DuraError(f"the fleet exited with {code} at start:\n{self.log_tail()}")

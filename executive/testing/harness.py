@@ -23,9 +23,10 @@ import subprocess
 import sys
 import threading
 import time
+from abc import abstractmethod
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Self
 
 import yaml
 
@@ -35,6 +36,7 @@ from executive.bus.keys import EXECUTIVE_ALIVE, service_alive
 from executive.bus.security import Login
 from executive.bus.session import Bus
 from executive.testing.client import INJECT_TIMEOUT, GoalEnded, RobotClient, WaitTimedOut
+from knowledge.description import RobotDescription
 from knowledge.errors import BusError, DuraError
 from knowledge.robot import load_robot
 from knowledge.yamlsource import load as load_yaml
@@ -42,6 +44,7 @@ from knowledge.yamlsource import load as load_yaml
 __all__ = [  # GoalEnded, WaitTimedOut and INJECT_TIMEOUT live in the client; named here too
     "INJECT_TIMEOUT",
     "START_TIMEOUT",
+    "ExecutiveProcess",
     "GoalEnded",
     "RobotProcess",
     "ServiceGroupProcess",
@@ -106,7 +109,130 @@ def terminate(process: subprocess.Popen[Any], timeout: float) -> None:
             process.wait()
 
 
-class RobotProcess(RobotClient):
+class ExecutiveProcess(RobotClient):
+    """A child process that serves the executive's bus API: an executive
+    (:class:`RobotProcess`) or a fleet's high level
+    (:class:`~executive.testing.fleet.FleetProcess`). Its start, stop and kill, its
+    liveliness token and its output; what a test asks of it is
+    :class:`~executive.testing.client.RobotClient`'s."""
+
+    robot: RobotDescription
+    folder: Path
+    endpoint: str
+    output: Path
+
+    def __init__(self) -> None:
+        self._process: subprocess.Popen[bytes] | None = None
+        self._bus: Bus | None = None
+        self._running = threading.Event()  # its liveliness token is there
+
+    @property
+    @abstractmethod
+    def what(self) -> str:
+        """How messages name it: ``the executive of 'usecase'``."""
+
+    @abstractmethod
+    def start(self, timeout: float = START_TIMEOUT) -> None:
+        """Start the process and wait until every service of it runs."""
+
+    def __enter__(self) -> Self:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def _started(self, probe: str, timeout: float) -> int | None:
+        """Wait until the process just started answers ``probe`` and its liveliness token
+        is there (every service started, not only the API); returns ``None``, or its
+        exit code if it ended first.
+
+        Raises:
+            DuraError: it did not answer within ``timeout`` seconds (it is stopped).
+        """
+        process = self._process
+        if process is None:
+            raise DuraError(f"{self.what} was not started")
+        deadline = time.monotonic() + timeout
+        while True:
+            if process.poll() is not None:
+                self._close()
+                return process.returncode
+            try:
+                if self._bus is None:
+                    self._bus = Bus(
+                        self.robot.name, name="harness", endpoint=self.endpoint, login=self.login()
+                    )
+                    self._bus.watch_alive(EXECUTIVE_ALIVE, self._on_alive)
+                self.request(probe, timeout=2.0)
+                if self._running.wait(0.1):
+                    return None
+                raise BusError(f"{self.what} is starting")
+            except BusError:
+                if time.monotonic() > deadline:
+                    self.stop()
+                    raise DuraError(
+                        f"{self.what} did not answer within {timeout:g} s:\n{self.log_tail()}"
+                    ) from None
+                time.sleep(0.1)
+
+    def login(self) -> Login | None:
+        """The operator's login to its bus (the credentials it wrote in its folder)."""
+        return security.find_login(self.robot.name, security.OPERATOR, [self.folder])
+
+    def _on_alive(self, key: str, alive: bool) -> None:
+        if alive:
+            self._running.set()
+        else:
+            self._running.clear()
+
+    @property
+    def pid(self) -> int:
+        """The process's id."""
+        if self._process is None:
+            raise DuraError(f"{self.what} does not run")
+        return self._process.pid
+
+    @property
+    def running(self) -> bool:
+        return self._process is not None and self._process.poll() is None
+
+    def stop(self, timeout: float = 30.0) -> int | None:
+        """Stop it as Ctrl-C does (SIGTERM); returns its exit code."""
+        process = self._process
+        if process is None:
+            return None
+        terminate(process, timeout)
+        self._close()
+        return process.returncode
+
+    def kill(self) -> None:
+        """SIGKILL it, as a crash would (an executive's components end by themselves)."""
+        process = self._process
+        if process is not None:
+            process.kill()
+            process.wait()
+        self._close()
+
+    def _close(self) -> None:
+        if self._bus is not None:
+            self._bus.close()
+        self._bus, self._process = None, None
+        self._running.clear()
+
+    def log_tail(self, lines: int = 20) -> str:
+        with contextlib.suppress(OSError):
+            return "\n".join(self.output.read_text(errors="replace").splitlines()[-lines:])
+        return ""
+
+    @property
+    def bus(self) -> Bus:
+        if self._bus is None:
+            raise DuraError(f"{self.what} does not run")
+        return self._bus
+
+
+class RobotProcess(ExecutiveProcess):
     """The executive of one robot, as a child process (see the module docstring); the
     helpers a test calls on it are :class:`~executive.testing.client.RobotClient`'s.
 
@@ -146,18 +272,11 @@ class RobotProcess(RobotClient):
         )  # fmt: skip
         self.kb_path = self.folder / f"{self.robot.name}.db"
         self.output = self.folder / "executive.log"
-        self._process: subprocess.Popen[bytes] | None = None
-        self._bus: Bus | None = None
-        self._running = threading.Event()  # the executive's liveliness token is there
+        super().__init__()
 
-    # --- lifecycle -----------------------------------------------------------------------
-
-    def __enter__(self) -> RobotProcess:
-        self.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
+    @property
+    def what(self) -> str:
+        return f"the executive of '{self.robot.name}'"
 
     def start(self, timeout: float = START_TIMEOUT, *, tries: int = 3) -> None:
         """Start the executive and wait until every service of it runs (its liveliness
@@ -167,41 +286,15 @@ class RobotProcess(RobotClient):
         argv = ["--endpoint", self.endpoint, "--db", str(self.kb_path)]
         argv += ["--log-dir", str(self.folder / "logs"), "--grace", "1", *self.run_args]
         self._process = self.run(argv, self.output)
-        deadline = time.monotonic() + timeout
-        while True:
-            if self._process.poll() is not None:
-                code = self._process.returncode
-                self._close()
-                if self._own_endpoint and "Address already in use" in self.log_tail(3) and tries:
-                    # another process took the free port between our look and its bind
-                    self.endpoint = free_endpoint()
-                    self.start(timeout, tries=tries - 1)
-                    return
-                raise DuraError(f"the executive exited with {code} at start:\n{self.log_tail()}")
-            try:
-                if self._bus is None:
-                    self._bus = Bus(
-                        self.robot.name, name="harness", endpoint=self.endpoint, login=self.login()
-                    )
-                    self._bus.watch_alive(EXECUTIVE_ALIVE, self._on_alive)
-                self.request(self._probe, timeout=2.0)
-                if self._running.wait(0.1):  # every service started, not only the API
-                    return
-                raise BusError("the executive is starting")
-            except BusError:
-                if time.monotonic() > deadline:
-                    self.stop()
-                    raise DuraError(
-                        f"the executive did not answer within {timeout:g} s:\n{self.log_tail()}"
-                    ) from None
-                time.sleep(0.1)
-
-    @property
-    def pid(self) -> int:
-        """The executive's process id."""
-        if self._process is None:
-            raise DuraError(f"the executive of '{self.robot.name}' does not run")
-        return self._process.pid
+        code = self._started(self._probe, timeout)
+        if code is None:
+            return
+        if self._own_endpoint and "Address already in use" in self.log_tail(3) and tries:
+            # another process took the free port between our look and its bind
+            self.endpoint = free_endpoint()
+            self.start(timeout, tries=tries - 1)
+            return
+        raise DuraError(f"the executive exited with {code} at start:\n{self.log_tail()}")
 
     def run(self, args: Sequence[str], output: Path) -> subprocess.Popen[bytes]:
         """Start ``dura run`` of this robot with ``args`` in its folder, on its clock,
@@ -215,33 +308,6 @@ class RobotProcess(RobotClient):
                 argv, cwd=self.folder, stdout=out, stderr=subprocess.STDOUT, env=env
             )
 
-    def _on_alive(self, key: str, alive: bool) -> None:
-        if alive:
-            self._running.set()
-        else:
-            self._running.clear()
-
-    def stop(self, timeout: float = 30.0) -> int | None:
-        """Stop the executive as Ctrl-C does (SIGTERM); returns its exit code."""
-        process = self._process
-        if process is None:
-            return None
-        terminate(process, timeout)
-        self._close()
-        return process.returncode
-
-    def kill(self) -> None:
-        """SIGKILL the executive, as a crash would; its components end by themselves."""
-        process = self._process
-        if process is not None:
-            process.kill()
-            process.wait()
-        self._close()
-
-    def login(self) -> Login | None:
-        """The operator's login to this robot's bus (its credentials are in the folder)."""
-        return security.find_login(self.robot.name, security.OPERATOR, [self.folder])
-
     @property
     def credentials(self) -> Path:
         """The robot's bus credentials, as ``dura`` commands run elsewhere need them
@@ -251,29 +317,6 @@ class RobotProcess(RobotClient):
     def environment(self) -> dict[str, str]:
         """The environment for a ``dura`` command run against this robot from any folder."""
         return {**os.environ, security.ENV_CREDENTIALS: str(self.credentials)}
-
-    def _close(self) -> None:
-        if self._bus is not None:
-            self._bus.close()
-        self._bus, self._process = None, None
-        self._running.clear()
-
-    @property
-    def running(self) -> bool:
-        return self._process is not None and self._process.poll() is None
-
-    def log_tail(self, lines: int = 20) -> str:
-        with contextlib.suppress(OSError):
-            return "\n".join(self.output.read_text(errors="replace").splitlines()[-lines:])
-        return ""
-
-    # --- the bus -------------------------------------------------------------------------
-
-    @property
-    def bus(self) -> Bus:
-        if self._bus is None:
-            raise DuraError(f"the executive of '{self.robot.name}' does not run")
-        return self._bus
 
 
 class ServiceGroupProcess:
