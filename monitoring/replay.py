@@ -352,9 +352,12 @@ class Replay:
             else:
                 self._feeds[key] = tuple(h for h in handlers if h is not handler)
         if should:
-            slot.observer.start_ns(t)
-            first = t + round(slot.observer.first_report * 1e9)
+            start_up = round(slot.observer.first_report * 1e9)
+            first = t + start_up
             due = self._next_loop(slot, first - round(slot.observer.period * 0.5e9), first)
+            # the live observer started start-up time before its first loop: the recorder
+            # heard of the component's start a little after the live observers did
+            slot.observer.start_ns(min(t, due - start_up))
             heapq.heappush(self._due, (due, slot.index, slot.generation))
         else:
             for old in [k for k in self._verdicts if k[0] == slot.id]:

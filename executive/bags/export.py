@@ -56,7 +56,7 @@ def export_ros2(path: Path, out: Path) -> Exported:
             if contents.profile != DURA_PROFILE:
                 raise BagError(f"{path}: not a dura recording (its profile is "
                                f"'{contents.profile}'; a ROS 2 bag is one already)")  # fmt: skip
-            return _write(contents, _messages(contents, stream), out)
+            return _write_bag(contents, _messages(contents, stream), out)
     except OSError as e:
         shutil.rmtree(out, ignore_errors=True)
         raise BagError(f"{e.filename or path}: cannot export ({e.strerror or e})") from e
@@ -71,7 +71,7 @@ def _messages(contents: Contents, stream: IO[bytes]) -> Iterator[McapMessage]:
         yield message
 
 
-def _write(contents: Contents, messages: Iterator[McapMessage], out: Path) -> Exported:
+def _write_bag(contents: Contents, messages: Iterator[McapMessage], out: Path) -> Exported:
     topics: dict[tuple[str, str], Any] = {}  # (ROS 2 topic, type) -> its connection
     by_channel: dict[int, Any] = {}
     left: set[str] = set()

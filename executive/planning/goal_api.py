@@ -147,7 +147,7 @@ class GoalApi:
             oldest=request.oldest,
         )
         kept = fitting(events, newest=not request.oldest)
-        return api.EventsReply(kept, more=len(kept) < len(events))
+        return api.EventsReply(kept, more=True if len(kept) < len(events) else None)
 
     def _status(self, request: Empty) -> api.StatusReply:
         kb = self.context.kb

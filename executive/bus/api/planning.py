@@ -282,10 +282,11 @@ class EventsReply(Payload):
     """Events of the log, oldest first. ``more``: some of those asked for were left
     out to keep the reply under the bus's payload limit (the oldest of them, or with
     ``oldest`` the newest): ask again before the first one (``before``), or after the
-    last one (``after``). :func:`newest_events` does it."""
+    last one (``after``). :func:`newest_events` does it. Sent only when true, so that
+    other replies are unchanged on the wire."""
 
     events: list[Event]
-    more: bool = False
+    more: bool | None = None
 
 
 @record
