@@ -72,6 +72,18 @@ def assert_loops_as_live(path: Path, timeline: Timeline) -> None:
     assert timeline.origin + replayed.time == pytest.approx(live, abs=0.001)
 
 
+def assert_replays_as_live(out: Path, description: Path) -> None:
+    """A recording of a lidar fault that the live run repaired by restarting lidar
+    replays to the same diagnosis and repair, as live, at the live observers' loops."""
+    with BagReplay(out, description) as session:
+        timeline = session.run()
+        tolerance = session.replay.loop
+    assert [h.diagnosis for h in timeline.recorded_holds()][:1] == [("lidar",)]
+    assert timeline.differences(tolerance) == []
+    assert [r.rule for r in timeline.repairs()][:1] == ["restart_lidar"]
+    assert_loops_as_live(out, timeline)
+
+
 def record(robot: RobotProcess, out: Path) -> subprocess.Popen[str]:
     """``dura record`` of a running robot, once it records."""
     argv = [sys.executable, "-m", "executive.cli", "record", str(out)]
@@ -212,13 +224,7 @@ def test_a_run_whose_lidar_was_restarted_replays_as_live_from_dura_record(
     finally:
         robot.stop()
         recorder.wait(30)
-    with BagReplay(out, robot.description) as session:
-        timeline = session.run()
-        tolerance = session.replay.loop
-    assert [h.diagnosis for h in timeline.recorded_holds()][:1] == [("lidar",)]
-    assert timeline.differences(tolerance) == []
-    assert [r.rule for r in timeline.repairs()][:1] == ["restart_lidar"]
-    assert_loops_as_live(out, timeline)
+    assert_replays_as_live(out, robot.description)
 
 
 def test_a_recording_begun_while_the_robot_runs_replays_at_the_live_observers_loops(
@@ -241,10 +247,4 @@ def test_a_recording_begun_while_the_robot_runs_replays_at_the_live_observers_lo
     finally:
         robot.stop()
         recorder.wait(30)
-    with BagReplay(out, robot.description) as session:
-        timeline = session.run()
-        tolerance = session.replay.loop
-    assert [h.diagnosis for h in timeline.recorded_holds()][:1] == [("lidar",)]
-    assert timeline.differences(tolerance) == []
-    assert [r.rule for r in timeline.repairs()][:1] == ["restart_lidar"]
-    assert_loops_as_live(out, timeline)
+    assert_replays_as_live(out, robot.description)
