@@ -95,6 +95,7 @@ class BagReplay:
                 start_ns=self.start_ns,
                 on_entry=on_entry,
                 loops=self._live_loops(),
+                undecodable=self.bag.undecodable,
             )
             listened = self.replay.listened
             self.routes: dict[str, Route] = {
@@ -118,8 +119,11 @@ class BagReplay:
                 payload = message.payload
                 stamp = round(float(payload["stamp"]) * 1e9)  # the bus has it in seconds
                 loops.setdefault(str(payload["observer"]), set()).add(stamp)
-            except (BusError, KeyError, TypeError, ValueError):
-                continue  # a malformed observation: that loop is not known
+            except BusError:  # a malformed observation: that loop is not known (counted)
+                continue
+            except (KeyError, TypeError, ValueError) as e:
+                why = f"not an observation ({type(e).__name__}: {e})"
+                bag.undecodable.add(OBSERVATIONS, why)
         return {observer: sorted(times) for observer, times in loops.items()}
 
     @property

@@ -35,6 +35,12 @@ A recording without component states (a ROS 2 bag) counts every component as rea
 from the start. An observer that listens to a key the recording does not have is not
 replayed (:attr:`Timeline.skipped` says why). A recording of a dura run also holds
 what the live run diagnosed and repaired: that goes to :attr:`Timeline.recorded`.
+
+A message that does not decode is counted per topic with its first reason
+(:attr:`Timeline.undecodable`), never dropped silently: a recording's messages count
+themselves when an observer fails to decode them (:mod:`executive.bags.message`), and
+the replay counts the component states, diagnoses and events it cannot read. The
+replay goes on without them.
 """
 
 from __future__ import annotations
@@ -49,6 +55,7 @@ from executive.bus.keys import DIAGNOSES, EVENTS
 from executive.bus.message import Message
 from executive.bus.payloads import ComponentState
 from executive.bus.states import Lifecycle
+from executive.bus.undecodable import UndecodableMessages
 from knowledge.description import RobotDescription
 from knowledge.errors import BusError
 from monitoring.diagnosis.diagnosis_service import PERIOD, SETTLE
@@ -124,6 +131,8 @@ class Replay:
         settle, period: the diagnosis service's timing (as live).
         on_entry: called with each timeline entry as it happens.
         loops: when each observer (by id) looped live, in the recording's time (ns), sorted.
+        undecodable: where to count the messages that do not decode (the recording's
+            own count, which its messages add to; default: a count of the replay's own).
 
     Raises:
         ConfigError, AspError: an observer or a rules file of the robot is invalid.
@@ -144,8 +153,10 @@ class Replay:
         period: float = PERIOD,
         on_entry: Callable[[Entry], None] | None = None,
         loops: Mapping[str, Sequence[int]] | None = None,
+        undecodable: UndecodableMessages | None = None,
     ) -> None:
         self.robot = robot
+        self.undecodable = UndecodableMessages() if undecodable is None else undecodable
         self._loops = dict(loops or {})
         self.origin_ns = origin_ns
         self.start_ns = origin_ns if start_ns is None else start_ns
@@ -254,8 +265,8 @@ class Replay:
         for handler in self._feeds.get(message.key, ()):
             try:
                 handler(message)
-            except BusError as e:  # as the bus drops a malformed message
-                log.debug("dropped a message on %s: %s", message.key, e)
+            except BusError:  # as the bus drops a malformed message; the recording counts it
+                continue
             except Exception:
                 log.exception("observer handler for %s failed", message.key)
 
@@ -295,6 +306,7 @@ class Replay:
             recorded=tuple(self._recorded),
             messages=self.messages,
             skipped=tuple(self._skipped),
+            undecodable=self.undecodable.topics(),
         )
 
     # --- components -----------------------------------------------------------------
@@ -313,8 +325,10 @@ class Replay:
     def _component_state(self, message: Message, t: int, *, quiet: bool = False) -> None:
         try:
             state = ComponentState.from_payload(message.payload)
-        except (BusError, KeyError, ValueError, TypeError) as e:
-            log.warning("malformed component state on %s: %s", message.key, e)
+        except BusError:  # its JSON: the recording counts it
+            return
+        except (KeyError, ValueError, TypeError) as e:
+            self._unreadable(message, "component state", e)
             return
         name = state.component
         if name not in self.robot.components:
@@ -420,8 +434,10 @@ class Replay:
     def _recorded_diagnosis(self, message: Message, t: int) -> None:
         try:
             entry = recorded_diagnosis(message.payload, self._time(t))
-        except (BusError, KeyError, ValueError, TypeError) as e:
-            log.warning("malformed recorded diagnosis: %s", e)
+        except BusError:
+            return
+        except (KeyError, ValueError, TypeError) as e:
+            self._unreadable(message, "diagnosis", e)
             return
         if (entry.status, entry.diagnoses) != self._recorded_last:
             self._recorded_last = (entry.status, entry.diagnoses)
@@ -432,8 +448,15 @@ class Replay:
             entry = recorded_repair(message.payload, self._time(t))
         except BusError:
             return
+        except (KeyError, ValueError, TypeError, AttributeError) as e:
+            self._unreadable(message, "event", e)
+            return
         if entry is not None:
             self._recorded.append(entry)
+
+    def _unreadable(self, message: Message, what: str, error: Exception) -> None:
+        """Count a message whose JSON decoded but is not the payload its key carries."""
+        self.undecodable.add(message.key, f"not a {what} ({type(error).__name__}: {error})")
 
     # --- output ---------------------------------------------------------------------
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from executive.bus.payloads import DiagnosisInfo, ObservationInfo
+from executive.bus.undecodable import Undecodable
 from knowledge.errors import ConfigError
 from monitoring.diagnosis.model import observer_from
 
@@ -212,6 +213,8 @@ class Timeline:
             run's own ``diagnoses`` and RULE_FIRED events), to compare with.
         messages: how many messages were replayed.
         skipped: observers that were not replayed, each with the reason.
+        undecodable: the topics with messages that did not decode: how many, and why
+            the first did not (the replay went on without them).
     """
 
     origin: float
@@ -221,6 +224,7 @@ class Timeline:
     recorded: tuple[DiagnosisEntry | RepairEntry, ...] = ()
     messages: int = 0
     skipped: tuple[str, ...] = ()
+    undecodable: tuple[Undecodable, ...] = ()
 
     def observations(self, observer: str | None = None) -> list[ObservationEntry]:
         return [
@@ -291,4 +295,5 @@ class Timeline:
             },
             "recorded": [e.to_payload() for e in self.recorded],
             "skipped": list(self.skipped),
+            "undecodable": [u.to_payload() for u in self.undecodable],
         }

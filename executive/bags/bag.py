@@ -19,12 +19,13 @@ topic, if there is exactly one.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Collection, Iterator, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from executive.bus.keys import DIAGNOSES, EVENTS, RESOURCES, topic
 from executive.bus.message import Message
+from executive.bus.undecodable import UndecodableMessages
 from knowledge.description import RobotDescription
 from knowledge.errors import BagError, did_you_mean
 
@@ -63,6 +64,8 @@ class Bag(ABC):
     robot: str | None = None  # the robot a dura recording is of
     keys_are_bus_keys: bool = False  # a dura recording: topics are bus keys
     notes: list[str] = field(default_factory=list)  # what was not read, each in one line
+    # its messages that did not decode, per recorded topic (counted as they are read)
+    undecodable: UndecodableMessages = field(default_factory=UndecodableMessages)
 
     @property
     def start(self) -> float:
@@ -97,11 +100,21 @@ class Bag(ABC):
 
         A message whose type the bag does not define is still yielded (observers that
         do not decode it use its times); decoding it fails, and :attr:`notes` says so
-        once per topic.
+        once per topic. Each message that fails to decode (or to decompress) is counted
+        in :attr:`undecodable` under its recorded topic, once.
 
         Raises:
             BagError: the file is corrupt, or a routed topic unreadable.
         """
+
+    def counter(self, topic: str) -> Callable[[str], None]:
+        """Return how to count an undecodable message of a recorded topic, with the reason."""
+        undecodable = self.undecodable
+
+        def count(reason: str) -> None:
+            undecodable.add(topic, reason)
+
+        return count
 
     def note(self, text: str) -> None:
         """Say once why something of the bag was not read."""

@@ -31,10 +31,10 @@ from mcap.records import Message as McapMessage
 from mcap.stream_reader import StreamReader, breakup_chunk
 
 from executive.bags.bag import DURA_PROFILE, Bag, BagTopic, Route
+from executive.bags.message import RecordedMessage, ros_message
 from executive.bags.ros_messages import Definition, RosTypes
 from executive.bags.rosbag2_bag import reason, uncompressed
 from executive.bus.message import Message
-from executive.ros2.message import RosMessage
 from knowledge.errors import BagError
 
 ROS_SCHEMAS = ("ros2msg", "ros2idl")
@@ -151,14 +151,17 @@ class McapBag(Bag):
         key = route.key
         caller = channel.metadata.get("caller_id") or route.caller
         unpack = self.unpack
+        topic = channel.topic
+        count = self.counter(topic)
         if channel.message_encoding == "json":
 
             def plain(record: McapMessage) -> Message:
                 sent = record.publish_time or None
-                return Message.at_ns(key, record.data, caller, sent, record.log_time)
+                return RecordedMessage.at_ns(
+                    key, record.data, caller, sent, record.log_time, count=count
+                )
 
             return plain
-        topic = channel.topic
 
         def unknown(why: str) -> None:
             self.note(f"{self.path}: topic '{topic}' not decoded: {why}")
@@ -170,9 +173,10 @@ class McapBag(Bag):
             decoder = RosTypes.undecodable(f"its encoding '{encoding}' is not CDR or JSON", unknown)
 
         def ros(record: McapMessage) -> Message:
-            sent = record.publish_time or None
-            data = record.data if unpack is None else unpack(record.data)
-            return RosMessage.at_ns(key, data, caller, sent, record.log_time, decode=decoder)
+            times = (record.publish_time or None, record.log_time)
+            return ros_message(
+                key, record.data, caller, times, decode=decoder, count=count, unpack=unpack
+            )
 
         return ros
 

@@ -27,9 +27,9 @@ from rosbags.interfaces import Connection, MessageDefinitionFormat
 from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
 
 from executive.bags.bag import Bag, BagTopic, Route
+from executive.bags.message import ros_message
 from executive.bags.ros_messages import Definition, RosTypes
 from executive.bus.message import Message
-from executive.ros2.message import RosMessage
 from knowledge.errors import BagError
 
 FORMATS = {MessageDefinitionFormat.MSG: "ros2msg", MessageDefinitionFormat.IDL: "ros2idl"}
@@ -141,12 +141,11 @@ class Sqlite3Bag(Bag):
         while True:
             try:
                 connection, timestamp, raw = next(found)
-                data = bytes(raw) if self.unpack is None else self.unpack(bytes(raw))
             except StopIteration:
                 return
             except Exception as e:  # a cut or corrupt database fails in many ways
                 raise BagError(f"{reader.path}: truncated or corrupt ({reason(e)})") from e
-            yield timestamp, makers[connection.id](data, timestamp)
+            yield timestamp, makers[connection.id](bytes(raw), timestamp)
 
     def _maker(self, route: Route, connection: Connection) -> Callable[[bytes, int], Message]:
         topic = connection.topic
@@ -154,10 +153,13 @@ class Sqlite3Bag(Bag):
             connection.msgtype,
             lambda why: self.note(f"{self.path}: topic '{topic}' not decoded: {why}"),
         )
-        key, caller = route.key, route.caller
+        key, caller, unpack = route.key, route.caller, self.unpack
+        count = self.counter(topic)
 
         def make(raw: bytes, timestamp: int) -> Message:
-            return RosMessage.at_ns(key, raw, caller, None, timestamp, decode=decoder)
+            return ros_message(
+                key, raw, caller, (None, timestamp), decode=decoder, count=count, unpack=unpack
+            )
 
         return make
 

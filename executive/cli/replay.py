@@ -33,8 +33,9 @@ def register(sub: Any) -> None:
         "--rate. Repair actions are reported, never run. Prints a timeline of the "
         "observations that changed, the diagnoses and the would-be repairs, then how long "
         "each diagnosis held. Recorded topics go to the robot's topics of the same name "
-        "(without the leading slash) or as --map says. Exit 1 on a bad recording or a "
-        "missing mapping.",
+        "(without the leading slash) or as --map says. Messages that do not decode are "
+        "counted per topic and reported in the summary; the replay goes on without them. "
+        "Exit 1 on a bad recording or a missing mapping.",
     )
     p.add_argument("bag", metavar="BAG", type=Path, help="a rosbag2 folder, .mcap or .db3 file")
     p.add_argument(
@@ -205,6 +206,9 @@ class Printer:
         out.write(f"\nsummary: {length:.3f} s replayed, {used}\n")
         for note in notes:
             out.write(f"  note: {note}\n")
+        for topic in timeline.undecodable:  # replayed without them: the verdict stands
+            count = plural(topic.count, "message")
+            out.write(f"  undecodable: {topic.topic}: {count} (the first: {topic.reason})\n")
         holds = timeline.holds()
         if not holds:
             out.write("  nothing was diagnosed\n")

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import sqlite3
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -51,17 +52,19 @@ def write_scan_bag(
     times: list[int] | None = None,
     version: int = 9,
     compression: str = "",
+    broken: Mapping[int, bytes] | None = None,
 ) -> Path:
     """A rosbag2 folder with a lidar's scan at 10 Hz that stops for 2 s at 10 s
-    (``compression``: rosbag2's zstd per ``file`` or per ``message``)."""
+    (``compression``: rosbag2's zstd per ``file`` or per ``message``; ``broken``: the
+    bytes of the k-th message instead of its scan)."""
     writer = Writer(path, version=version, storage_plugin=STORAGES[storage])  # type: ignore[arg-type]
     if compression:
         mode = {"file": CompressionMode.FILE, "message": CompressionMode.MESSAGE}
         writer.set_compression(mode[compression], CompressionFormat.ZSTD)
     with writer:
         connection = writer.add_connection(topic, SCAN, typestore=TYPES)
-        for t in scan_times() if times is None else times:
-            writer.write(connection, t, scan(t))
+        for k, t in enumerate(scan_times() if times is None else times):
+            writer.write(connection, t, (broken or {}).get(k) or scan(t))
     return path
 
 

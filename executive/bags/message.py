@@ -1,0 +1,87 @@
+"""A recording's messages as bus messages that count themselves when their payload
+does not decode: in their bag's :class:`~executive.bus.undecodable.UndecodableMessages`,
+once, however many observers read them (a replay reports them, never drops them
+silently).
+
+A dura recording's JSON messages are :class:`RecordedMessage`; ROS 2 messages (CDR)
+are :class:`RecordedRosMessage`, decoded when read as live ones are. A message that
+cannot even be decompressed (rosbag2's zstd per message) is counted as it is read,
+and is still replayed for its times.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from executive.bus.message import Message
+from executive.ros2.message import Decode, RosMessage
+from knowledge.errors import BusError
+
+Count = Callable[[str], None]  # count one undecodable message of a topic, with the reason
+
+
+@dataclass
+class RecordedMessage(Message):
+    """A JSON message of a recording, counted (``count``) if its payload does not decode."""
+
+    count: Count | None = field(default=None, kw_only=True, repr=False, compare=False)
+
+    @property
+    def payload(self) -> dict[str, Any]:
+        try:
+            return super().payload
+        except BusError as e:
+            count, self.count = self.count, None
+            if count is not None:
+                count(str(e))
+            raise
+
+
+@dataclass
+class RecordedRosMessage(RosMessage):
+    """A ROS 2 message of a recording, counted (``count``) if its CDR does not decode."""
+
+    count: Count | None = field(default=None, kw_only=True, repr=False, compare=False)
+
+    @property
+    def payload(self) -> dict[str, Any]:
+        try:
+            return super().payload
+        except BusError as e:
+            count, self.count = self.count, None
+            if count is not None:
+                count(str(e))
+            raise
+
+
+def ros_message(
+    key: str,
+    data: bytes,
+    caller: str,
+    times: tuple[int | None, int],
+    *,
+    decode: Decode,
+    count: Count,
+    unpack: Callable[[bytes], bytes] | None = None,
+) -> RecordedRosMessage:
+    """A recorded ROS 2 message (``times``: sent and received, in ns), decompressed with
+    ``unpack`` if the bag compressed each message; one that does not decompress is
+    counted now and fails when decoded."""
+    sent, received = times
+    if unpack is not None:
+        try:
+            data = unpack(data)
+        except Exception as e:  # zstd fails in several ways on bytes that are not its own
+            why = f"cannot decompress it ({type(e).__name__}: {e})"
+            count(why)
+            return RecordedRosMessage.at_ns(key, data, caller, sent, received, decode=_failing(why))
+    return RecordedRosMessage.at_ns(key, data, caller, sent, received, decode=decode, count=count)
+
+
+def _failing(why: str) -> Decode:
+    def decode(raw: bytes, caller: str) -> dict[str, Any]:
+        raise BusError(f"cannot decode a message from {caller or '?'}: {why}")
+
+    return decode

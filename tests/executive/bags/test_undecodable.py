@@ -1,0 +1,123 @@
+"""Messages of a recording that do not decode (CDR cut short or garbage, bad JSON, a
+payload of the wrong shape, bytes that do not decompress) are counted per topic with
+the first reason, and the replay goes on without them."""
+
+from __future__ import annotations
+
+import contextlib
+import sqlite3
+from pathlib import Path
+
+import pytest
+
+from executive.bags.recording import Recorder
+from executive.bus.keys import DIAGNOSES, OBSERVATIONS, component, topic
+from executive.bus.message import Message, encode
+from executive.bus.payloads import ComponentState
+from executive.bus.states import Lifecycle
+from executive.bus.undecodable import Undecodable
+from executive.testing.harness import robot_variant
+from executive.testing.replay import replay_bag
+from knowledge.errors import QUOTED
+from tests.conftest import USECASE
+from tests.executive.bags.recorded import T0, scan, scan_times, write_scan_bag
+
+TIMES = scan_times()
+BROKEN = {  # three scans of 180 that are not LaserScans
+    5: scan(TIMES[5])[:30],  # cut short
+    7: b"\x00\x01\x00\x00" + b"\xff" * 40,  # a CDR header, then a length past the end
+    50: b"garbage!",  # not even CDR
+}
+CUT_SHORT = (
+    "malformed sensor_msgs/msg/LaserScan from lidar (not a sensor_msgs/msg/LaserScan: "
+    "unpack_from requires a buffer of at least 28 bytes for unpacking 4 bytes at offset 24 "
+    "(actual buffer size is 26))"
+)
+
+
+def stamped_robot(folder: Path) -> Path:
+    """The use case's robot whose lidar is watched by a timestamp observer: it decodes
+    every scan (frequency and timeout observers use only their times)."""
+    timestamp = {"type": "timestamp", "topics": [{"name": "scan", "filter": {"type": "mean", "window_size": 5}, "states": [
+        {"state": "ok", "number": 1, "age": {"type": "less_than", "less_than": 0.5}}]}]}  # fmt: skip
+    return robot_variant(
+        USECASE, folder, {"functionalities": {"lidar": {"observers": [timestamp]}}}
+    )
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_scans_that_do_not_decode_are_counted_with_the_first_reason_and_the_replay_goes_on(
+    tmp_path: Path, storage: str
+) -> None:
+    robot = stamped_robot(tmp_path / "robot")
+    good = replay_bag(write_scan_bag(tmp_path / "good", storage), robot)
+    timeline = replay_bag(write_scan_bag(tmp_path / "bag", storage, broken=BROKEN), robot)
+    assert timeline.undecodable == (Undecodable("/scan", 3, CUT_SHORT),)
+    assert timeline.messages == good.messages == 180  # replayed, for their times
+    assert timeline.entries == good.entries
+    assert good.undecodable == ()
+
+
+def test_a_scan_that_does_not_decompress_is_counted_as_it_is_read_and_replayed_for_its_time(
+    tmp_path: Path,
+) -> None:
+    plain = replay_bag(write_scan_bag(tmp_path / "plain", "sqlite3"), USECASE)
+    bag = write_scan_bag(tmp_path / "bag", "sqlite3", compression="message")
+    with contextlib.closing(sqlite3.connect(next(bag.glob("*.db3")))) as db, db:
+        db.execute("UPDATE messages SET data = X'00112233445566' WHERE id = 6")
+    timeline = replay_bag(bag, USECASE)  # frequency and timeout: nothing decodes the scans
+    ((found,),) = [timeline.undecodable]
+    assert (found.topic, found.count) == ("/scan", 1)
+    assert found.reason.startswith("cannot decompress it (ZstdError: ")
+    assert (timeline.messages, timeline.entries) == (plain.messages, plain.entries)
+
+
+def record(path: Path, rows: list[tuple[str, bytes, str, float]]) -> Path:
+    """A dura recording of ``(key, raw payload, caller, seconds after T0)`` messages."""
+    with Recorder(path, "usecase") as recorder:
+        for key, raw, caller, t in rows:
+            recorder.write(
+                Message.at_ns(key, raw, caller, None, T0 * 10**9 + round(t * 10) * 10**8)
+            )
+    return path
+
+
+def test_a_recordings_bad_json_and_payloads_of_the_wrong_shape_are_counted_per_key(
+    tmp_path: Path,
+) -> None:
+    state = component("lidar", "state")
+    ready = encode(ComponentState("lidar", Lifecycle.READY, stamp=T0).to_payload())
+    wrong_state = encode({"component": "lidar", "state": "x" * 5000})
+    scans = [(topic("scan"), encode({"stamp": T0 + k / 10}), "lidar", k / 10) for k in range(100)]
+    scans[10] = (topic("scan"), b"{not json", "lidar", 1.0)
+    scans[20] = (topic("scan"), b"[1, 2]", "lidar", 2.0)
+    scans[30] = (topic("scan"), b"\xff\xfe", "lidar", 3.0)
+    path = record(
+        tmp_path / "run.mcap",
+        [
+            (state, ready, "executive", 0.0),
+            *scans,
+            (state, wrong_state, "executive", 5.0),
+            (DIAGNOSES, b"{", "executive", 6.0),
+            (OBSERVATIONS, encode({"observer": "lidar/0"}), "executive", 6.5),
+        ],
+    )
+    timeline = replay_bag(path, stamped_robot(tmp_path / "robot"))
+    found = {u.topic: (u.count, u.reason) for u in timeline.undecodable}
+    assert set(found) == {"topic/scan", state, DIAGNOSES, OBSERVATIONS}
+    assert found["topic/scan"] == (
+        3,
+        "topic/scan: malformed payload (not JSON: Expecting property name enclosed in double "
+        "quotes: line 1 column 2 (char 1))",
+    )
+    assert found[DIAGNOSES][0] == 1 and "malformed payload (not JSON" in found[DIAGNOSES][1]
+    assert found[OBSERVATIONS] == (1, "not an observation (KeyError: 'stamp')")
+    count, reason = found[state]
+    assert count == 1
+    assert reason.startswith("not a component state (ValueError: ")
+    assert reason.endswith(" more characters)")  # the state quoted in part
+    assert len(reason) < QUOTED + 30
+    assert timeline.messages == 103  # the state, the scans and the diagnosis: all replayed
+    assert [e.describe() for e in timeline.observations()] == [
+        "lidar/0 timestamp scan: ok (1) [age 0]; age 0 s over 5 messages"
+    ]
