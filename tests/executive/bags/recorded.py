@@ -1,5 +1,5 @@
 """ROS 2 bags written with ``rosbags`` for the tests: a lidar that stops, a topic of a
-type nobody knows, a bag cut short."""
+type nobody knows, a bag cut short, scans that do not decode; and dura recordings."""
 
 from __future__ import annotations
 
@@ -13,6 +13,11 @@ import yaml
 from mcap.writer import Writer as McapWriter
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+from executive.bags.recording import Recorder
+from executive.bus.message import Message
+from executive.testing.harness import robot_variant
+from tests.conftest import USECASE
 
 T0 = 1_700_000_000  # seconds since the epoch: the bags' first message
 SCAN = "sensor_msgs/msg/LaserScan"
@@ -192,4 +197,36 @@ def write_split_bag(
     merged["message_count"] = sum(i["message_count"] for i in infos)
     merged.pop("files", None)
     (path / "metadata.yaml").write_text(yaml.safe_dump({"rosbag2_bagfile_information": merged}))
+    return path
+
+
+BROKEN = {  # three scans of 180 that are not LaserScans
+    5: scan(scan_times()[5])[:30],  # cut short
+    7: b"\x00\x01\x00\x00" + b"\xff" * 40,  # a CDR header, then a length past the end
+    50: b"garbage!",  # not even CDR
+}
+CUT_SHORT = (
+    "malformed sensor_msgs/msg/LaserScan from lidar (not a sensor_msgs/msg/LaserScan: "
+    "unpack_from requires a buffer of at least 28 bytes for unpacking 4 bytes at offset 24 "
+    "(actual buffer size is 26))"
+)
+
+
+def stamped_robot(folder: Path) -> Path:
+    """The use case's robot whose lidar is watched by a timestamp observer: it decodes
+    every scan (frequency and timeout observers use only their times)."""
+    timestamp = {"type": "timestamp", "topics": [{"name": "scan", "filter": {"type": "mean", "window_size": 5}, "states": [
+        {"state": "ok", "number": 1, "age": {"type": "less_than", "less_than": 0.5}}]}]}  # fmt: skip
+    return robot_variant(
+        USECASE, folder, {"functionalities": {"lidar": {"observers": [timestamp]}}}
+    )
+
+
+def record(path: Path, rows: list[tuple[str, bytes, str, float]]) -> Path:
+    """A dura recording of ``(key, raw payload, caller, seconds after T0)`` messages."""
+    with Recorder(path, "usecase") as recorder:
+        for key, raw, caller, t in rows:
+            recorder.write(
+                Message.at_ns(key, raw, caller, None, T0 * 10**9 + round(t * 10) * 10**8)
+            )
     return path

@@ -10,39 +10,22 @@ from pathlib import Path
 
 import pytest
 
-from executive.bags.recording import Recorder
 from executive.bus.keys import DIAGNOSES, OBSERVATIONS, component, topic
-from executive.bus.message import Message, encode
+from executive.bus.message import encode
 from executive.bus.payloads import ComponentState
 from executive.bus.states import Lifecycle
 from executive.bus.undecodable import Undecodable
-from executive.testing.harness import robot_variant
 from executive.testing.replay import replay_bag
 from knowledge.errors import QUOTED
 from tests.conftest import USECASE
-from tests.executive.bags.recorded import T0, scan, scan_times, write_scan_bag
-
-TIMES = scan_times()
-BROKEN = {  # three scans of 180 that are not LaserScans
-    5: scan(TIMES[5])[:30],  # cut short
-    7: b"\x00\x01\x00\x00" + b"\xff" * 40,  # a CDR header, then a length past the end
-    50: b"garbage!",  # not even CDR
-}
-CUT_SHORT = (
-    "malformed sensor_msgs/msg/LaserScan from lidar (not a sensor_msgs/msg/LaserScan: "
-    "unpack_from requires a buffer of at least 28 bytes for unpacking 4 bytes at offset 24 "
-    "(actual buffer size is 26))"
+from tests.executive.bags.recorded import (
+    BROKEN,
+    CUT_SHORT,
+    T0,
+    record,
+    stamped_robot,
+    write_scan_bag,
 )
-
-
-def stamped_robot(folder: Path) -> Path:
-    """The use case's robot whose lidar is watched by a timestamp observer: it decodes
-    every scan (frequency and timeout observers use only their times)."""
-    timestamp = {"type": "timestamp", "topics": [{"name": "scan", "filter": {"type": "mean", "window_size": 5}, "states": [
-        {"state": "ok", "number": 1, "age": {"type": "less_than", "less_than": 0.5}}]}]}  # fmt: skip
-    return robot_variant(
-        USECASE, folder, {"functionalities": {"lidar": {"observers": [timestamp]}}}
-    )
 
 
 @pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
@@ -70,16 +53,6 @@ def test_a_scan_that_does_not_decompress_is_counted_as_it_is_read_and_replayed_f
     assert (found.topic, found.count) == ("/scan", 1)
     assert found.reason.startswith("cannot decompress it (ZstdError: ")
     assert (timeline.messages, timeline.entries) == (plain.messages, plain.entries)
-
-
-def record(path: Path, rows: list[tuple[str, bytes, str, float]]) -> Path:
-    """A dura recording of ``(key, raw payload, caller, seconds after T0)`` messages."""
-    with Recorder(path, "usecase") as recorder:
-        for key, raw, caller, t in rows:
-            recorder.write(
-                Message.at_ns(key, raw, caller, None, T0 * 10**9 + round(t * 10) * 10**8)
-            )
-    return path
 
 
 def test_a_recordings_bad_json_and_payloads_of_the_wrong_shape_are_counted_per_key(

@@ -12,12 +12,24 @@ from subprocess import CompletedProcess
 
 import pytest
 
-from executive.bus.message import Message
+from executive.bus.keys import component, topic
+from executive.bus.message import Message, encode
+from executive.bus.payloads import ComponentState
+from executive.bus.states import Lifecycle
 from executive.cli import replay as replay_command
 from executive.testing.harness import robot_variant
 from monitoring.timeline import Timeline
 from tests.conftest import USECASE
-from tests.executive.bags.recorded import T0, scan_times, write_scan_bag, write_unknown_type_bag
+from tests.executive.bags.recorded import (
+    BROKEN,
+    CUT_SHORT,
+    T0,
+    record,
+    scan_times,
+    stamped_robot,
+    write_scan_bag,
+    write_unknown_type_bag,
+)
 
 Dura = Callable[..., CompletedProcess[str]]
 
@@ -212,3 +224,52 @@ def test_an_observer_that_must_decode_an_unknown_type_is_reported_once_in_one_li
         ".msg files)"
     ]
     assert "summary: 19.900 s replayed, 180 messages" in result.stdout
+
+
+# the keys of `dura replay --json` before undecodable messages were reported (public API)
+JSON_KEYS = {"bag", "format", "robot", "routes", "origin", "begin", "end", "messages",
+             "timeline", "summary", "recorded", "skipped", "counts", "notes", "live"}  # fmt: skip
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
+def test_scans_that_do_not_decode_are_reported_per_topic_and_the_verdict_stands(
+    dura: Dura, tmp_path: Path, storage: str
+) -> None:
+    robot = stamped_robot(tmp_path / "robot")
+    good = dura("replay", str(write_scan_bag(tmp_path / "good", storage)), "--robot", str(robot),
+                "--json")  # fmt: skip
+    bag = write_scan_bag(tmp_path / "bag", storage, broken=BROKEN)
+    result = dura("replay", str(bag), "--robot", str(robot), "--json")
+    assert result.returncode == 0, result.stderr
+    payload, expected = json.loads(result.stdout), json.loads(good.stdout)
+    assert set(payload) == JSON_KEYS | {"undecodable"}
+    assert payload["undecodable"] == [{"topic": "/scan", "count": 3, "reason": CUT_SHORT}]
+    assert expected["undecodable"] == []
+    assert (payload["timeline"], payload["counts"]) == (expected["timeline"], expected["counts"])
+    printed = dura("replay", str(bag), "--robot", str(robot))
+    assert printed.returncode == 0, printed.stderr
+    assert printed.stdout.splitlines()[-3:] == [
+        "summary: 19.900 s replayed, 180 messages",
+        f"  undecodable: /scan: 3 messages (the first: {CUT_SHORT})",
+        "  nothing was diagnosed",
+    ]
+
+
+def test_a_recordings_undecodable_messages_are_reported_per_key(dura: Dura, tmp_path: Path) -> None:
+    state = component("lidar", "state")
+    ready = encode(ComponentState("lidar", Lifecycle.READY, stamp=T0).to_payload())
+    rows = [(state, ready, "executive", 0.0)]
+    rows += [(topic("scan"), encode({"stamp": T0 + k / 10}), "lidar", k / 10) for k in range(50)]
+    rows += [(topic("scan"), b'{"stamp": ', "lidar", 2.5), (state, b"{}", "executive", 3.0)]
+    path = record(tmp_path / "run.mcap", rows)
+    result = dura("replay", str(path), "--robot", str(stamped_robot(tmp_path / "robot")), "--json")
+    assert result.returncode == 0, result.stderr
+    assert json.loads(result.stdout)["undecodable"] == [
+        {"topic": state, "count": 1, "reason": "not a component state (KeyError: 'component')"},
+        {
+            "topic": "topic/scan",
+            "count": 1,
+            "reason": "topic/scan: malformed payload (not JSON: Expecting value: line 1 column 11 "
+            "(char 10))",
+        },
+    ]
