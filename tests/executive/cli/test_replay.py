@@ -224,6 +224,11 @@ def test_an_observer_that_must_decode_an_unknown_type_is_reported_once_in_one_li
         ".msg files)"
     ]
     assert "summary: 19.900 s replayed, 180 messages" in result.stdout
+    (counted,) = [line for line in result.stdout.splitlines() if "undecodable:" in line]
+    assert counted.startswith(  # those the timestamp observer read: not after its last loop
+        "  undecodable: /scan: 170 messages (the first: cannot decode a message from lidar: "
+        "its type 'acme_msgs/msg/Sweep' is unknown"
+    )
 
 
 # the keys of `dura replay --json` before undecodable messages were reported (public API)
