@@ -158,7 +158,7 @@ class McapBag(Bag):
             def plain(record: McapMessage) -> Message:
                 sent = record.publish_time or None
                 return RecordedMessage.at_ns(
-                    key, record.data, caller, sent, record.log_time, count=count
+                    key, record.data, caller, sent, record.log_time, on_undecodable=count
                 )
 
             return plain
@@ -175,7 +175,7 @@ class McapBag(Bag):
         def ros(record: McapMessage) -> Message:
             times = (record.publish_time or None, record.log_time)
             return ros_message(
-                key, record.data, caller, times, decode=decoder, count=count, unpack=unpack
+                key, record.data, caller, times, decode=decoder, on_undecodable=count, unpack=unpack
             )
 
         return ros

@@ -24,36 +24,39 @@ Count = Callable[[str], None]  # count one undecodable message of a topic, with 
 
 @dataclass
 class RecordedMessage(Message):
-    """A JSON message of a recording, counted (``count``) if its payload does not decode."""
+    """A JSON message of a recording; ``on_undecodable`` counts it if it does not decode."""
 
-    count: Count | None = field(default=None, kw_only=True, repr=False, compare=False)
+    on_undecodable: Count | None = field(default=None, kw_only=True, repr=False, compare=False)
 
     @property
     def payload(self) -> dict[str, Any]:
         try:
             return super().payload
         except BusError as e:
-            count, self.count = self.count, None
-            if count is not None:
-                count(str(e))
+            _count(self, e)
             raise
 
 
 @dataclass
 class RecordedRosMessage(RosMessage):
-    """A ROS 2 message of a recording, counted (``count``) if its CDR does not decode."""
+    """A ROS 2 message of a recording; ``on_undecodable`` counts it if it does not decode."""
 
-    count: Count | None = field(default=None, kw_only=True, repr=False, compare=False)
+    on_undecodable: Count | None = field(default=None, kw_only=True, repr=False, compare=False)
 
     @property
     def payload(self) -> dict[str, Any]:
         try:
             return super().payload
         except BusError as e:
-            count, self.count = self.count, None
-            if count is not None:
-                count(str(e))
+            _count(self, e)
             raise
+
+
+def _count(message: RecordedMessage | RecordedRosMessage, error: BusError) -> None:
+    """Count a message that did not decode, once (its ``on_undecodable`` is gone after)."""
+    count, message.on_undecodable = message.on_undecodable, None
+    if count is not None:
+        count(str(error))
 
 
 def ros_message(
@@ -63,7 +66,7 @@ def ros_message(
     times: tuple[int | None, int],
     *,
     decode: Decode,
-    count: Count,
+    on_undecodable: Count,
     unpack: Callable[[bytes], bytes] | None = None,
 ) -> RecordedRosMessage:
     """A recorded ROS 2 message (``times``: sent and received, in ns), decompressed with
@@ -75,9 +78,11 @@ def ros_message(
             data = unpack(data)
         except Exception as e:  # zstd fails in several ways on bytes that are not its own
             why = f"cannot decompress it ({type(e).__name__}: {e})"
-            count(why)
+            on_undecodable(why)
             return RecordedRosMessage.at_ns(key, data, caller, sent, received, decode=_failing(why))
-    return RecordedRosMessage.at_ns(key, data, caller, sent, received, decode=decode, count=count)
+    return RecordedRosMessage.at_ns(
+        key, data, caller, sent, received, decode=decode, on_undecodable=on_undecodable
+    )
 
 
 def _failing(why: str) -> Decode:

@@ -158,7 +158,13 @@ class Sqlite3Bag(Bag):
 
         def make(raw: bytes, timestamp: int) -> Message:
             return ros_message(
-                key, raw, caller, (None, timestamp), decode=decoder, count=count, unpack=unpack
+                key,
+                raw,
+                caller,
+                (None, timestamp),
+                decode=decoder,
+                on_undecodable=count,
+                unpack=unpack,
             )
 
         return make

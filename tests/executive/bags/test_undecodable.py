@@ -9,6 +9,8 @@ import sqlite3
 from pathlib import Path
 
 import pytest
+from mcap.reader import make_reader
+from mcap.writer import Writer as McapWriter
 
 from executive.bus.keys import DIAGNOSES, OBSERVATIONS, component, topic
 from executive.bus.message import encode
@@ -41,13 +43,43 @@ def test_scans_that_do_not_decode_are_counted_with_the_first_reason_and_the_repl
     assert good.undecodable == ()
 
 
+def spoil(bag: Path, storage: str, index: int, data: bytes) -> None:
+    """Replace the bytes of the bag's ``index``-th message (from 0)."""
+    if storage == "sqlite3":
+        with contextlib.closing(sqlite3.connect(next(bag.glob("*.db3")))) as db, db:
+            db.execute("UPDATE messages SET data = ? WHERE id = ?", (data, index + 1))
+        return
+    (path,) = bag.glob("*.mcap")
+    with path.open("rb") as f:
+        reader = make_reader(f)
+        header, summary = reader.get_header(), reader.get_summary()
+        assert summary is not None
+        metadata = list(reader.iter_metadata())
+        records = [m for _, _, m in reader.iter_messages(log_time_order=True)]
+    with path.open("wb") as f:
+        writer = McapWriter(f)
+        writer.start(header.profile, header.library)
+        for record in metadata:
+            writer.add_metadata(record.name, record.metadata)
+        for schema in summary.schemas.values():
+            writer.register_schema(schema.name, schema.encoding, schema.data)
+        for channel in summary.channels.values():
+            writer.register_channel(
+                channel.topic, channel.message_encoding, channel.schema_id, channel.metadata
+            )
+        for k, m in enumerate(records):
+            writer.add_message(m.channel_id, m.log_time, data if k == index else m.data,
+                               m.publish_time, m.sequence)  # fmt: skip
+        writer.finish()
+
+
+@pytest.mark.parametrize("storage", ["mcap", "sqlite3"])
 def test_a_scan_that_does_not_decompress_is_counted_as_it_is_read_and_replayed_for_its_time(
-    tmp_path: Path,
+    tmp_path: Path, storage: str
 ) -> None:
-    plain = replay_bag(write_scan_bag(tmp_path / "plain", "sqlite3"), USECASE)
-    bag = write_scan_bag(tmp_path / "bag", "sqlite3", compression="message")
-    with contextlib.closing(sqlite3.connect(next(bag.glob("*.db3")))) as db, db:
-        db.execute("UPDATE messages SET data = X'00112233445566' WHERE id = 6")
+    plain = replay_bag(write_scan_bag(tmp_path / "plain", storage), USECASE)
+    bag = write_scan_bag(tmp_path / "bag", storage, compression="message")
+    spoil(bag, storage, 5, b"\x00\x11\x22\x33\x44\x55\x66")
     timeline = replay_bag(bag, USECASE)  # frequency and timeout: nothing decodes the scans
     ((found,),) = [timeline.undecodable]
     assert (found.topic, found.count) == ("/scan", 1)
