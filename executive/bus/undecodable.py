@@ -35,10 +35,6 @@ class UndecodableMessages:
         self._counts[topic] = self._counts.get(topic, 0) + 1
         self._reasons.setdefault(topic, excerpt(reason))
 
-    @property
-    def total(self) -> int:
-        return sum(self._counts.values())
-
     def topics(self) -> tuple[Undecodable, ...]:
         """Each topic with undecodable messages, by name."""
         return tuple(
