@@ -16,7 +16,7 @@ class Undecodable:
 
     topic: str
     count: int
-    reason: str  # quotes at most ~200 characters of the message
+    reason: str  # one line, quoting at most ~200 characters of the message
 
     def to_payload(self) -> dict[str, Any]:
         return {"topic": self.topic, "count": self.count, "reason": self.reason}
@@ -33,7 +33,7 @@ class UndecodableMessages:
     def add(self, topic: str, reason: str) -> None:
         """Count one message of ``topic`` that did not decode, and why."""
         self._counts[topic] = self._counts.get(topic, 0) + 1
-        self._reasons.setdefault(topic, excerpt(reason))
+        self._reasons.setdefault(topic, excerpt(" ".join(reason.split())))  # one line
 
     def topics(self) -> tuple[Undecodable, ...]:
         """Each topic with undecodable messages, by name."""

@@ -10,6 +10,7 @@ so that a test can pin what a recorded incident must be diagnosed as::
         timeline = dura_replay("bags/lidar_dropout", "robot.yaml")
         assert timeline.diagnosed() == [("lidar",)]
         assert [r.action for r in timeline.repairs()] == ["restart lidar"]
+        assert timeline.undecodable == ()  # every message the observers read decoded
 
 ``dura replay`` runs the same :class:`BagReplay` (of :mod:`executive.bag_replay`).
 """

@@ -16,7 +16,7 @@ from executive.bus.keys import DIAGNOSES, OBSERVATIONS, component, topic
 from executive.bus.message import encode
 from executive.bus.payloads import ComponentState
 from executive.bus.states import Lifecycle
-from executive.bus.undecodable import Undecodable
+from executive.bus.undecodable import Undecodable, UndecodableMessages
 from executive.testing.replay import replay_bag
 from knowledge.errors import QUOTED
 from tests.conftest import USECASE
@@ -126,3 +126,12 @@ def test_a_recordings_bad_json_and_payloads_of_the_wrong_shape_are_counted_per_k
     assert [e.describe() for e in timeline.observations()] == [
         "lidar/0 timestamp scan: ok (1) [age 0]; age 0 s over 5 messages"
     ]
+
+
+def test_the_first_reason_of_a_topic_is_one_short_line() -> None:
+    counted = UndecodableMessages()
+    counted.add("topic/scan", "not JSON:\n" + "x" * 1000)
+    counted.add("topic/scan", "a second reason is not kept")
+    ((found,),) = [counted.topics()]
+    assert (found.topic, found.count) == ("topic/scan", 2)
+    assert found.reason == f"not JSON: {'x' * (QUOTED - 10)}... (810 more characters)"
