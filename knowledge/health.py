@@ -77,7 +77,8 @@ def check(path: Path, *, thorough: bool = True) -> Health:
             pragma = "integrity_check" if thorough else "quick_check"
             verdicts = [str(r[0]) for r in db.execute(f"PRAGMA {pragma}(20)")]
             if verdicts != ["ok"]:
-                problems.append("damaged: " + "; ".join(verdicts[:3]))
+                lines = [line.strip() for v in verdicts for line in v.splitlines()]
+                problems.append("damaged: " + "; ".join([line for line in lines if line][:3]))
             present = {
                 r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type = 'table'")
             }

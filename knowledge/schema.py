@@ -125,6 +125,12 @@ MIGRATIONS: tuple[tuple[str, ...], ...] = (
     );
     CREATE INDEX timed_facts_at ON timed_facts(at)
     """),
+    # 5: what is asked on every change of facts, or per goal, reads no more than it needs
+    # (a robot's history grows with every goal it takes)
+    _statements("""
+    CREATE INDEX goals_kept ON goals(keep, state);
+    CREATE INDEX events_subject ON events(subject)
+    """),
 )
 
 VERSION = len(MIGRATIONS)

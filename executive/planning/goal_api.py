@@ -29,6 +29,7 @@ from knowledge.records import Event
 
 SECTIONS = ("tasks", "components", "robots")  # what other services add to ``status``
 MAX_EVENTS = 10_000  # the most events one request returns
+HISTORY_PAGE = 1_000  # events read at a time for a goal's history
 EVENTS_BUDGET = MAX_PAYLOAD * 3 // 4  # bytes of events in one reply: under the bus's limit
 
 
@@ -99,8 +100,14 @@ class GoalApi:
         kb = self.context.kb
         goal = kb.goal(request.id)
         subject = f"goal {goal.id}"
-        events = [e for e in kb.events() if e.subject == subject or _names_goal(e, goal.id)]
-        return api.GoalHistory(goal, events)
+        first = kb.first_event(subject)
+        events: list[Event] = []
+        after = first - 1 if first is not None else None
+        while after is not None:  # page by page from the goal's first event: the log is long
+            page = kb.events(after=after, limit=HISTORY_PAGE, oldest=True)
+            events += [e for e in page if e.subject == subject or _names_goal(e, goal.id)]
+            after = page[-1].id if len(page) == HISTORY_PAGE else None
+        return api.GoalHistory(goal, fitting(events, newest=False))
 
     def _goal_cancel(self, request: api.GoalId) -> api.GoalReply:
         """Cancelled by the goal planner's thread, which owns goal states; the reply is

@@ -112,7 +112,7 @@ class GoalKeeper:
         return not self.kb.goal(spec.id).keep or facts.holds(spec.expression)
 
     def _repost_broken(self, reason: str) -> None:
-        kept = [g for g in self.kb.goals([GoalState.ACHIEVED]) if g.keep]
+        kept = self.kb.kept_goals()
         if not kept:
             return
         usable, _ = specs(kept, Signature.of(self.domain, self.kb.objects()), clock=self.clock)

@@ -48,7 +48,7 @@ from knowledge.domain import DomainInfo
 from knowledge.errors import ConfigError, DomainError, did_you_mean
 from knowledge.finding import Report
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.records import Goal, GoalState
+from knowledge.records import Goal
 from knowledge.typed_reader import Entry, Place, read, read_value
 from knowledge.yamlsource import DocumentSource, read_file
 
@@ -254,7 +254,7 @@ class IntegrityGoals:
         now = self.clock.monotonic() if now is None else now
         state = WorldState(self.kb.facts())
         faulty = {c.name for c in self.kb.components() if c.permanent_fault}
-        watched = [g for g in self.kb.goals([GoalState.ACHIEVED]) if g.keep]
+        watched = self.kb.kept_goals()
         open_goals = {g.expression for g in (*self.kb.open_goals(), *watched)}
         posted: list[Goal] = []
         for rule in self.rules:

@@ -140,10 +140,9 @@ class TaskExecutor(Service):
             clock=self.clock,
         )
         with self.kb.transaction():  # tasks of an executive that died
-            for task in self.kb.tasks():
-                if not task.state.is_final:
-                    reason = "the executive stopped before it ended"
-                    self.kb.set_task_state(task.id, TaskState.FAILED, reason=reason)
+            for task in self.kb.tasks(s for s in TaskState if not s.is_final):
+                reason = "the executive stopped before it ended"
+                self.kb.set_task_state(task.id, TaskState.FAILED, reason=reason)
         self._snapshot = Snapshot(faulty=enactor.faults.faulty())
         self.launcher.add_listener(enactor.repairs.on_component_state)
         self.launcher.add_host_listener(enactor.repairs.on_host)

@@ -28,6 +28,11 @@ class EventLog(Database):
                 self._logged.append(Event(event_id, stamp, kind, subject, payload))
             return event_id
 
+    def first_event(self, subject: str) -> int | None:
+        """The id of the first event about ``subject`` (``goal 4``), if any (an index)."""
+        rows = self._query("SELECT min(id) FROM events WHERE subject = ?", (subject,))
+        return int(rows[0][0]) if rows and rows[0][0] is not None else None
+
     def events(
         self,
         *,

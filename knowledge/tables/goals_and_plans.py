@@ -70,6 +70,13 @@ class GoalTables(EventLog):
     def open_goals(self) -> list[Goal]:
         return self.goals(s for s in GoalState if s.is_open)
 
+    def kept_goals(self) -> list[Goal]:
+        """The maintenance goals that hold now (achieved, with ``keep``): those re-posted
+        when they stop holding. Asked on every change of facts, so it reads only them
+        (an index), not every goal ever achieved."""
+        sql = "SELECT * FROM goals WHERE keep = 1 AND state = ? ORDER BY id"
+        return [self._goal(r) for r in self._query(sql, (GoalState.ACHIEVED.value,))]
+
     def set_goal_state(self, goal_id: int, state: GoalState, reason: str = "") -> Goal:
         """Move a goal to ``state`` and log ``GOAL_<STATE>``.
 

@@ -356,3 +356,32 @@ def test_the_event_log_is_in_the_order_of_its_stamps_whoever_writes(kb: Knowledg
         writer.join()
     stamps = [e.stamp for e in kb.events(kind="TICK")]
     assert len(stamps) == 800 and stamps == sorted(stamps)
+
+
+def test_the_kept_goals_are_the_achieved_maintenance_goals_read_by_an_index(
+    kb: KnowledgeBase,
+) -> None:
+    """Asked on every change of facts: it must not read every goal the robot ever achieved
+    (in a long run that cost memory and time per goal)."""
+    kept, once, open_kept = (kb.add_goal(e, keep=k) for e, k in
+                             (("(a)", True), ("(b)", False), ("(c)", True)))  # fmt: skip
+    for goal in (kept, once):
+        kb.set_goal_state(goal.id, GoalState.ACHIEVED)
+    assert [g.id for g in kb.kept_goals()] == [kept.id]
+    assert open_kept.id not in {g.id for g in kb.kept_goals()}
+    for sql, params, index in (
+        ("SELECT * FROM goals WHERE keep = 1 AND state = ? ORDER BY id", ("achieved",), "goals_kept"),
+        ("SELECT min(id) FROM events WHERE subject = ?", ("goal 1",), "events_subject"),
+    ):  # fmt: skip
+        plan = " ".join(str(r[-1]) for r in kb._query(f"EXPLAIN QUERY PLAN {sql}", params))
+        assert f"USING COVERING INDEX {index}" in plan or f"USING INDEX {index}" in plan, plan
+
+
+def test_the_first_event_of_a_subject(kb: KnowledgeBase) -> None:
+    assert kb.first_event("goal 1") is None
+    goal = kb.add_goal("(a)")
+    kb.log_event("NOTE", "goal 2")
+    kb.set_goal_state(goal.id, GoalState.CANCELLED)
+    first = kb.first_event(f"goal {goal.id}")
+    assert first is not None
+    assert kb.events(kind="GOAL_ADDED")[0].id == first

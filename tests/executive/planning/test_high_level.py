@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from executive.bus.api.planning import EVENTS as EVENTS_API
-from executive.bus.api.planning import GOAL_LIST, GOAL_SHOW, GoalQuery
+from executive.bus.api.planning import GOAL_LIST, GOAL_SHOW, GoalId, GoalQuery
 from executive.bus.event_relay import EventRelay
 from executive.bus.keys import EVENTS
 from executive.bus.lifecycle_manager import LifecycleManager
@@ -351,6 +351,21 @@ def test_a_malformed_request_is_refused_by_its_declared_type(robot: Robot) -> No
         robot.bus.request(EVENTS_API.key, {"limit": -1})
     listed = GOAL_LIST.call(robot.bus, GoalQuery([GoalState.PENDING]))
     assert listed.goals == []
+
+
+def test_a_goal_s_history_is_read_page_by_page_from_its_first_event(robot: Robot) -> None:
+    """A robot's log is long: a goal's history is read from the goal's first event on, a
+    page at a time (not the whole log at once), and no event of it is missed."""
+    robot.kb.log_event("NOTE", "before", {"goals": [1]})  # before goal 1 was added
+    goal = robot.kb.add_goal("(picture_taken lab)")
+    with robot.kb.transaction():
+        for n in range(2_500):  # more than two pages of other events
+            robot.kb.log_event("NOTE", f"goal {goal.id + 1 + n}", {"goals": [goal.id + 1]})
+    robot.kb.log_event("NOTE", "late", {"goals": [goal.id]})
+    history = GOAL_SHOW.call(robot.bus, GoalId(goal.id))
+    mine = [e for e in history.events if e.kind == "NOTE"]
+    assert [e.subject for e in mine] == ["late"]
+    assert history.events[0].kind == "GOAL_ADDED"
 
 
 def test_a_goal_unreachable_until_dura_state_set_is_then_achieved(robot: Robot) -> None:
