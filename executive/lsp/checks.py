@@ -4,7 +4,7 @@ texts, with their findings grouped by file."""
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from executive.cli.validate import check_rule_files
@@ -76,7 +76,10 @@ def _domain_findings(domain: Path, problem: Path | None) -> list[Finding]:
 def _alone_findings(path: Path) -> list[Finding]:
     """A YAML file no robot names: an observers file as ``dura validate`` checks one; a
     repair rules file as it checks a robot's, with the clingo syntax of its ASP files;
-    an integrity rules file as far as it can be without the robot and its domain."""
+    an integrity rules file as far as it can be without the robot and its domain. An
+    ASP program: its clingo syntax."""
+    if path.suffix.lower() == ".lp":
+        return _asp_findings([path])
     observers = check_observer_file(path)
     if observers is not None:
         return observers[1]
@@ -88,8 +91,13 @@ def _alone_findings(path: Path) -> list[Finding]:
     if _RULES_KEY.search(text) is None:
         return []
     rules = read_rules(path, report)
-    findings = list(report.findings)
-    for program in rules.asp:
+    return report.findings + _asp_findings(rules.asp)
+
+
+def _asp_findings(programs: Sequence[Path]) -> list[Finding]:
+    """The clingo syntax errors of ASP programs, at their line and column."""
+    findings = []
+    for program in programs:
         try:
             Asp().load(program)
         except AspError as e:

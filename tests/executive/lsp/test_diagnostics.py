@@ -205,7 +205,32 @@ async def test_a_rules_file_no_robot_names_is_checked_alone_with_its_asp_files(
     assert await diagnostics_until(client, rules, lambda d: len(d) == 0) == []
     [syntax] = await diagnostics_until(client, program, lambda d: len(d) > 0)
     assert syntax.message == "syntax error, unexpected <IDENTIFIER>"
-    assert syntax.range.start.line == 1
+    assert syntax.range == _at(program.read_text(), 1, "inhibit")
+
+
+async def test_an_asp_program_is_checked_as_typed_at_clingos_line_and_column(
+    client: LanguageClient, usecase: Path
+) -> None:
+    program = usecase / "alone.lp"  # no rules file names it
+    text = 'trigger("restart_cam") :- fault(cam).\n'
+    program.write_text(text)
+    open_file(client, program)
+    assert await diagnostics_until(client, program, lambda d: True) == []
+    typed = text + "% the camera again\ninhibit(X) :- 📷 fault(cam).\n"
+    change_file(client, program, typed)  # unsaved: the file on disk is fine
+    [syntax] = await diagnostics_until(client, program, lambda d: len(d) > 0)
+    assert syntax.message == "unexpected character '📷'"  # clingo's lexer would abort dura
+    assert syntax.severity == types.DiagnosticSeverity.Error
+    column = len("inhibit(X) :- ")
+    assert syntax.range == types.Range(  # the client counts UTF-16: the camera is 2
+        types.Position(2, column), types.Position(2, column + 2)
+    )
+    change_file(client, program, text + "inhibit(X) :- fault(X), X != cam.\n", version=3)
+    assert await diagnostics_until(client, program, lambda d: len(d) == 0) == []
+    change_file(client, program, text + "inhibit(X) :- fault(X) X.\n", version=4)
+    [syntax] = await diagnostics_until(client, program, lambda d: len(d) > 0)
+    assert syntax.message == "syntax error, unexpected <VARIABLE>"
+    assert syntax.range == _at(text + "inhibit(X) :- fault(X) X.\n", 1, "X.")
 
 
 INTEGRITY = """goals:
