@@ -5,7 +5,9 @@ from files or text under a source name, adds facts and externals, grounds parts 
 solves (optionally under a time bound and with assumptions). Models come back as
 :class:`Answer` objects holding plain Python values, and every clingo failure (a
 syntax error in a user's ``.lp`` file, an unsafe variable, a grounding error) becomes
-an :class:`~knowledge.errors.AspError` whose message starts with ``file:line:``.
+an :class:`~knowledge.errors.AspError` whose message starts with ``file:line:col:``.
+A program file the editor has unsaved (:func:`~knowledge.sources.unsaved`) is read from
+its buffer, so ``dura lsp`` checks the text in the editor.
 
 A theory (e.g. clingo-dl's difference constraints) plugs in through ``theory=``: its
 programs are rewritten by the theory as they are read, and it is prepared after each
@@ -28,17 +30,19 @@ from clingo import ast
 from clingo.theory import Theory
 
 from knowledge.errors import AspError
+from knowledge.sources import unsaved_text
 
 # Python value of a symbol: numbers, strings (constants and quoted strings alike),
 # tuples for tuples, and (name, args) for functions with arguments.
 Value = int | str | tuple["Value", ...]
 
 _LOCATION = re.compile(
-    r"^(?P<src>.*?):(?P<line>\d+):\d+(?:-\d+(?::\d+)?)?: (?P<kind>\w+): (?P<msg>.*)$"
+    r"^(?P<src>.*?):(?P<line>\d+):(?P<col>\d+)(?:-\d+(?::\d+)?)?: (?P<kind>\w+): (?P<msg>.*)$"
 )
 SHOWN_CACHE = 100_000  # converted shown atoms kept per control
 PARSED_FILES = 64  # program files kept parsed
-PARSED: dict[tuple[str, int, int], list[ast.AST]] = {}  # (path, mtime, size) -> statements
+# (path, mtime, size), or (path, text) of an editor's buffer -> statements
+PARSED: dict[tuple[str, int, int] | tuple[str, str], list[ast.AST]] = {}
 
 
 def to_python(symbol: clingo.Symbol) -> Value:
@@ -72,6 +76,25 @@ def to_symbol(value: object) -> clingo.Symbol:
 def atom(name: str, *args: object) -> clingo.Symbol:
     """The symbol ``name(args...)`` with the arguments converted by :func:`to_symbol`."""
     return clingo.Function(name, [to_symbol(a) for a in args])
+
+
+_QUOTED_OR_COMMENT = re.compile(r'"(?:\\.|[^"\\\n])*"|%\*.*?\*%|%[^\n]*', re.DOTALL)
+_FOREIGN = re.compile(r"[^\x00-\x7f]")
+
+
+def _refuse_foreign(source: str, text: str) -> None:
+    """Refuse a character beyond ASCII outside strings and comments, at its line and
+    column: clingo's lexer would report it with its bytes cut, which its Python logger
+    cannot decode, and the process would abort."""
+    if text.isascii():
+        return
+    code = _QUOTED_OR_COMMENT.sub(lambda m: re.sub(r"[^\n]", " ", m.group()), text)
+    found = _FOREIGN.search(code)
+    if found is not None:
+        line = code.count("\n", 0, found.start()) + 1
+        column = found.start() - (code.rfind("\n", 0, found.start()) + 1) + 1
+        character = text[found.start()]
+        raise AspError(f"{source}:{line}:{column}: unexpected character '{character}'")
 
 
 def facts(atoms: Iterable[clingo.Symbol]) -> str:
@@ -209,8 +232,11 @@ class Asp:
     def _log(self, code: clingo.MessageCode, message: str) -> None:
         self._messages.append(message)
 
-    def _fail(self, what: str, error: Exception, source: str | None = None) -> AspError:
-        """An AspError naming the first located clingo message, else the error itself."""
+    def _fail(
+        self, what: str, error: Exception, source: str | None = None, shift: int = 0
+    ) -> AspError:
+        """An AspError naming the first located clingo message, else the error itself;
+        ``shift``: characters clingo read before the text's first line."""
         lines = [line for m in self._messages for line in m.splitlines()]
         if source is not None:
             lines = [line.replace("<block>", source).replace("<string>", source) for line in lines]
@@ -221,34 +247,48 @@ class Asp:
                 message = match["msg"].rstrip(":")
                 detail = " ".join(x.strip() for x in lines[i + 1 : i + 2] if not _LOCATION.match(x))
                 text = f"{message}: {detail}" if detail else message
-                return AspError(f"{match['src']}:{match['line']}: {text}")
+                row, column = int(match["line"]), int(match["col"])
+                column = max(1, column - shift) if row == 1 else column
+                return AspError(f"{match['src']}:{row}:{column}: {text}")
         detail = next((line for line in lines if line.strip()), str(error))
         return AspError(f"{what}: {detail}")
 
     # --- programs -------------------------------------------------------------------
 
     def load(self, path: Path) -> None:
-        """Load a program file; errors name ``path:line``."""
-        if not path.is_file():
+        """Load a program file; errors name ``path:line:col``."""
+        text = unsaved_text(path)
+        if text is None and not path.is_file():
             raise AspError(f"{path}: cannot read: no such file")
         try:
-            statements = self._parsed(path)
+            statements = self._parsed(path, text)
             with ast.ProgramBuilder(self._control) as builder:
                 add = builder.add if self._theory is None else self._rewriter(self._theory, builder)
                 for statement in statements:
                     add(statement)
+        except UnicodeDecodeError as e:
+            raise AspError(f"{path}: cannot read: not UTF-8 ({e.reason})") from e
         except RuntimeError as e:
-            raise self._fail(str(path), e) from e
+            raise self._fail(str(path), e, str(path)) from e
 
-    def _parsed(self, path: Path) -> list[ast.AST]:
-        """The statements of a program file, parsed once while the file stays the same
-        (parsing costs more than building a control from parsed statements)."""
-        stat = path.stat()
-        key = (str(path), stat.st_mtime_ns, stat.st_size)
+    def _parsed(self, path: Path, text: str | None) -> list[ast.AST]:
+        """The statements of a program file (or of ``text``, an editor's buffer of it),
+        parsed once while it stays the same (parsing costs more than building a control
+        from parsed statements)."""
+        key: tuple[str, int, int] | tuple[str, str]
+        if text is None:
+            stat = path.stat()
+            key = (str(path), stat.st_mtime_ns, stat.st_size)
+        else:
+            key = (str(path), text)
         statements = PARSED.get(key)
         if statements is None:
             statements = []
-            ast.parse_files([str(path)], statements.append, logger=self._log)
+            _refuse_foreign(str(path), path.read_text(encoding="utf-8") if text is None else text)
+            if text is None:
+                ast.parse_files([str(path)], statements.append, logger=self._log)
+            else:  # its messages name <string>: _fail names the file
+                ast.parse_string(text, statements.append, logger=self._log)
             if len(PARSED) >= PARSED_FILES:
                 PARSED.clear()
             PARSED[key] = statements
@@ -262,18 +302,22 @@ class Asp:
         params: Sequence[str] = (),
         source: str = "<program>",
     ) -> None:
-        """Add program text to a part; errors name ``source:line``."""
+        """Add program text to a part; errors name ``source:line:col``."""
+        # with a theory, on the first line: clingo's line numbers stay those of the text
+        # (its columns there are shifted by the head)
+        head = ""
+        if self._theory is not None:
+            head = f"#program {part}({','.join(params)}). " if params else f"#program {part}. "
+        _refuse_foreign(source, text)
         try:
             if self._theory is None:
                 self._control.add(part, list(params), text)
             else:
-                # on the first line, so that clingo's line numbers stay those of the text
-                head = f"#program {part}({','.join(params)}). " if params else f"#program {part}. "
                 with ast.ProgramBuilder(self._control) as builder:
                     rewrite = self._rewriter(self._theory, builder)
                     ast.parse_string(head + text, rewrite, logger=self._log)
         except RuntimeError as e:
-            raise self._fail(source, e, source) from e
+            raise self._fail(source, e, source, len(head)) from e
 
     def add_facts(self, atoms: Iterable[clingo.Symbol], *, part: str = "base") -> None:
         """Add facts to a part (fast: facts never need a theory's rewriting)."""

@@ -44,12 +44,14 @@ def read_text(path: Path) -> str:
     Raises:
         OSError, UnicodeDecodeError: as :meth:`Path.read_text`.
     """
+    text = unsaved_text(path)
+    return Path(path).read_text(encoding="utf-8") if text is None else text
+
+
+def unsaved_text(path: Path) -> str | None:
+    """An editor's unsaved buffer of ``path``, if one is lent (see :func:`unsaved`)."""
     buffers = _READING.get().texts
-    if buffers:
-        text = buffers.get(Path(path).resolve())
-        if text is not None:
-            return text
-    return Path(path).read_text(encoding="utf-8")
+    return buffers.get(Path(path).resolve()) if buffers else None
 
 
 def remembered(key: Hashable, read: Callable[[], T], copy: Callable[[T], T]) -> T:

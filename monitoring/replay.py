@@ -279,8 +279,7 @@ class Replay:
         due = self._due
         diagnosis = self.diagnosis
         while True:  # the earliest of the next loop and the diagnosis' wake; loops first
-            wake = diagnosis.wake_at
-            wake_ns = None if wake is None else round(wake * 1e9)
+            wake_ns = diagnosis.wake_at_ns
             if due and due[0][0] <= until_ns and (wake_ns is None or due[0][0] <= wake_ns):
                 t, index, generation = heapq.heappop(due)
                 self.now_ns = max(self.now_ns, t)
@@ -350,7 +349,7 @@ class Replay:
         """Add or remove nodes as the task executor does when components start or stop."""
         specs = [self.robot.components[name] for name in names]
         nodes = [Node(c.name, tuple(c.subscribes), tuple(c.publishes)) for c in specs]
-        self.diagnosis.change_model(action, nodes, t / 1e9)
+        self.diagnosis.change_model(action, nodes, t)
 
     def _refresh(self, slot: _Slot, t: int) -> None:
         """(De)activate an observer as its component's state says."""
@@ -405,7 +404,7 @@ class Replay:
         if self._verdicts.get(key) != verdict:
             self._verdicts[key] = verdict
             self._emit(ObservationEntry(self._time(t), slot.id, info, dict(result.values)))
-        self.diagnosis.observe(info, t / 1e9)
+        self.diagnosis.observe(info, t)
         if self.rules is not None:
             self.rules.observe(info)
             self._fire(self.rules, t)
@@ -413,7 +412,7 @@ class Replay:
     # --- diagnosis and rules ----------------------------------------------------------
 
     def _diagnosed(self, t: int) -> None:
-        published = self.diagnosis.wake(t / 1e9)
+        published = self.diagnosis.wake(t)
         if published is None:
             return
         result = published.result

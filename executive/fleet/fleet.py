@@ -41,6 +41,7 @@ from executive.fleet.robot_facts import FactMapping, RobotFacts
 from executive.fleet.robot_link import RobotLink
 from executive.planning.high_level import HighLevel
 from knowledge.description import RobotDescription
+from knowledge.domain import DomainInfo
 from knowledge.errors import DuraError
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Fact
@@ -161,6 +162,7 @@ class Fleet:
                 status={"robots": self._robots},
                 actions=frozenset(self.actors),
                 unavailable=self.availability.unavailable_objects,
+                refuse_object=self._refuse_object,
             )
             manager = LifecycleManager([relay, self.high_level], on_failure=self.on_failure)
             stack.callback(manager.close)
@@ -204,6 +206,18 @@ class Fleet:
             ask=ask,
             fleet_facts=lambda predicate: [f for f in kb.facts() if f.name == predicate],
             change=change,
+        )
+
+    def _refuse_object(self, name: str, type_name: str, domain: DomainInfo) -> str | None:
+        """Why an object may not be added at run time: one of the robot type that is no
+        robot of the fleet would have no executive to carry out its steps."""
+        ours = {robot.pddl_object for robot in self.fleet.robots.values()}
+        if name in ours or not domain.is_a(type_name, self.fleet.robot_type):
+            return None
+        return (
+            f"object '{name}' of type '{type_name}' is no robot of fleet '{self.fleet.name}' "
+            f"(its robots: {', '.join(sorted(ours))}): a robot joins the fleet in "
+            f"{self.fleet.path.name}, with its description, and the fleet runs again"
         )
 
     def _robots(self) -> list[FleetRobot]:

@@ -4,12 +4,13 @@ texts, with their findings grouped by file."""
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from executive.cli.validate import check_rule_files
 from executive.lsp.project import Project
 from executive.planning.domain_check import check_domain
+from executive.planning.integrity import check_rules_alone
 from knowledge.asp import Asp
 from knowledge.errors import AspError, DomainError
 from knowledge.finding import Finding, Report, finding_of
@@ -19,6 +20,7 @@ from monitoring.observer_config import check_observer_file, check_observers
 from monitoring.repair.rule import read_rules
 
 _RULES_KEY = re.compile(r"^(rules|asp)\s*:", re.MULTILINE)  # a repair rules file
+_GOALS_KEY = re.compile(r"^goals\s*:", re.MULTILINE)  # an integrity rules file
 
 
 def check(
@@ -73,17 +75,29 @@ def _domain_findings(domain: Path, problem: Path | None) -> list[Finding]:
 
 def _alone_findings(path: Path) -> list[Finding]:
     """A YAML file no robot names: an observers file as ``dura validate`` checks one; a
-    repair rules file as it checks a robot's, with the clingo syntax of its ASP files
-    (an integrity rules file needs the robot and its domain: it is not checked alone)."""
+    repair rules file as it checks a robot's, with the clingo syntax of its ASP files;
+    an integrity rules file as far as it can be without the robot and its domain. An
+    ASP program: its clingo syntax."""
+    if path.suffix.lower() == ".lp":
+        return _asp_findings([path])
     observers = check_observer_file(path)
     if observers is not None:
         return observers[1]
-    if _RULES_KEY.search(read_text(path)) is None:
-        return []
+    text = read_text(path)
     report = Report(str(path))
+    if _GOALS_KEY.search(text) is not None and _RULES_KEY.search(text) is None:
+        check_rules_alone(path, report)
+        return report.findings
+    if _RULES_KEY.search(text) is None:
+        return []
     rules = read_rules(path, report)
-    findings = list(report.findings)
-    for program in rules.asp:
+    return report.findings + _asp_findings(rules.asp)
+
+
+def _asp_findings(programs: Sequence[Path]) -> list[Finding]:
+    """The clingo syntax errors of ASP programs, at their line and column."""
+    findings = []
+    for program in programs:
         try:
             Asp().load(program)
         except AspError as e:

@@ -29,7 +29,7 @@ _PROBLEM_DOMAIN = re.compile(r"\(\s*:domain\s+([^\s()]+)", re.IGNORECASE)
 class Project:
     """The files checked together; ``robot`` is ``None`` for PDDL on its own, or for a
     YAML file that no robot names (a standalone observers file, checked as ``dura
-    validate`` checks one: ``alone``)."""
+    validate`` checks one: ``alone``) or an ASP program (``alone``: its syntax)."""
 
     robot: Path | None
     domain: Path | None
@@ -114,12 +114,12 @@ def projects_of(
     path: Path, robots: Mapping[Path, Project], texts: Mapping[Path, str]
 ) -> list[Project]:
     """The projects a file belongs to: the robots that name it, else the file on its own
-    (a PDDL problem with its domain)."""
+    (a PDDL problem with its domain; an ASP program, whichever rules file names it)."""
     path = path.resolve()
     mine = [p for p in robots.values() if path in p.files]
     if mine:
         return mine
-    if path.suffix.lower() in (".yaml", ".yml"):
+    if path.suffix.lower() in (".yaml", ".yml", ".lp"):
         return [Project(None, None, alone=path)]
     if path.suffix.lower() != ".pddl":
         return []

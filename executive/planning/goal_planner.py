@@ -14,6 +14,13 @@ are left out of the problem, and a goal that needs them is unreachable with that
 When the world changes, unreachable goals are looked at again and maintenance goals
 that stopped holding are re-posted (:mod:`executive.planning.goal_keeper`).
 
+When to plan again: when asked to (a plan failed, a goal was cancelled, a robot was lost)
+or when a goal is open that the running plan was not made for (added, or pending again).
+A goal of the plan that ends (achieved, or failed) leaves the plan to the others: it
+still serves them. Any other wake-up (a fact changed, a sensor's reading) only looks.
+A round's reason is what asked for it, and what changed among the goals
+(``goal 7 added``), never a wake-up that merely came first.
+
 One owner: the goal planner's thread is the only thread that changes the state of a
 goal or a plan. Its rounds mark goals; a cancel (:meth:`GoalPlanner.cancel`) and the
 plan executor's reports (a plan executing, ended or failed; a goal executing, achieved
@@ -46,7 +53,7 @@ from executive.planning.oversubscription import GoalPlan, blocked_note, plan_goa
 from executive.planning.plan_executor import PlanExecutor
 from executive.planning.planner import Planner, PlanningTask, PlanResult
 from executive.planning.problem import live_world
-from executive.planning.state_change import Change, apply_change
+from executive.planning.state_change import Change, GoalChange, apply_change
 from knowledge.domain import DomainInfo
 from knowledge.errors import DuraError, KnowledgeError
 from knowledge.knowledge_base import KnowledgeBase
@@ -70,6 +77,17 @@ class _Round:
     began: float = field(default_factory=time.time)
     phase: RoundPhase = RoundPhase.PAUSING
     unreachable: dict[int, str] = field(default_factory=dict)
+
+
+def _news(goal: Goal) -> str:
+    """What made an open goal one the plan does not serve: ``goal 7 added``, ``goal 3:
+    reachable again after ...`` (pending again, with the reason); nothing for a goal
+    planned by an earlier process or round (a restart, a round that failed)."""
+    if goal.state is not GoalState.PENDING:
+        return ""
+    if goal.reason:
+        return f"goal {goal.id}: {goal.reason}"
+    return f"goal {goal.id} added" + ("" if goal.source == "user" else f" ({goal.source})")
 
 
 class GoalPlanner:
@@ -104,9 +122,9 @@ class GoalPlanner:
         self._stopping = threading.Event()
         # the goal planner's thread only:
         self._failures: Counter[int] = Counter()  # failed plans per goal
-        self._planned: frozenset[int] | None = None
-        self._replan = True
-        self._reasons: list[str] = []
+        self._planned: frozenset[int] | None = None  # the goals the running plan serves
+        self._replan = False
+        self._reasons: list[str] = []  # why a replan was asked
         self._round: _Round | None = None
         self._snapshot = PlannerStatus()
         self._keeper = GoalKeeper(
@@ -132,7 +150,7 @@ class GoalPlanner:
             self._stopping.clear()
             self._worker.start()
             self._search.start()
-            self.wake("the executive started")
+            self.wake("the executive started", replan=True)
 
     def stop(self) -> None:
         """Stop planning: a search under way ends first (within the planner's timeout)."""
@@ -160,7 +178,12 @@ class GoalPlanner:
     # --- what others ask (any thread) -----------------------------------------------------
 
     def wake(self, reason: str, *, replan: bool = False) -> None:
-        """Plan again soon; ``replan`` even if the open goals did not change."""
+        """Plan again soon if a goal is open that the plan does not serve; ``replan``:
+        plan again anyway, for ``reason``.
+
+        Without ``replan`` the round's reason is what changed among the goals (``goal 7
+        added``), not ``reason``: a wake-up that merely came first is not why.
+        """
         self._worker.post(lambda: self._want(reason, replan))
 
     def world_changed(self, reason: str) -> None:
@@ -214,7 +237,10 @@ class GoalPlanner:
     # --- the goal planner's thread --------------------------------------------------------
 
     def _apply(self, change: Change) -> None:
-        apply_change(self.kb, change)
+        applied = apply_change(self.kb, change)
+        if applied and isinstance(change, GoalChange) and not change.state.is_open:
+            # the plan goes on for the others: an ended goal is no reason to replace it
+            self._planned = (self._planned or frozenset()) - {change.goal}
 
     def _cancel(self, goal_id: int) -> Goal:
         goal = self.kb.goal(goal_id)
@@ -242,23 +268,27 @@ class GoalPlanner:
         self._want(reason, replan=True)
 
     def _want(self, reason: str, replan: bool) -> None:
-        self._reasons.append(reason)
-        self._replan = self._replan or replan
+        if replan:
+            self._reasons.append(reason)
+            self._replan = True
         self._begin()
 
     def _begin(self) -> None:
-        """Begin a round if something changed and none is under way."""
+        """Begin a round if one was asked for or a goal is open that the plan does not
+        serve, and none is under way."""
         if self._round is not None or self._stopping.is_set():
             return  # a round under way looks again when it ends
-        if not self._reasons and not self._replan:
+        goals = self.kb.open_goals()
+        open_ids = frozenset(g.id for g in goals)
+        planned = self._planned or frozenset()
+        news = [_news(g) for g in goals if g.id not in planned]
+        if not (self._replan and (open_ids or planned)) and not news:
+            # nothing asked, and the plan serves every open goal (an ended one is no
+            # reason to replace it)
+            self._planned, self._replan, self._reasons = open_ids, False, []
             return
-        reasons, self._reasons = self._reasons, []
-        replan, self._replan = self._replan, False
-        reason = "; ".join(dict.fromkeys(reasons)) or "asked to plan"
-        open_ids = frozenset(g.id for g in self.kb.open_goals())
-        if (not replan and open_ids == self._planned) or (not open_ids and not self._planned):
-            self._planned = open_ids
-            return
+        reasons, self._reasons, self._replan = self._reasons, [], False
+        reason = "; ".join(dict.fromkeys(r for r in (*reasons, *news) if r)) or "asked to plan"
         blocked = dict(self.blocked())
         self.kb.log_event(
             "PLANNING",

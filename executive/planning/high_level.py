@@ -46,7 +46,7 @@ from executive.planning.portfolio import planner_for
 from executive.planning.recovery import recover
 from executive.planning.sensing import Subscribe
 from executive.planning.warm_up import Warm, WarmUp, WarmUpState
-from executive.planning.world_api import WorldApi
+from executive.planning.world_api import RefuseObject, WorldApi
 from knowledge.errors import DuraError
 
 log = logging.getLogger("dura.high_level")
@@ -70,6 +70,8 @@ class HighLevel(Service):
         actions: the actions whose steps ``runner`` carries out (default: the robot's
             tasks).
         unavailable: the objects that cannot act now (a fleet's lost robots).
+        refuse_object: why a new object may not be added to the world (a fleet's: an
+            object of its robot type that is no robot of it).
     """
 
     name = "high-level"
@@ -87,6 +89,7 @@ class HighLevel(Service):
         subscribe: Subscribe | None = None,
         actions: Collection[str] | None = None,
         unavailable: Callable[[], Collection[str]] | None = None,
+        refuse_object: RefuseObject | None = None,
     ) -> None:
         super().__init__(context)
         robot = context.robot
@@ -105,7 +108,7 @@ class HighLevel(Service):
             diagnoses=lambda: self._diagnoses,
             status=status or {},
         )
-        self.world_api = WorldApi(context, self.warm_up, lambda: self.deliberation)
+        self.world_api = WorldApi(context, self.warm_up, lambda: self.deliberation, refuse_object)
         self._deliberation: Deliberation | None = None  # while it plans
         self._diagnoses: dict[str, Any] = {}  # the latest diagnosis result
         self._diagnoses_lock = threading.Lock()  # the diagnoses, and the deliberation's birth

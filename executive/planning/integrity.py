@@ -31,7 +31,13 @@ from pathlib import Path
 from typing import Annotated, Any, NamedTuple
 
 from executive.bus.clock import Clock
-from executive.planning.expression import Expression, Signature, WorldState, parse
+from executive.planning.expression import (
+    Expression,
+    Signature,
+    WorldState,
+    check_syntax,
+    parse,
+)
 from executive.planning.goals import normalized, submit
 from knowledge.conventions import (
     AtLeast,
@@ -80,12 +86,20 @@ class IntegrityRule:
 
 
 class _Context(NamedTuple):
-    """What the rules of a file are checked against, and the names of those read."""
+    """What the rules of a file are checked against, and the names of those read;
+    without a robot and its signature (a file checked alone), only what needs neither."""
 
-    robot: RobotDescription
-    signature: Signature
+    robot: RobotDescription | None
+    signature: Signature | None
     path: str
     names: set[str]
+
+    def check(self, text: str, what: str) -> None:
+        """Raise DomainError if ``text`` is no condition of the domain (alone: of PDDL)."""
+        if self.signature is None:
+            check_syntax(text, what)
+        else:
+            parse(text, self.signature, what)
 
 
 @dataclass(frozen=True)
@@ -131,7 +145,7 @@ class RuleEntry:
         goal: str | None = self.goal
         if goal is not None:
             try:
-                parse(goal, context.signature)
+                context.check(goal, "goal")
             except DomainError as e:
                 entry.error("goal", f"{entry.what}: {e}")
                 goal = None
@@ -140,8 +154,9 @@ class RuleEntry:
         line = self.line
         if trigger is not None:
             line = entry.source.key_line((*entry.path, "when", trigger.value)) or line
-        components = context.robot.components
-        if trigger in (Trigger.PERMANENT_FAULT, Trigger.DIAGNOSIS) and subject not in components:
+        components = () if context.robot is None else context.robot.components
+        named = trigger in (Trigger.PERMANENT_FAULT, Trigger.DIAGNOSIS)
+        if named and context.robot is not None and subject not in components:
             entry.source.error(
                 line,
                 f"{entry.what} names unknown component '{subject}'"
@@ -150,7 +165,7 @@ class RuleEntry:
             trigger = None
         if trigger is Trigger.CONDITION and subject is not None:
             try:
-                parse(subject, context.signature, "condition")
+                context.check(subject, "condition")
             except DomainError as e:
                 entry.source.error(line, f"{entry.what}: {e}")
                 trigger = None
@@ -195,18 +210,31 @@ def read_rules(
     """
     own = report is None
     report = report or Report(str(path))
-    rules: list[IntegrityRule] = []
-    found = read_file(path, report)
-    if found is not None:
-        context = _Context(robot, Signature.of(domain, objects), report.path, set())
-        source = DocumentSource(found, report, context=context)
-        written = read(IntegrityFile, found.value, source, "the integrity rules")
-        rules = list(written.goals) if written is not None else []
-    elif not report.findings:
-        report.error(None, "is empty")
+    rules = _read(path, report, robot, Signature.of(domain, objects))
     if own and report.errors:
         raise ConfigError("\n".join(str(f) for f in report.errors))
     return rules
+
+
+def check_rules_alone(path: Path, report: Report) -> None:
+    """Check a rules file that no robot names, in the words of :func:`read_rules`: what
+    needs neither the robot nor its domain (keys and values, one trigger per rule, unique
+    names, the form of each goal and condition); not the components and the names in
+    the expressions."""
+    _read(path, report, None, None)
+
+
+def _read(
+    path: Path, report: Report, robot: RobotDescription | None, signature: Signature | None
+) -> list[IntegrityRule]:
+    found = read_file(path, report)
+    if found is None:
+        if not report.findings:
+            report.error(None, "is empty")
+        return []
+    source = DocumentSource(found, report, context=_Context(robot, signature, report.path, set()))
+    written = read(IntegrityFile, found.value, source, "the integrity rules")
+    return list(written.goals) if written is not None else []
 
 
 @dataclass

@@ -27,11 +27,15 @@ from executive.planning.expression import (
 )
 from executive.planning.integrity import Trigger
 from executive.planning.warm_up import WarmUp
+from knowledge.domain import DomainInfo
 from knowledge.errors import DuraError, KnowledgeError, did_you_mean
 from knowledge.records import Fact, TimedFact
 from knowledge.transitions import PlanState
 
 WORLD_WAIT = 25.0  # seconds state/get waits for a new robot's world (callers wait 30)
+
+RefuseObject = Callable[[str, str, DomainInfo], "str | None"]
+"""Why an object (name, type) may not be added to the world, or ``None``."""
 
 
 class WorldApi:
@@ -42,14 +46,21 @@ class WorldApi:
         warm_up: the planner's warm-up (a new robot's world comes with it).
         planning: the high level at work, once it plans (waits for it; raises
             :class:`~knowledge.errors.DuraError` with the reason if it does not).
+        refuse_object: why a new object may not be added (a fleet's: an object of its
+            robot type that is no robot of it).
     """
 
     def __init__(
-        self, context: Context, warm_up: WarmUp, planning: Callable[[], Deliberation]
+        self,
+        context: Context,
+        warm_up: WarmUp,
+        planning: Callable[[], Deliberation],
+        refuse_object: RefuseObject | None = None,
     ) -> None:
         self.context = context
         self.warm_up = warm_up
         self.planning = planning
+        self.refuse_object = refuse_object
 
     def serve(self) -> list[Any]:
         """Answer the verbs; returns the queryables."""
@@ -120,6 +131,10 @@ class WorldApi:
         existing = kb.objects().get(name)
         if existing is not None and existing != type_name:
             raise KnowledgeError(f"object '{name}' exists already, of type '{existing}'")
+        if existing is None and self.refuse_object is not None:
+            refused = self.refuse_object(name, type_name, domain)
+            if refused is not None:
+                raise DuraError(refused)
         with kb.transaction():
             kb.add_object(name, type_name)
             kb.log_event("OBJECT_ADDED", name, {"type": type_name})

@@ -6,7 +6,10 @@ learns observers from their observations and keeps the model's nodes as it is to
 it diagnoses ``settle`` seconds after a verdict or the model changed (what changes
 meanwhile is diagnosed with it), publishes a result that differs from the last one
 published, and, while that one is faulty, wakes every ``period`` seconds and
-publishes it again. A change while it waits to repeat starts a settle instead.
+publishes it again. A change while it waits to repeat starts a settle instead. Its
+times are integer nanoseconds, as the replay's clock: float seconds since the epoch
+are some hundred nanoseconds off, enough to put a diagnosis before an observer loop
+due at the same instant.
 """
 
 from __future__ import annotations
@@ -27,36 +30,37 @@ log = logging.getLogger("dura.diagnosis")
 
 @dataclass(frozen=True)
 class Published:
-    """A result the service publishes at ``time``; ``changed``: not a repetition."""
+    """A result the service publishes at ``time_ns``; ``changed``: not a repetition."""
 
     result: DiagnosisResult
-    time: float
+    time_ns: int
     changed: bool
 
 
 class TimedDiagnosis:
     """The diagnosis service without its thread; the caller calls :meth:`wake` at
-    :attr:`wake_at`.
+    :attr:`wake_at_ns`.
 
     Args:
         engine: the diagnosis engine (its model starts empty, as live).
-        settle, period: the service's timing.
+        settle, period: the service's timing, in seconds.
     """
 
     def __init__(
         self, engine: DiagnosisEngine, *, settle: float = SETTLE, period: float = PERIOD
     ) -> None:
         self.engine = engine
-        self.settle = settle
-        self.period = period
-        self.wake_at: float | None = None  # when the service's loop runs next
+        self.settle_ns = round(settle * 1e9)
+        self.period_ns = round(period * 1e9)
+        self.wake_at_ns: int | None = None  # when the service's loop runs next
         self.last = DiagnosisResult(Status.OK)  # the last result published
         self._settling = False
-        self._published = 0.0
+        self._published_ns = 0
         self._ignored: set[str] = set()
 
-    def observe(self, info: ObservationInfo, t: float) -> None:
-        """Take in an observation; an observer the model lacks is learnt, as live."""
+    def observe(self, info: ObservationInfo, t_ns: int) -> None:
+        """Take in an observation at ``t_ns``; an observer the model lacks is learnt, as
+        live."""
         try:
             changed = self.engine.observe(info)
         except ConfigError as e:
@@ -65,9 +69,9 @@ class TimedDiagnosis:
                 self._ignored.add(str(e))  # say once why observations of a kind are ignored
                 log.info("ignored: %s", e)
         if changed:
-            self._changed(t)
+            self._changed(t_ns)
 
-    def change_model(self, action: UpdateAction, nodes: list[Node], t: float) -> None:
+    def change_model(self, action: UpdateAction, nodes: list[Node], t_ns: int) -> None:
         """Add nodes that are not in the model, or remove those that are (with the
         observers that watched only them), as the task executor asks live."""
         modelled = {n.name for n in self.engine.model.nodes}
@@ -81,12 +85,13 @@ class TimedDiagnosis:
             names = ", ".join(n.name for n in nodes)
             log.warning("diagnosis model refused %s %s: %s", action.value, names, e)
             return
-        self._changed(t)
+        self._changed(t_ns)
 
-    def wake(self, t: float) -> Published | None:
-        """Run one turn of the service's loop at ``t``; return what it publishes, if any."""
+    def wake(self, t_ns: int) -> Published | None:
+        """Run one turn of the service's loop at ``t_ns``; return what it publishes, if
+        any."""
         dirty, self._settling = self._settling, False
-        self.wake_at = None
+        self.wake_at_ns = None
         try:
             result = self.engine.diagnose() if dirty else self.last
         except DuraError:
@@ -94,17 +99,18 @@ class TimedDiagnosis:
             result = self.last
         published = None
         changed = self._differs(result)
-        if changed or (result.status is not Status.OK and t - self._published >= self.period):
-            self.last, self._published = result, t
-            published = Published(result, t, changed)
+        repeat = t_ns - self._published_ns >= self.period_ns
+        if changed or (result.status is not Status.OK and repeat):
+            self.last, self._published_ns = result, t_ns
+            published = Published(result, t_ns, changed)
         if self.last.status is not Status.OK:
-            self.wake_at = t + self.period
+            self.wake_at_ns = t_ns + self.period_ns
         return published
 
-    def _changed(self, t: float) -> None:
+    def _changed(self, t_ns: int) -> None:
         if not self._settling:  # a change while settling is diagnosed with the others
             self._settling = True
-            self.wake_at = t + self.settle
+            self.wake_at_ns = t_ns + self.settle_ns
 
     def _differs(self, result: DiagnosisResult) -> bool:
         last = self.last

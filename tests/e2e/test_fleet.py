@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import contextlib
 import json
+import subprocess
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import pytest
 
+from executive.bus.api.planning import STATE_GET, StateQuery
 from executive.testing.fleet import FleetProcess, fleet_variant
 from executive.testing.harness import RobotProcess, robot_variant
 from knowledge.records import Event
@@ -136,6 +138,30 @@ def test_a_goal_no_robot_can_reach_waits_for_a_robot_to_come_back(tmp_path: Path
         r1.start()
         fleet.wait_for(goal, "achieved", timeout=120)  # back: it takes the goal
         assert r1.events("TASK_SUCCEEDED")
+
+
+def test_a_robot_object_fleet_yaml_does_not_list_is_refused_at_run_time(tmp_path: Path) -> None:
+    with depot(tmp_path, ["r1"]) as (fleet, _):
+
+        def add(name: str, kind: str) -> subprocess.CompletedProcess[str]:
+            return run_dura("object", "add", name, kind, "--fleet", "../fleet.yaml",
+                            "--endpoint", fleet.endpoint, cwd=fleet.folder)  # fmt: skip
+
+        # it would have no executive to carry out the steps a plan gives it
+        refused = add("r4", "robot")
+        assert refused.returncode == 1
+        assert refused.stderr.splitlines() == [
+            "dura: object 'r4' of type 'robot' is no robot of fleet 'depot' (its robots:"
+            " r1): a robot joins the fleet in fleet.yaml, with its description, and the"
+            " fleet runs again"
+        ]
+        assert "r4" not in STATE_GET.call(fleet.bus, StateQuery("")).objects
+        assert fleet.events("OBJECT_ADDED") == []
+        # any other object is added; so is one that is there already (r2, in the problem)
+        assert add("parcel4", "crate").returncode == 0
+        assert add("r2", "robot").returncode == 0
+        objects = STATE_GET.call(fleet.bus, StateQuery("")).objects
+        assert (objects["parcel4"], objects["r2"]) == ("crate", "robot")
 
 
 def test_a_robot_whose_steps_keep_failing_is_set_aside_and_another_takes_its_goal(

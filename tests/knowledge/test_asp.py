@@ -9,19 +9,55 @@ import pytest
 
 from knowledge.asp import Asp, atom, facts, to_python
 from knowledge.errors import AspError
+from knowledge.sources import unsaved
 
 
-def test_a_syntax_error_in_a_file_names_the_file_and_line(tmp_path: Path) -> None:
+def test_a_syntax_error_in_a_file_names_the_file_line_and_column(tmp_path: Path) -> None:
     path = tmp_path / "user.lp"
     path.write_text("a.\nb :- a\nc.\n")
-    with pytest.raises(AspError, match=rf"^{path}:3: syntax error"):
+    with pytest.raises(AspError, match=rf"^{path}:3:1: syntax error"):
+        Asp().load(path)
+    path.write_text("a.\nb :- c(.\n")
+    with pytest.raises(AspError, match=rf"^{path}:2:8: syntax error"):
         Asp().load(path)
 
 
-def test_an_unsafe_rule_in_text_names_its_source_and_line() -> None:
+@pytest.mark.parametrize(
+    ("text", "place", "character"),
+    [("a :- é.\n", "1:6", "é"), ("a.\n%* é\n*%\nb :- a 📷.\n", "4:8", "📷")],
+)
+def test_a_character_beyond_ascii_outside_strings_and_comments_is_an_error_at_its_place(
+    tmp_path: Path, text: str, place: str, character: str
+) -> None:
+    # clingo's lexer reports it with its bytes cut and the process aborts: never reach it
+    path = tmp_path / "user.lp"
+    path.write_text(text)
+    with pytest.raises(AspError) as e:
+        Asp().load(path)
+    assert str(e.value) == f"{path}:{place}: unexpected character '{character}'"
+    with pytest.raises(AspError, match=rf"^rules:{place}: unexpected character"):
+        Asp().add(text, source="rules")
+    path.write_text('% a comment with é\np("📷 \\" é").\n')  # in strings and comments
+    Asp().load(path)
+
+
+def test_an_editors_unsaved_program_is_read_from_its_buffer_and_named_as_its_file(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "user.lp"
+    path.write_text("a.\n")
+    with unsaved({path: "a.\n  b :- a c.\n"}), pytest.raises(AspError) as e:
+        Asp().load(path)
+    assert str(e.value) == f"{path}:2:10: syntax error, unexpected <IDENTIFIER>"
+    Asp().load(path)  # the file itself is fine
+    with unsaved({tmp_path / "new.lp": "p(1).\n"}):
+        Asp().load(tmp_path / "new.lp")  # typed, never saved
+
+
+def test_an_unsafe_rule_in_text_names_its_source_line_and_column() -> None:
     asp = Asp()
     asp.add("a.\np(X) :- a.\n", source="<rules>")
-    with pytest.raises(AspError, match=r"^<program>:2: unsafe variables in: p\(X\)"):
+    with pytest.raises(AspError, match=r"^<program>:2:1: unsafe variables in: p\(X\)"):
         asp.ground()
 
 

@@ -39,14 +39,17 @@ def test_a_program_with_difference_constraints_is_solved_with_the_clingo_dl_theo
 def test_a_syntax_error_in_a_theory_program_names_its_file_and_line(tmp_path: Path) -> None:
     program = tmp_path / "bad.lp"
     program.write_text("a.\n&diff{ s(X) - } <= 1 :- a.\n")
-    with pytest.raises(AspError, match=r"bad\.lp:2: syntax error"):
+    with pytest.raises(AspError, match=r"bad\.lp:2:15: syntax error"):
         Asp(theory=ClingoDLTheory()).load(program)  # type: ignore[no-untyped-call]
 
 
-def test_program_text_for_a_theory_keeps_its_line_numbers() -> None:
+def test_program_text_for_a_theory_keeps_its_line_numbers_and_columns() -> None:
     asp = Asp(theory=ClingoDLTheory())  # type: ignore[no-untyped-call]
-    with pytest.raises(AspError, match=r"^rules:3: syntax error"):
+    with pytest.raises(AspError, match=r"^rules:3:8: syntax error"):
         asp.add("a.\nb.\nc :- a b.\n", source="rules")
+    # and the columns of its first line, although clingo read a head before it
+    with pytest.raises(AspError, match=r"^rules:1:8: syntax error"):
+        asp.add("c :- a b.\n", source="rules")
 
 
 def test_facts_are_added_without_the_theory_and_ground_with_the_program() -> None:

@@ -180,3 +180,21 @@ def test_the_replay_says_where_it_differs_from_the_live_run(robot: RobotDescript
         "diagnosis lidar: live never, replayed 10.520-12.520",
         "rules fired: live none, replayed restart_lidar at 10.520",
     ]
+
+
+def test_a_diagnosis_due_at_an_observer_loop_comes_after_it_to_the_nanosecond(
+    robot: RobotDescription,
+) -> None:
+    # the frequency observer reports lidar stopped at 10.5 s; the diagnosis settles 10 ms
+    # and is due at 10.51 s, when the live timeout observer looped too: as live, the loop
+    # comes first and the diagnosis has both. In float seconds since the epoch that
+    # diagnosis came 128 ns early, before the loop.
+    t0_ns = 1_700_000_000 * 10**9
+    loops = {"lidar/1": [t0_ns + 2_010_000_000 + k * 125_000_000 for k in range(150)]}
+    timeline = replay(robot, gap_of_two_seconds(), loops=loops, settle=0.01)
+    assert (10.51, "timeout") in [
+        (e.time, e.info.observation_msg) for e in timeline.observations("lidar/1")
+    ]
+    assert timeline.diagnoses()[0] == DiagnosisEntry(
+        10.51, "DIAGNOSED", (("lidar",),), ("frequency[scan]", "timeout[scan]")
+    )

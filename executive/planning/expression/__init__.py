@@ -31,7 +31,13 @@ from executive.planning.expression.nodes import (
     conjunction,
 )
 from executive.planning.expression.pattern import FactPattern, is_name, named_objects
-from executive.planning.expression.reader import Sexp, Signature, parse, parse_fact
+from executive.planning.expression.reader import (
+    Sexp,
+    Signature,
+    check_syntax,
+    parse,
+    parse_fact,
+)
 from executive.planning.expression.world_state import WorldState
 
 __all__ = [
@@ -52,6 +58,7 @@ __all__ = [
     "Value",
     "WorldState",
     "atoms",
+    "check_syntax",
     "conjunction",
     "is_name",
     "named_objects",

@@ -273,6 +273,23 @@ def parse(text: str, signature: Signature, what: str = "goal") -> Expression:
         raise DomainError(f"{what} '{shown}': {e}") from e
 
 
+def check_syntax(text: str, what: str = "goal") -> None:
+    """Check a PDDL condition's form alone, without a signature to name: one expression in
+    parentheses, balanced (what :func:`parse` refuses before it looks at any name).
+
+    Raises:
+        DomainError: ``goal '(robot_at dock': missing ')'``.
+    """
+    try:
+        form = read_sexp(text)
+        if isinstance(form, str):
+            raise ValueError(f"expected a condition in parentheses, not '{form}'")
+        if not form:
+            raise ValueError("empty parentheses")
+    except ValueError as e:
+        raise DomainError(f"{what} '{' '.join(text.split())}': {e}") from e
+
+
 def parse_fact(text: str, signature: Signature) -> Fact:
     """Read a fact: ``(robot_at dock)``, ``(not (robot_at dock))`` or ``(= (battery r) 80)``.
 

@@ -99,9 +99,11 @@ def test_rules_check_names_file_line_and_problem(
     assert "Traceback" not in result.stderr
 
 
-def test_rules_check_reports_an_asp_error_with_file_and_line(dura: Dura, tmp_path: Path) -> None:
+def test_rules_check_reports_an_asp_error_with_file_line_and_column(
+    dura: Dura, tmp_path: Path
+) -> None:
     (tmp_path / "rules.yaml").write_text("rules:\n  - {type: log, name: x}\nasp: [more.lp]\n")
     (tmp_path / "more.lp").write_text('trigger("x") :- status("DIAGNOSED").\nbad(.\n')
     result = dura("rules", "check", str(tmp_path / "rules.yaml"))
     assert result.returncode == 1
-    assert f"{tmp_path / 'more.lp'}:2: syntax error" in result.stderr
+    assert f"{tmp_path / 'more.lp'}:2:5: syntax error" in result.stderr

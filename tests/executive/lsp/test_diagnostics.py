@@ -10,7 +10,11 @@ import pytest
 from lsprotocol import types
 from pytest_lsp import LanguageClient
 
+from executive.planning.integrity import read_rules as read_integrity_rules
+from executive.planning.problem import read_world
+from knowledge.domain import read_domain
 from knowledge.finding import Report
+from knowledge.robot import load_robot
 from knowledge.validation import validate
 from monitoring.observer_config import check_observer_file
 from monitoring.repair.rule import read_rules as read_repair_rules
@@ -201,7 +205,79 @@ async def test_a_rules_file_no_robot_names_is_checked_alone_with_its_asp_files(
     assert await diagnostics_until(client, rules, lambda d: len(d) == 0) == []
     [syntax] = await diagnostics_until(client, program, lambda d: len(d) > 0)
     assert syntax.message == "syntax error, unexpected <IDENTIFIER>"
-    assert syntax.range.start.line == 1
+    assert syntax.range == _at(program.read_text(), 1, "inhibit")
+
+
+async def test_an_asp_program_is_checked_as_typed_at_clingos_line_and_column(
+    client: LanguageClient, usecase: Path
+) -> None:
+    program = usecase / "alone.lp"  # no rules file names it
+    text = 'trigger("restart_cam") :- fault(cam).\n'
+    program.write_text(text)
+    open_file(client, program)
+    assert await diagnostics_until(client, program, lambda d: True) == []
+    typed = text + "% the camera again\ninhibit(X) :- 📷 fault(cam).\n"
+    change_file(client, program, typed)  # unsaved: the file on disk is fine
+    [syntax] = await diagnostics_until(client, program, lambda d: len(d) > 0)
+    assert syntax.message == "unexpected character '📷'"  # clingo's lexer would abort dura
+    assert syntax.severity == types.DiagnosticSeverity.Error
+    column = len("inhibit(X) :- ")
+    assert syntax.range == types.Range(  # the client counts UTF-16: the camera is 2
+        types.Position(2, column), types.Position(2, column + 2)
+    )
+    change_file(client, program, text + "inhibit(X) :- fault(X), X != cam.\n", version=3)
+    assert await diagnostics_until(client, program, lambda d: len(d) == 0) == []
+    change_file(client, program, text + "inhibit(X) :- fault(X) X.\n", version=4)
+    [syntax] = await diagnostics_until(client, program, lambda d: len(d) > 0)
+    assert syntax.message == "syntax error, unexpected <VARIABLE>"
+    assert syntax.range == _at(text + "inhibit(X) :- fault(X) X.\n", 1, "X.")
+
+
+INTEGRITY = """goals:
+  - name: dock
+    when: {permanent_fault: lidar}
+    goal: "(robot_at dock)"
+"""
+
+
+async def test_an_integrity_rules_file_no_robot_names_is_checked_alone_in_dura_validates_words(
+    client: LanguageClient, usecase: Path
+) -> None:
+    rules = usecase / "spare_integrity.yaml"
+    rules.write_text(INTEGRITY)
+    open_file(client, rules)
+    # what only the robot and its domain know is not guessed at: no finding
+    assert await diagnostics_until(client, rules, lambda d: True) == []
+    wrong = (
+        INTEGRITY.replace(
+            "{permanent_fault: lidar}", "{permanent_fault: lidar, diagnosis: cam}"
+        ).replace('"(robot_at dock)"', '"(robot_at dock"')
+        + "    priorty: 3\n"
+        + "  - {name: charge, when: {condition: robot_at dock}, goal: (robot_at dock), for: -1}\n"
+    )
+    change_file(client, rules, wrong)
+    shown = await diagnostics_until(client, rules, lambda d: len(d) >= 5)
+    # the words of dura validate, which checks the same file against the use-case robot
+    copy = usecase / "checked.yaml"
+    copy.write_text(wrong)
+    robot = load_robot(usecase / "examples" / "usecase" / "robot.yaml")
+    report = Report(str(copy))
+    assert robot.problem is not None
+    objects = read_world(robot.domain, robot.problem)[0].objects
+    read_integrity_rules(copy, robot, read_domain(robot.domain), objects, report)
+    assert sorted(_words(shown)) == sorted(f.message for f in report.findings)
+    assert {d.message: d.range.start.line for d in shown} == {
+        "'when' of integrity rule 'dock' needs exactly one of permanent_fault, diagnosis,"
+        " condition": 2,
+        "integrity rule 'dock': goal '(robot_at dock': missing ')'": 3,
+        "unknown key 'priorty' in integrity rule 'dock' (did you mean 'priority'?)": 4,
+        "'for' of integrity rule 'charge' must be at least 0, not -1": 5,
+        "integrity rule 'charge': condition 'robot_at dock': text after the expression: dock": 5,
+    }
+    assert all(d.severity == types.DiagnosticSeverity.Error for d in shown)
+    assert shown[2].range == _at(wrong, 4, "priorty")
+    change_file(client, rules, INTEGRITY, version=3)
+    assert await diagnostics_until(client, rules, lambda d: len(d) == 0) == []
 
 
 async def test_diagnostics_name_the_version_of_the_text_they_were_found_in(

@@ -314,3 +314,53 @@ def test_the_executor_reports_and_the_goal_planner_writes_every_goal_state(
     kinds = [e.kind for e in ex.kb.events() if e.subject == f"goal {goal.id}"]
     assert kinds == ["GOAL_ADDED", "GOAL_PLANNED", "GOAL_EXECUTING", "GOAL_ACHIEVED"]
     assert set(writers) == {"goal planner"}
+
+
+READING = "(battery_level) = 93 set by base"  # a sensor's reading: a wake-up, no reason to plan
+
+
+def test_a_goal_achieved_leaves_the_plan_to_the_others_and_a_reading_does_not_replace_it(
+    executive: Callable[..., Executive],
+) -> None:
+    runner = ScriptedRunner(held={"take_picture"})
+    ex = executive(runner)
+    with ex.kb.transaction():  # both goals in the same round
+        lab = submit(ex.kb, usecase_domain(), "(picture_taken lab)")
+        office = submit(ex.kb, usecase_domain(), "(picture_taken office)")
+    ex.goals.wake("two goals added")
+    eventually(lambda: "take_picture" in {t.step.action for t in runner.tasks})
+    first = runner.tasks[-1]  # the planner picks the order
+    first.end(None)
+    done, other = (lab, office) if first.step.args == ("lab",) else (office, lab)
+    eventually(lambda: ex.state(done) is GoalState.ACHIEVED)
+    second = runner.wait_for(f"take_picture({'office' if other is office else 'lab'})")
+    ex.goals.wake(READING)
+    second.end(None)
+    eventually(ex.settled)  # written on the goal planner's thread, after the reading
+    assert ex.state(other) is GoalState.ACHIEVED
+    (planning,) = ex.kb.events(kind="PLANNING")
+    assert set(planning.data["reason"].split("; ")) <= {
+        "the executive started",
+        f"goal {lab.id} added",
+        f"goal {office.id} added",
+    }
+    assert [p.goal_ids for p in ex.kb.plans()] == [(lab.id, office.id)]
+    assert ex.goals.status().planned == ()
+
+
+def test_a_round_names_the_goal_that_changed_not_the_wake_up_that_came_first(
+    executive: Callable[..., Executive],
+) -> None:
+    runner = ScriptedRunner(held={"take_picture"})
+    ex = executive(runner)
+    lab = ex.submit("(picture_taken lab)")
+    picture = runner.wait_for("take_picture(lab)")
+    # a goal stored, and a reading wakes the goal planner before the goal's own wake-up
+    office = submit(ex.kb, usecase_domain(), "(picture_taken office)")
+    ex.goals.wake(READING)
+    eventually(lambda: len(ex.kb.events(kind="PLANNING")) == 2)
+    assert ex.kb.events(kind="PLANNING")[-1].data["reason"] == f"goal {office.id} added"
+    picture.end(None)
+    runner.wait_for("take_picture(office)").end(None)
+    eventually(ex.settled)
+    assert ex.state(lab) is GoalState.ACHIEVED and ex.state(office) is GoalState.ACHIEVED

@@ -197,5 +197,5 @@ def test_rules_written_in_asp_trigger_and_inhibit_yaml_rules(tmp_path: Path) -> 
 
 
 def test_an_invalid_asp_rule_file_is_refused_with_file_and_line(tmp_path: Path) -> None:
-    with pytest.raises(AspError, match=r"extra\.lp:2: syntax error"):
+    with pytest.raises(AspError, match=r"extra\.lp:2:8: syntax error"):
         engine(tmp_path, TABLE_5_4 + "asp: [extra.lp]\n", asp="a.\nb :- c(.\n")
