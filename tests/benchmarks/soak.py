@@ -7,14 +7,14 @@ Each goal sends the robot to another place, ``(robot_at lab)``, ``(robot_at offi
 ``(robot_at dock)`` in turn, and waits until it is achieved; nothing is injected. With
 ``--every`` a goal is sent at most that often (the issue's robot takes one every ~10 s;
 without it, one right after another); with ``--minutes`` goals are sent until that
-time has passed instead of ``--goals``. After
-the warm-up, the executive's process (and its planner worker, measured apart) is
-sampled after every goal: resident memory, threads, open files, and the knowledge
-base's size (its file: the WAL beside it is bounded by SQLite's checkpoints). The table
-gives each at the end of the warm-up and at the end, and the growth per goal; false
-repairs are the faults counted and the repair rules fired with nothing injected (0 is
-the only right answer). The executive's resident memory is also shown along the run
-(plateau or not), and the machine's load average (the machine may be shared: a high
+time has passed instead of ``--goals``. After the warm-up, the executive's process (and
+its planner worker, measured apart) is sampled after every goal: resident memory (and
+how much of it is anonymous: the heap, not mapped files), threads, open files, and the
+knowledge base's size (its file: the WAL beside it is bounded by SQLite's checkpoints).
+The table gives each at the end of the warm-up and at the end, and the growth per goal;
+false repairs are the faults counted and the repair rules fired with nothing injected
+(0 is the only right answer). The executive's resident memory is also shown along the
+run (plateau or not), and the machine's load average (the machine may be shared: a high
 load may cost observers their rates).
 """
 
@@ -41,6 +41,7 @@ PLACES = ("lab", "office", "dock")
 class Sample:
     goals: int
     rss: int
+    anonymous: int  # of rss: the heap's pages (Python's arenas, malloc's), not mapped files
     worker_rss: int
     threads: int
     files: int
@@ -55,12 +56,21 @@ def sample(robot: RobotProcess, goals: int) -> Sample:
     return Sample(
         goals,
         process.memory_info().rss,
+        _anonymous(robot.pid),
         sum(_rss(w) for w in workers),
         process.num_threads(),
         process.num_fds(),
         kb,
         os.getloadavg()[0],
     )
+
+
+def _anonymous(pid: int) -> int:
+    """The process's anonymous resident memory in bytes (Linux's smaps_rollup)."""
+    for line in Path(f"/proc/{pid}/smaps_rollup").read_text().splitlines():
+        if line.startswith("Anonymous:"):
+            return int(line.split()[1]) << 10
+    return 0
 
 
 def _is_worker(process: psutil.Process) -> bool:
@@ -116,6 +126,7 @@ def main() -> None:
     count = max(1, last.goals - first.goals)
     rows = [
         ("executive RSS (KiB)", first.rss >> 10, last.rss >> 10),
+        ("  of it anonymous (KiB)", first.anonymous >> 10, last.anonymous >> 10),
         ("planner worker RSS (KiB)", first.worker_rss >> 10, last.worker_rss >> 10),
         ("threads", first.threads, last.threads),
         ("open files", first.files, last.files),
