@@ -187,11 +187,13 @@ class GoalApi:
 
     def _status_goals(self) -> list[Goal]:
         """The open goals and the newest :data:`~executive.bus.api.planning.RECENT_GOALS`
-        others, by id (as many of them as fit in a reply)."""
+        others, by id: as many as fit in a reply (the newest open ones first; at most
+        :data:`MAX_GOALS` of them are read)."""
         kb = self.context.kb
+        open_goals = kb.goals([s for s in GoalState if s.is_open], limit=MAX_GOALS)
         ended = kb.goals([s for s in GoalState if not s.is_open], limit=api.RECENT_GOALS)
-        goals = sorted([*kb.open_goals(), *ended], key=lambda g: g.id)
-        return fitting(goals, newest=True, budget=STATUS_GOALS_BUDGET)
+        kept = fitting([*ended, *open_goals], newest=True, budget=STATUS_GOALS_BUDGET)
+        return sorted(kept, key=lambda g: g.id)  # the open ones first, if not all fit
 
     def _execution(self) -> ExecutionStatus:
         current = self.current()
