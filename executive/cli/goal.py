@@ -305,7 +305,8 @@ class GoalFollower:
     def _look(self, goal: Goal) -> Goal:
         """The goal now: among the open goals, or (once it ended) as shown."""
         open_states = [s for s in GoalState if s.is_open]
-        for found in api.GOAL_LIST.call(self.bus, api.GoalQuery(open_states)).goals:
+        query = api.GoalQuery(open_states, before=goal.id + 1, limit=1)  # this goal, if open
+        for found in api.GOAL_LIST.call(self.bus, query).goals:
             if found.id == goal.id:
                 return found
         return api.GOAL_SHOW.call(self.bus, api.GoalId(goal.id)).goal
