@@ -15,7 +15,7 @@ from executive.bus.message import Message
 from executive.bus.schema import plain
 from executive.bus.session import Bus
 from executive.cli import exits_at_once
-from executive.cli.arguments import identifier, priority, seconds
+from executive.cli.arguments import count, identifier, priority, seconds
 from executive.cli.client import add_client_options, ask, connect
 from executive.cli.output import add_json_flag, print_json, table
 from knowledge.errors import DuraError
@@ -64,6 +64,9 @@ def register(sub: Any) -> None:
     )
     listing.add_argument(
         "--open", action="store_true", help="only goals not yet achieved, failed or cancelled"
+    )
+    listing.add_argument(
+        "-n", "--lines", type=count, metavar="N", help="only the newest N goals (all without)"
     )
     listing.set_defaults(run=run_list)
 
@@ -302,7 +305,8 @@ class GoalFollower:
     def _look(self, goal: Goal) -> Goal:
         """The goal now: among the open goals, or (once it ended) as shown."""
         open_states = [s for s in GoalState if s.is_open]
-        for found in api.GOAL_LIST.call(self.bus, api.GoalQuery(open_states)).goals:
+        query = api.GoalQuery(open_states, before=goal.id + 1, limit=1)  # this goal, if open
+        for found in api.GOAL_LIST.call(self.bus, query).goals:
             if found.id == goal.id:
                 return found
         return api.GOAL_SHOW.call(self.bus, api.GoalId(goal.id)).goal
@@ -310,7 +314,12 @@ class GoalFollower:
 
 def run_list(args: argparse.Namespace) -> int:
     states = [s for s in GoalState if s.is_open] if args.open else None
-    goals = ask(args, api.GOAL_LIST, api.GoalQuery(states)).goals
+    first = ask(args, api.GOAL_LIST, api.GoalQuery(states, limit=args.lines))
+    goals = first.goals
+    left = None if args.lines is None else args.lines - len(goals)
+    if first.more and goals and left != 0:  # the older ones, a page at a time
+        with connect(args) as bus:
+            goals = api.newest_goals(bus, left, states, before=goals[0].id) + goals
     if args.json:
         print_json({"goals": plain(goals)})
     else:

@@ -39,7 +39,10 @@ def run_status(args: argparse.Namespace) -> int:
 def print_status(status: api.StatusReply, out: Any = None) -> None:
     out = out or sys.stdout
     whose = "fleet" if status.robots is not None else "robot"
-    section(f"{whose} {status.robot}: goals", out, first=True)
+    total = sum((status.goal_counts or {}).values())
+    shown = len(status.goals)
+    left = f" (the open ones and the newest: {shown} of {total}; all: dura goal list)"
+    section(f"{whose} {status.robot}: goals{left if total > shown else ''}", out, first=True)
     table(GOAL_HEADERS, goal_rows(status.goals), out)
     plan = status.plan
     if plan is not None:

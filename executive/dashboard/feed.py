@@ -37,7 +37,7 @@ from executive.dashboard.live import (
 )
 from knowledge.errors import DuraError
 from knowledge.records import Event
-from knowledge.transitions import PlanState
+from knowledge.transitions import GoalState, PlanState
 
 log = logging.getLogger("dura.dashboard")
 
@@ -45,6 +45,8 @@ SETTLE = 0.1  # seconds: events that come together make one round of questions
 FLUSH = 0.1  # seconds between two pushes of what changed
 CLOCK = 1.0  # seconds between two redraws of a running plan's "now"
 HISTORY = 500  # events read from the log when the feed starts
+RECENT_GOALS = 100  # the goals shown besides the open ones: the newest
+OPEN = [s for s in GoalState if s.is_open]
 QUEUE = 2000  # messages a page may lag behind before it is dropped (it reconnects)
 COMPONENTS, OBSERVATIONS_NOW, EVENTS_NOW, DIAGNOSIS = (
     "components",
@@ -250,8 +252,10 @@ class Feed:
     def _fetch(self, query: str) -> Any:
         """Ask the executive (blocking: on a worker thread); the answer for :meth:`_apply`."""
         bus = self.bus
-        if query == GOALS:
-            return planning.GOAL_LIST.call(bus).goals
+        if query == GOALS:  # not all: a long run's goals are many
+            open_goals = planning.GOAL_LIST.call(bus, planning.GoalQuery(OPEN)).goals
+            recent = planning.GOAL_LIST.call(bus, planning.GoalQuery(limit=RECENT_GOALS)).goals
+            return sorted({g.id: g for g in [*open_goals, *recent]}.values(), key=lambda g: g.id)
         if query == PLAN:
             return planning.PLAN_SHOW.call(bus)
         if query == TASKS:

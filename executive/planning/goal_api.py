@@ -11,7 +11,7 @@ high level to plan.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import Any, TypeVar
 
 from executive.bus.api import planning as api
 from executive.bus.message import MAX_PAYLOAD, encode
@@ -25,12 +25,16 @@ from executive.planning.domain_description import describe
 from executive.planning.dry_run import dry_run
 from executive.planning.goals import submit
 from knowledge.errors import DuraError
-from knowledge.records import Event
+from knowledge.records import Event, Goal, GoalState
 
 SECTIONS = ("tasks", "components", "robots")  # what other services add to ``status``
 MAX_EVENTS = 10_000  # the most events one request returns
 HISTORY_PAGE = 1_000  # events read at a time for a goal's history
-EVENTS_BUDGET = MAX_PAYLOAD * 3 // 4  # bytes of events in one reply: under the bus's limit
+MAX_GOALS = 10_000  # the most goals one request reads
+EVENTS_BUDGET = MAX_PAYLOAD * 3 // 4  # bytes of events (or goals) in one reply: under the limit
+STATUS_GOALS_BUDGET = MAX_PAYLOAD // 4  # bytes of goals in ``status``, which carries more
+
+R = TypeVar("R")
 
 
 class GoalApi:
@@ -94,7 +98,13 @@ class GoalApi:
         return api.GoalReply(goal)
 
     def _goal_list(self, request: api.GoalQuery) -> api.GoalsReply:
-        return api.GoalsReply(self.context.kb.goals(request.states))
+        """The newest goals asked for that fit in a reply: at most :data:`MAX_GOALS` are
+        read, and one more tells whether there are older ones."""
+        wanted = MAX_GOALS if request.limit is None else min(request.limit, MAX_GOALS)
+        goals = self.context.kb.goals(request.states, before=request.before, limit=wanted + 1)
+        asked = len(goals) if request.limit is None else min(len(goals), request.limit)
+        kept = fitting(goals[-wanted:] if wanted else [], newest=True)
+        return api.GoalsReply(kept, more=True if len(kept) < asked else None)
 
     def _goal_show(self, request: api.GoalId) -> api.GoalHistory:
         kb = self.context.kb
@@ -163,7 +173,7 @@ class GoalApi:
         diagnoses = self.diagnoses()
         return api.StatusReply(
             robot=self.context.robot.name,
-            goals=kb.goals(),
+            goals=self._status_goals(),
             plan=plan,
             execution=self._execution(),
             diagnoses=DiagnosisInfo.from_payload(diagnoses) if diagnoses else api.NoDiagnosis(),
@@ -172,7 +182,18 @@ class GoalApi:
             components=self._section("components"),
             robots=self._section("robots"),
             planning=current.status() if current is not None else _STARTING,
+            goal_counts={s.value: n for s, n in kb.goal_counts().items()},
         )
+
+    def _status_goals(self) -> list[Goal]:
+        """The open goals and the newest :data:`~executive.bus.api.planning.RECENT_GOALS`
+        others, by id: as many as fit in a reply (the newest open ones first; at most
+        :data:`MAX_GOALS` of them are read)."""
+        kb = self.context.kb
+        open_goals = kb.goals([s for s in GoalState if s.is_open], limit=MAX_GOALS)
+        ended = kb.goals([s for s in GoalState if not s.is_open], limit=api.RECENT_GOALS)
+        kept = fitting([*ended, *open_goals], newest=True, budget=STATUS_GOALS_BUDGET)
+        return sorted(kept, key=lambda g: g.id)  # the open ones first, if not all fit
 
     def _execution(self) -> ExecutionStatus:
         current = self.current()
@@ -197,14 +218,14 @@ def _names_goal(event: Event, goal_id: int) -> bool:
     return isinstance(goals, list) and goal_id in goals
 
 
-def fitting(events: list[Event], *, newest: bool) -> list[Event]:
-    """As many of ``events`` as one reply carries (:data:`EVENTS_BUDGET`): the newest of
-    them, or the oldest (none if the first alone is larger)."""
-    kept: list[Event] = []
+def fitting(records: list[R], *, newest: bool, budget: int = EVENTS_BUDGET) -> list[R]:
+    """As many of ``records`` (events, goals) as one reply carries (``budget`` bytes):
+    the newest of them, or the oldest (none if the first alone is larger)."""
+    kept: list[R] = []
     size = 0
-    for event in reversed(events) if newest else events:
-        size += len(encode(plain(event))) + 1
-        if size > EVENTS_BUDGET:
+    for found in reversed(records) if newest else records:
+        size += len(encode(plain(found))) + 1
+        if size > budget:
             break
-        kept.append(event)
+        kept.append(found)
     return kept[::-1] if newest else kept

@@ -82,7 +82,8 @@ class RobotClient(ABC):
         return planning.GOAL_SHOW.call(self.bus, planning.GoalId(goal_id)).goal
 
     def goals(self) -> list[Goal]:
-        return planning.GOAL_LIST.call(self.bus).goals
+        """Every goal, oldest first, however many (asked for a page at a time)."""
+        return planning.newest_goals(self.bus)
 
     def cancel_goal(self, goal_id: int) -> None:
         planning.GOAL_CANCEL.call(self.bus, planning.GoalId(goal_id))

@@ -59,13 +59,37 @@ class GoalTables(EventLog):
             raise KnowledgeError(f"no goal {goal_id}")
         return self._goal(rows[0])
 
-    def goals(self, states: Iterable[GoalState] | None = None) -> list[Goal]:
-        if states is None:
-            return [self._goal(r) for r in self._query("SELECT * FROM goals ORDER BY id")]
-        wanted = [s.value for s in states]
-        marks = ",".join("?" * len(wanted))
-        sql = f"SELECT * FROM goals WHERE state IN ({marks}) ORDER BY id"
-        return [self._goal(r) for r in self._query(sql, wanted)]
+    def goals(
+        self,
+        states: Iterable[GoalState] | None = None,
+        *,
+        before: int = 0,
+        limit: int | None = None,
+    ) -> list[Goal]:
+        """Goals in ``states`` (all without) with an id below ``before`` (unless 0),
+        oldest first: all of them, or the newest ``limit`` (read as such: a long run's
+        goals are many)."""
+        where: list[str] = []
+        params: list[Any] = []
+        if states is not None:
+            wanted = [s.value for s in states]
+            where.append(f"state IN ({','.join('?' * len(wanted))})")
+            params.extend(wanted)
+        if before:
+            where.append("id < ?")
+            params.append(before)
+        sql = "SELECT * FROM goals" + (f" WHERE {' AND '.join(where)}" if where else "")
+        if limit is not None:
+            sql = f"SELECT * FROM ({sql} ORDER BY id DESC LIMIT ?) ORDER BY id"
+            params.append(limit)
+        else:
+            sql += " ORDER BY id"
+        return [self._goal(r) for r in self._query(sql, params)]
+
+    def goal_counts(self) -> dict[GoalState, int]:
+        """How many goals are in each state (those with none are left out)."""
+        rows = self._query("SELECT state, count(*) FROM goals GROUP BY state")
+        return {GoalState(r[0]): int(r[1]) for r in rows}
 
     def open_goals(self) -> list[Goal]:
         return self.goals(s for s in GoalState if s.is_open)

@@ -385,3 +385,20 @@ def test_the_first_event_of_a_subject(kb: KnowledgeBase) -> None:
     first = kb.first_event(f"goal {goal.id}")
     assert first is not None
     assert kb.events(kind="GOAL_ADDED")[0].id == first
+
+
+def test_goals_are_read_a_page_at_a_time_newest_first_in_sql(kb: KnowledgeBase) -> None:
+    """A long run's goals are many: a page is the newest ``limit`` goals before one,
+    given oldest first."""
+    for n in range(10):
+        goal = kb.add_goal(f"(g{n})")
+        if n % 2:
+            kb.set_goal_state(goal.id, GoalState.CANCELLED)
+    assert [g.id for g in kb.goals(limit=3)] == [8, 9, 10]
+    assert [g.id for g in kb.goals(before=8, limit=3)] == [5, 6, 7]
+    assert [g.id for g in kb.goals(before=3, limit=3)] == [1, 2]
+    assert [g.id for g in kb.goals(before=4)] == [1, 2, 3]
+    assert [g.id for g in kb.goals([GoalState.CANCELLED], before=8, limit=2)] == [4, 6]
+    assert kb.goals(limit=0) == []
+    assert [g.id for g in kb.goals()] == list(range(1, 11))
+    assert kb.goal_counts() == {GoalState.PENDING: 5, GoalState.CANCELLED: 5}

@@ -131,9 +131,14 @@ class GoalId(Payload):
 
 @record
 class GoalQuery(Payload):
-    """Goals in these states (all goals without)."""
+    """Goals in these states (all states without) and before a goal id (unless
+    ``before`` is 0), oldest first: all of them, or the newest ``limit``. A reply carries
+    the newest of them that fit under the bus's payload limit (:class:`GoalsReply`
+    ``more``); :func:`newest_goals` pages through them all."""
 
     states: list[GoalState] | None = None
+    before: Count = 0
+    limit: Count | None = None
 
 
 @record
@@ -145,9 +150,13 @@ class GoalReply(Payload):
 
 @record
 class GoalsReply(Payload):
-    """Goals as stored, by id."""
+    """Goals as stored, by id. ``more``: some of those asked for were left out to keep
+    the reply under the bus's payload limit (the oldest of them): ask again before the
+    first one (``before``). Sent only when true, so that other replies are unchanged on
+    the wire."""
 
     goals: list[Goal]
+    more: bool | None = None
 
 
 @record
@@ -296,7 +305,10 @@ class NoDiagnosis:
 
 @record
 class StatusReply(KeyAccess, Payload):
-    """Everything at a glance. ``diagnoses`` is the newest diagnosis result, if any.
+    """Everything at a glance. ``goals``: the open goals and the newest
+    :data:`RECENT_GOALS` others (a long run's goals are many: ``goal/list`` pages through
+    them all); ``goal_counts``: how many goals are in each state (not sent by an executive
+    before 0.2). ``diagnoses`` is the newest diagnosis result, if any.
     ``tasks`` and ``components`` come from the task executor and the launcher, or say
     why that service did not answer; ``robots``, for a fleet, from its links. ``planning`` says whether the goal planner is
     computing a plan, since when and why."""
@@ -311,12 +323,15 @@ class StatusReply(KeyAccess, Payload):
     components: list[ComponentEntry] | Unanswered | None = None
     planning: PlannerStatus | None = None
     robots: list[FleetRobot] | Unanswered | None = None  # a fleet's robots
+    goal_counts: dict[str, int] | None = None  # goals in each state, all of them
 
     @property
     def diagnosis(self) -> DiagnosisInfo | None:
         """The newest diagnosis result, or ``None`` before the first."""
         return self.diagnoses if isinstance(self.diagnoses, DiagnosisInfo) else None
 
+
+RECENT_GOALS = 20  # the ended goals ``status`` carries besides the open ones
 
 GOAL_ADD = Verb(api("goal/add"), GoalAdd, GoalReply)
 GOAL_LIST = Verb(api("goal/list"), GoalQuery, GoalsReply)
@@ -348,3 +363,24 @@ def newest_events(bus: Bus, limit: int, kind: str | None = None) -> list[Event]:
             break
         before = reply.events[0].id
     return events
+
+
+def newest_goals(
+    bus: Bus,
+    limit: int | None = None,
+    states: list[GoalState] | None = None,
+    *,
+    before: int = 0,
+) -> list[Goal]:
+    """The newest ``limit`` goals (all without) in ``states`` (all without) and before
+    the goal ``before`` (unless 0), oldest first, however many: asked for page by page
+    while a reply says there is more."""
+    goals: list[Goal] = []
+    while limit is None or len(goals) < limit:
+        left = None if limit is None else limit - len(goals)
+        reply = GOAL_LIST.call(bus, GoalQuery(states, before=before, limit=left))
+        goals[:0] = reply.goals
+        if not reply.more or not reply.goals:
+            break
+        before = reply.goals[0].id
+    return goals

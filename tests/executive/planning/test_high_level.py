@@ -16,22 +16,35 @@ from pathlib import Path
 
 import pytest
 
+from executive.bus.api import components, monitoring, tasks
 from executive.bus.api.planning import EVENTS as EVENTS_API
-from executive.bus.api.planning import GOAL_LIST, GOAL_SHOW, GoalId, GoalQuery
+from executive.bus.api.planning import (
+    GOAL_LIST,
+    GOAL_SHOW,
+    RECENT_GOALS,
+    STATUS,
+    GoalId,
+    GoalQuery,
+    newest_goals,
+)
 from executive.bus.event_relay import EventRelay
 from executive.bus.keys import EVENTS
 from executive.bus.lifecycle_manager import LifecycleManager
 from executive.bus.reports import RoundPhase
 from executive.bus.service import Context, ServiceState
 from executive.bus.session import Bus
+from executive.dashboard.feed import RECENT_GOALS as RECENT_SHOWN
+from executive.dashboard.server import Dashboard
 from executive.planning.goals import submit
 from executive.planning.high_level import HighLevel
+from executive.testing.client import RobotClient
 from executive.testing.harness import robot_variant
 from knowledge.errors import DuraError
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import Fact, GoalState, PlanState
 from knowledge.robot import load_robot
 from tests.conftest import ROOT, USECASE, run_dura, wait_for
+from tests.executive.dashboard.test_app import stream
 from tests.executive.planning import slow_engine
 from tests.executive.planning.scripted_runner import ScriptedRunner
 
@@ -494,3 +507,96 @@ def test_a_time_that_is_not_to_come_is_a_usage_error(robot: Robot, at: str, erro
     assert done.returncode == 2
     assert error in done.stderr.splitlines()[-1]
     assert not robot.kb.timed_facts()
+
+
+TAKEN = 6_000  # goals of a long run (a goal every 10 s for 17 hours): over 1 MB of goals
+ENDS = ("achieved", "failed", "cancelled", "unreachable")
+
+
+def taken(kb: KnowledgeBase, count: int) -> None:
+    """``count`` goals that ended long ago, written in one transaction (as a long run
+    leaves them; no event, so the goal planner has nothing to look at)."""
+    with kb.transaction() as db:
+        db.executemany(
+            "INSERT INTO goals(expression, state, priority, deadline, source, reason,"
+            " created, updated, keep) VALUES (?, ?, 0, NULL, 'user', ?, 1.0, 2.0, 0)",
+            [("(picture_taken lab)", ENDS[n % 4], "a reason as a goal has one")
+             for n in range(count)],
+        )  # fmt: skip
+
+
+def test_a_long_run_s_goals_are_listed_page_by_page_and_status_stays_bounded(
+    robot: Robot,
+) -> None:
+    """Every goal ever taken no longer fits in one reply: ``goal/list`` sends the newest
+    that fit and says there are more, a client pages through them all, and ``status``
+    carries the open goals and the newest ended ones, with the count of each state."""
+    taken(robot.kb, TAKEN)
+    robot.runner.held.add("take_picture")
+    running = json.loads(robot.dura("goal", "add", "(picture_taken office)", "--json").stdout)
+    robot.runner.wait_for("take_picture(office)")
+    every = list(range(1, TAKEN + 2))
+
+    first = GOAL_LIST.call(robot.bus, GoalQuery())  # as a client before paging asks
+    assert first.more and 0 < len(first.goals) < TAKEN
+    assert [g.id for g in first.goals] == every[-len(first.goals) :]
+    assert [g.id for g in newest_goals(robot.bus)] == every
+    assert [g.id for g in newest_goals(robot.bus, 5)] == every[-5:]
+    ended = newest_goals(robot.bus, 3, [GoalState.CANCELLED], before=TAKEN - 10)
+    assert [g.state for g in ended] == [GoalState.CANCELLED] * 3 and ended[-1].id < TAKEN - 10
+
+    assert [g.id for g in Client(robot).goals()] == every
+
+    listed = robot.dura("goal", "list", "--json")
+    assert listed.returncode == 0, listed.stderr
+    assert [g["id"] for g in json.loads(listed.stdout)["goals"]] == every
+    few = json.loads(robot.dura("goal", "list", "-n", "3", "--json").stdout)["goals"]
+    assert [g["id"] for g in few] == every[-3:]
+    table = robot.dura("goal", "list", "--lines", "2")
+    assert table.returncode == 0 and len(table.stdout.splitlines()) == 3, table.stdout
+
+    status = STATUS.call(robot.bus)
+    assert [g.id for g in status.goals] == every[-RECENT_GOALS - 1 :]
+    assert status.goals[-1].id == running["id"] and status.goals[-1].state.is_open
+    assert status.goal_counts is not None and sum(status.goal_counts.values()) == TAKEN + 1
+    assert status.goal_counts["cancelled"] == TAKEN // 4
+    shown = robot.dura("status")
+    assert shown.returncode == 0, shown.stderr
+    assert (
+        "take_picture(office)" in shown.stdout
+        and f"{RECENT_GOALS + 1} of {TAKEN + 1}" in shown.stdout
+    )
+    assert len(shown.stdout.splitlines()) < 60, shown.stdout
+
+
+def test_the_dashboard_shows_a_long_run_s_open_goals_and_the_newest_others(
+    robot: Robot, endpoint: str
+) -> None:
+    taken(robot.kb, TAKEN)
+    robot.runner.held.add("take_picture")
+    running = json.loads(robot.dura("goal", "add", "(picture_taken office)", "--json").stdout)
+    robot.runner.wait_for("take_picture(office)")
+    for verb, reply in (  # the services the high level does not run: nothing to show
+        (tasks.TASK_LIST, tasks.TasksReply([])),
+        (tasks.SCHEDULE_SHOW, tasks.ScheduleReply([], [], [])),
+        (components.COMPONENT_LIST, components.ComponentsReply([])),
+        (monitoring.OBSERVER_LATEST, monitoring.LatestReply([])),
+    ):
+        verb.serve(robot.bus, lambda _, reply=reply: reply)  # type: ignore[misc]
+    with Dashboard.connect(load_robot(USECASE), endpoint, port=0, folders=[]) as dashboard:
+        shown = stream(dashboard, "goals", lambda data: bool(data["goals"]))["goals"]
+    ids = [g["id"] for g in shown]
+    assert ids == list(range(TAKEN + 2 - RECENT_SHOWN, TAKEN + 2))
+    assert shown[-1]["id"] == running["id"] and shown[-1]["state"] == "executing"
+
+
+class Client(RobotClient):
+    """The test fixtures' client, on this bus."""
+
+    def __init__(self, robot: Robot) -> None:
+        self.robot = load_robot(USECASE)
+        self._bus = robot.bus
+
+    @property
+    def bus(self) -> Bus:
+        return self._bus
