@@ -23,36 +23,33 @@ Count = Callable[[str], None]  # count one undecodable message of a topic, with 
 
 
 @dataclass
-class RecordedMessage(Message):
-    """A JSON message of a recording; ``on_undecodable`` counts it if it does not decode."""
+class _Counted:
+    """A recorded message's decoding, counted when it fails: put before the message
+    class, whose ``payload`` it wraps."""
 
     on_undecodable: Count | None = field(default=None, kw_only=True, repr=False, compare=False)
 
     @property
     def payload(self) -> dict[str, Any]:
         try:
-            return super().payload
+            payload: dict[str, Any] = super().payload  # type: ignore[misc]  # the message's
         except BusError as e:
             _count(self, e)
             raise
+        return payload
 
 
 @dataclass
-class RecordedRosMessage(RosMessage):
+class RecordedMessage(_Counted, Message):
+    """A JSON message of a recording; ``on_undecodable`` counts it if it does not decode."""
+
+
+@dataclass
+class RecordedRosMessage(_Counted, RosMessage):
     """A ROS 2 message of a recording; ``on_undecodable`` counts it if it does not decode."""
 
-    on_undecodable: Count | None = field(default=None, kw_only=True, repr=False, compare=False)
 
-    @property
-    def payload(self) -> dict[str, Any]:
-        try:
-            return super().payload
-        except BusError as e:
-            _count(self, e)
-            raise
-
-
-def _count(message: RecordedMessage | RecordedRosMessage, error: BusError) -> None:
+def _count(message: _Counted, error: BusError) -> None:
     """Count a message that did not decode, once (its ``on_undecodable`` is gone after)."""
     count, message.on_undecodable = message.on_undecodable, None
     if count is not None:

@@ -10,34 +10,23 @@ import pytest
 
 from executive.bus.api import planning as api
 from executive.bus.message import MAX_PAYLOAD, encode
-from executive.bus.service import Context
 from executive.bus.session import Bus
-from executive.planning.goal_api import GoalApi
-from knowledge.errors import DuraError
 from knowledge.knowledge_base import KnowledgeBase
-from knowledge.robot import load_robot
-from tests.conftest import USECASE
+from tests.executive.planning.long_run import served
 
 LOGGED = 2500  # of about 1 KB each: 2.5 MB, more than two replies hold
 
 
-def nothing() -> None:
-    raise DuraError("not needed here")
+def _logged(kb: KnowledgeBase) -> None:
+    with kb.transaction():
+        for n in range(LOGGED):
+            kb.log_event("COMPONENT_READY", f"lidar {n}", {"note": "x" * 1000, "n": n})
 
 
 @pytest.fixture
 def client(tmp_path: Path, endpoint: str) -> Iterator[Bus]:
-    with (
-        KnowledgeBase(tmp_path / "kb.db") as kb,
-        Bus("usecase", name="executive", endpoint=endpoint, listen=True) as bus,
-    ):
-        with kb.transaction():
-            for n in range(LOGGED):
-                kb.log_event("COMPONENT_READY", f"lidar {n}", {"note": "x" * 1000, "n": n})
-        context = Context(load_robot(USECASE), bus, kb)
-        GoalApi(context, planning=nothing, current=lambda: None, diagnoses=dict, status={}).serve()
-        with Bus("usecase", name="cli", endpoint=endpoint) as cli:
-            yield cli
+    with served(tmp_path / "kb.db", endpoint, _logged) as cli:
+        yield cli
 
 
 def test_a_reply_stays_under_the_payload_limit_and_says_there_is_more(client: Bus) -> None:

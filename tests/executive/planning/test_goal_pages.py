@@ -11,38 +11,28 @@ import pytest
 
 from executive.bus.api import planning as api
 from executive.bus.message import MAX_PAYLOAD, encode
-from executive.bus.service import Context
 from executive.bus.session import Bus
-from executive.planning.goal_api import MAX_GOALS, GoalApi
-from knowledge.errors import DuraError
+from executive.planning.goal_api import MAX_GOALS
 from knowledge.knowledge_base import KnowledgeBase
 from knowledge.records import GoalState
-from knowledge.robot import load_robot
-from tests.conftest import USECASE
+from tests.executive.planning.long_run import served
 
 TAKEN = 12_000  # more goals than one request reads (MAX_GOALS), in three states
 
 
-def nothing() -> None:
-    raise DuraError("not needed here")
+def _taken(kb: KnowledgeBase) -> None:
+    with kb.transaction() as db:
+        db.executemany(
+            "INSERT INTO goals(expression, state, created, updated) VALUES (?, ?, 1, 2)",
+            [(f"(picture_taken lab{n})", ("achieved", "failed", "pending")[n % 3])
+             for n in range(TAKEN)],
+        )  # fmt: skip
 
 
 @pytest.fixture
 def client(tmp_path: Path, endpoint: str) -> Iterator[Bus]:
-    with (
-        KnowledgeBase(tmp_path / "kb.db") as kb,
-        Bus("usecase", name="executive", endpoint=endpoint, listen=True) as bus,
-    ):
-        with kb.transaction() as db:
-            db.executemany(
-                "INSERT INTO goals(expression, state, created, updated) VALUES (?, ?, 1, 2)",
-                [(f"(picture_taken lab{n})", ("achieved", "failed", "pending")[n % 3])
-                 for n in range(TAKEN)],
-            )  # fmt: skip
-        context = Context(load_robot(USECASE), bus, kb)
-        GoalApi(context, planning=nothing, current=lambda: None, diagnoses=dict, status={}).serve()
-        with Bus("usecase", name="cli", endpoint=endpoint) as cli:
-            yield cli
+    with served(tmp_path / "kb.db", endpoint, _taken) as cli:
+        yield cli
 
 
 def test_a_reply_stays_under_the_payload_limit_and_says_there_is_more(client: Bus) -> None:
@@ -87,19 +77,17 @@ def test_status_carries_the_open_goals_and_the_newest_others(client: Bus) -> Non
 def test_status_carries_the_open_goals_first(tmp_path: Path, endpoint: str) -> None:
     """The ended goals that status carries besides the open ones are the newest, however
     old the open ones are."""
-    with (
-        KnowledgeBase(tmp_path / "kb.db") as kb,
-        Bus("usecase", name="executive", endpoint=endpoint, listen=True) as bus,
-    ):
-        first = kb.add_goal("(robot_at lab)")
+    opened: list[int] = []
+
+    def fill(kb: KnowledgeBase) -> None:
+        opened.append(kb.add_goal("(robot_at lab)").id)
         with kb.transaction() as db:
             db.executemany(
                 "INSERT INTO goals(expression, state, created, updated) VALUES (?, ?, 1, 2)",
                 [("(robot_at dock)", "achieved")] * 5_000,
             )
-        context = Context(load_robot(USECASE), bus, kb)
-        GoalApi(context, planning=nothing, current=lambda: None, diagnoses=dict, status={}).serve()
-        with Bus("usecase", name="cli", endpoint=endpoint) as cli:
-            status = api.STATUS.call(cli)
-    assert [g.id for g in status.goals] == [first.id, *range(5_002 - api.RECENT_GOALS, 5_002)]
+
+    with served(tmp_path / "kb.db", endpoint, fill) as cli:
+        status = api.STATUS.call(cli)
+    assert [g.id for g in status.goals] == [*opened, *range(5_002 - api.RECENT_GOALS, 5_002)]
     assert status.goal_counts == {"pending": 1, "achieved": 5_000}
