@@ -22,6 +22,7 @@ from executive.cli.progress import LiveLine
 from executive.cli.stopping import stop_on_signals, wait
 from executive.executive import SEPARABLE, Executive, ServiceProcess
 from executive.runtime.launcher import local_endpoint
+from executive.runtime.native_heap import HeapTrimmer, limit_arenas
 from knowledge.description import RobotDescription
 from knowledge.robot import load_robot
 
@@ -114,6 +115,12 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    limit_arenas()  # before any thread starts (see executive.runtime.native_heap)
+    with HeapTrimmer():
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     robot = load_robot(args.robot, domain=False)  # the planner worker checks the domain
     stop = stop_on_signals()
     failure: list[str] = []
