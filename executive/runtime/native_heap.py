@@ -3,11 +3,12 @@
 Zenoh's threads and clingo allocate with the C library's ``malloc``. glibc gives threads
 arenas of their own, up to eight per core, and memory freed in one arena serves only the
 threads of that arena. A component that logs in to the bus and leaves again makes the
-router allocate on several of Zenoh's threads at once and free it all later: nothing
-leaks, but the free chunks stay spread over many arenas, and the executive's resident
-memory grows with every component start. With all arenas (a router, 800 component
-logins, four at a time) its heap grew 1.5 MB and kept growing; limited to two it grew
-0.5 MB within 400 logins and then not at all.
+router allocate on several of Zenoh's threads at once and free nearly all of it later,
+but the free chunks stay spread over many arenas, and the executive's resident memory
+grows with every component start. A router of dura's bus, 800 component logins four at
+a time: with all arenas its heap grew by 1.6 MB from login 200 to 800 and kept growing;
+limited to two, it stopped growing after login 400 (``tests.benchmarks.bus_logins``
+measures the like).
 
 :func:`limit_arenas` caps the arenas (what ``MALLOC_ARENA_MAX`` does; that variable, if
 set, wins): call it first thing in a process, before any thread starts. A
