@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import ctypes
 import ctypes.util
-import logging
+import functools
 import os
 import threading
 from typing import Any
@@ -30,11 +30,10 @@ ARENAS = 2  # malloc arenas of a dura process (glibc's default: eight per core)
 TRIM_EVERY = 30.0  # seconds between two trims of the heap
 _M_ARENA_MAX = -8  # mallopt's parameter number (glibc's malloc.h)
 
-_log = logging.getLogger("dura.heap")
 
-
+@functools.cache
 def _glibc() -> Any | None:
-    """glibc, if this process's C library is glibc."""
+    """glibc, if this process's C library is glibc (loaded once)."""
     try:
         libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
         libc.gnu_get_libc_version  # noqa: B018  (glibc alone has it)
@@ -65,17 +64,15 @@ class HeapTrimmer:
     """Trims the heap every ``every`` seconds on a thread of its own, until closed."""
 
     def __init__(self, every: float = TRIM_EVERY) -> None:
-        self._libc = _glibc()
         self._every = every
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True, name="heap-trim")
-        if self._libc is not None:
+        if _glibc() is not None:
             self._thread.start()
 
     def _run(self) -> None:
         while not self._stop.wait(self._every):
-            # ctypes lets go of the GIL during the call: the other threads go on
-            self._libc.malloc_trim(0)  # type: ignore[union-attr]
+            trim()  # ctypes lets go of the GIL during the call: the other threads go on
 
     def close(self) -> None:
         self._stop.set()

@@ -28,6 +28,7 @@ from pathlib import Path
 
 from executive.bus import keys, security
 from executive.bus.session import Bus
+from executive.testing.harness import free_endpoint
 from knowledge.robot import load_robot
 from tests.conftest import USECASE
 
@@ -111,7 +112,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="dura-logins-") as name:
         folder = Path(name)
         security.ensure_credentials(folder / "bus.json", robot.name, components)
-        endpoints = [f"tcp/127.0.0.1:{port}" for port in _free_ports(len(VARIANTS))]
+        endpoints = [free_endpoint() for _ in VARIANTS]
         routers = [subprocess.Popen([*me, "router", str(i), endpoint, name], text=True,
                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE)
                    for i, endpoint in enumerate(endpoints)]  # fmt: skip
@@ -165,18 +166,6 @@ def _sample(routers: list[subprocess.Popen[str]]) -> list[dict[str, int]]:
         r.stdin.flush()
         out.append(json.loads(r.stdout.readline()))
     return out
-
-
-def _free_ports(count: int) -> list[int]:
-    import socket
-
-    sockets = [socket.socket() for _ in range(count)]
-    for s in sockets:
-        s.bind(("127.0.0.1", 0))
-    ports = [s.getsockname()[1] for s in sockets]
-    for s in sockets:
-        s.close()
-    return ports
 
 
 if __name__ == "__main__":
