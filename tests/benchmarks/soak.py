@@ -14,7 +14,8 @@ knowledge base's size (its file: the WAL beside it is bounded by SQLite's checkp
 The table gives each at the end of the warm-up and at the end, and the growth per goal;
 false repairs are the faults counted and the repair rules fired with nothing injected
 (0 is the only right answer). The executive's resident memory is also shown along the
-run (plateau or not), and the machine's load average (the machine may be shared: a high
+run, and its growth per goal in each half of it (a plateau: the second half's is near
+0), and the machine's load average (the machine may be shared: a high
 load may cost observers their rates).
 """
 
@@ -145,8 +146,16 @@ def main() -> None:
     tenth = max(1, len(samples) // 10)
     trend = ", ".join(f"{s.goals}: {s.rss >> 10}" for s in samples[::tenth])
     print(f"executive RSS (KiB) along the run, after goal N: {trend}")
+    middle = samples[len(samples) // 2]
+    halves = [_slope(a, b) for a, b in ((first, middle), (middle, last))]
+    print(f"executive RSS per goal: {halves[0]} in the first half, {halves[1]} in the second")
     for repair in repairs[:10]:
         print(f"  {repair}")
+
+
+def _slope(a: Sample, b: Sample) -> str:
+    """The executive's RSS growth per goal from sample ``a`` to ``b``."""
+    return f"{((b.rss - a.rss) >> 10) / max(1, b.goals - a.goals):+.2f} KiB (goals {a.goals}-{b.goals})"
 
 
 if __name__ == "__main__":
