@@ -92,6 +92,11 @@ def session_config(
         # a router waits this long for scouting answers before it opens (500 ms by
         # default); without scouting nothing answers, and the executive starts later
         config.insert_json5("scouting/delay", "0")
+        # a router's own messages are the control plane (events, replies): none needs
+        # Zenoh's implicit shared memory, whose pool (16 MiB) is resident from the first
+        # message above 3 KiB. Components' large messages still pass through as shared
+        # memory, and a component's own pool is Zenoh's default.
+        config.insert_json5("transport/shared_memory/transport_optimization/enabled", "false")
     if connect:
         config.insert_json5("connect/endpoints", json.dumps(list(connect)))
     config.insert_json5("scouting/multicast/enabled", "false")

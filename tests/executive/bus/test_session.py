@@ -7,6 +7,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 import zenoh
@@ -79,6 +80,34 @@ def test_messages_from_another_process_carry_its_caller_id_and_stamps(
     assert first.caller_id == "peer" and first.key == "topic/chatter"
     assert first.stamp is not None and first.sent is not None
     assert abs(first.sent - first.stamp) < 1.0 and first.received >= first.stamp
+
+
+def test_the_routers_large_messages_take_no_shared_memory_pool(
+    executive_bus: Bus, peer: object
+) -> None:
+    """Zenoh puts a message above 3 KiB to a process on the same machine in a shared
+    memory pool of 16 MiB, all of it resident from the first such message; the
+    executive's control plane (its events and replies) goes without one."""
+    executive_bus.request("test/listen", {"key": "topic/large"})
+    assert executive_bus.wait_for_subscriber("topic/large", timeout=10)
+    for _ in range(20):
+        executive_bus.publish("topic/large", {"x": "a" * 64_000})
+    assert wait_for(
+        lambda: executive_bus.request("test/heard", {"key": "topic/large"})["count"] == 20
+    )
+    assert _shared_memory_kib() < 1024
+
+
+def _shared_memory_kib() -> int:
+    """Resident KiB of this process's mappings of Zenoh's shared memory files."""
+    total, zenoh_file = 0, False
+    for line in Path("/proc/self/smaps").read_text().splitlines():
+        fields = line.split()
+        if "-" in fields[0] and ":" in fields[3]:  # a mapping's first line
+            zenoh_file = fields[-1].endswith(".zenoh")
+        elif fields[0] == "Rss:" and zenoh_file:
+            total += int(fields[1])
+    return total
 
 
 def test_a_publisher_waits_until_a_subscriber_in_another_process_listens(
