@@ -68,8 +68,6 @@ FRAMEWORK_METHODS: Mapping[str, str] = {
     "cancel_goal": "execute",
 }
 GOAL_METHODS = ("take_goal", "cancel_goal")
-# Seconds of robot time a rate loop may be late and still run the steps it missed.
-CATCH_UP = 0.5
 
 
 def refuse_framework_methods(cls: type) -> None:
@@ -237,36 +235,25 @@ class Component:
         the loop's :class:`Rate`, whose ``hz`` may change while it runs (in
         :meth:`on_reconfigure`).
 
-        The loop keeps its schedule, as a sensor does whatever its computer is busy
-        with: deadlines are absolute, so the rate does not drift, and a loop that is
-        late (its process starved of CPU, or stopped) runs the steps it missed at once,
-        as a driver delivers what its sensor buffered, while they are at most
-        :data:`CATCH_UP` seconds of robot time late. Steps later than that (a long stall,
-        a pause) are dropped and the loop goes on at its next deadline, never twice in a
-        row. A step that keeps taking longer than its period therefore slows the loop
-        down, as it should.
+        Deadlines are absolute, so the rate does not drift; a loop that falls more
+        than a period behind skips ahead instead of bursting.
         """
         rate = Rate(hz)
         framework = self._framework
-        catch_up = self.clock.wall(CATCH_UP)
 
         def loop() -> None:
             due = time.monotonic()
-            while True:
-                if not framework.running:  # paused: the schedule starts afresh after
-                    if not framework.wait_running():
-                        return
-                    due = time.monotonic()
+            while framework.wait_running():
                 try:
                     step()
                 except Exception:
                     framework.fail(f"the rate loop {getattr(step, '__name__', step)!r}")
                     return
-                period = self.clock.wall(1.0 / rate.hz) / self.faults.rate_factor()
-                due += period
+                period = self.clock.wall(1.0 / rate.hz)
+                due += period / self.faults.rate_factor()
                 now = time.monotonic()
-                if now - due > max(catch_up, period):  # too late: drop the missed steps
-                    due += ((now - due) // period + 1) * period
+                if due < now - period:
+                    due = now
                 framework.wait(lambda: framework.ended, timeout=max(0.0, due - now))
 
         threading.Thread(target=loop, daemon=True, name=f"rate-{self.name}").start()
