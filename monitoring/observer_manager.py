@@ -16,6 +16,16 @@ Every bus key an observer listens to has one subscription, shared by all observe
 of that key; its handlers only queue. A key that a topic source serves (a ROS 2
 topic: :mod:`executive.bus.topic_source`) is subscribed there instead of on the bus. One loop thread runs each active observer at its
 rate and publishes each result on ``observations``.
+
+The loop itself takes a bus key's messages from its subscription's queue
+(:meth:`executive.bus.session.Bus.poll`) before each round, and at least every
+``TAKE_EVERY`` seconds: a message that has reached the executive is always seen by the
+next round, however busy the process is. A handler thread of its own could be left
+waiting while the loop runs, and the observers would count that wait as the
+publisher's silence (a false timeout under CPU load). A message's ``received`` time is
+when it was sent (the publisher's clock), or when the loop took it if that is earlier:
+a silence, a delay between two topics or a stamp's age is the publisher's, never the
+executive's own lateness.
 """
 
 from __future__ import annotations
@@ -33,6 +43,7 @@ from executive.bus.keys import OBSERVATIONS, component
 from executive.bus.message import Message
 from executive.bus.payloads import ComponentState
 from executive.bus.service import Context, Service
+from executive.bus.session import Polled
 from executive.bus.states import Lifecycle
 from executive.bus.topic_source import TopicSource
 from knowledge.description import ObserverSpec
@@ -43,6 +54,8 @@ from monitoring.observer_config import config_of
 from monitoring.robot_time import RobotTime
 
 log = logging.getLogger("dura.observers")
+
+TAKE_EVERY = 0.1  # wall seconds: the loop takes the queued messages at least this often
 
 ObserverEntry = ObserverSpec | Mapping[str, Any]
 
@@ -77,6 +90,14 @@ class _Feed:
     subscriber: Any = None
     handlers: tuple[Handler, ...] = ()
     users: dict[int, _Slot] = field(default_factory=dict)  # the observers on it, by identity
+    queue: Polled | None = None  # a bus key's messages, until the loop takes them
+    receive: Handler | None = None  # deliver, on the robot-time axis
+
+    def take(self) -> None:
+        """Deliver the queued messages (on the loop's thread)."""
+        if self.queue is not None and self.receive is not None:
+            for message in self.queue.drain():
+                self.receive(message)
 
     def deliver(self, message: Message) -> None:
         for handler in self.handlers:
@@ -286,12 +307,11 @@ class ObserverManager(Service):
             if feed is None:
                 feed = self._feeds[key] = _Feed()
                 source = next((s for s in self._sources if s.serves(key)), None)
-                deliver = self._time.handler(feed.deliver)
-                feed.subscriber = (
-                    source.subscribe(key, deliver)
-                    if source is not None
-                    else self.context.bus.subscribe(key, deliver, decoded=False)
-                )
+                feed.receive = self._time.handler(feed.deliver)
+                if source is not None:
+                    feed.subscriber = source.subscribe(key, feed.receive)
+                else:  # taken by the loop: see the module documentation
+                    feed.subscriber = feed.queue = self.context.bus.poll(key)
             feed.users[id(slot)] = slot
         self._refresh(slot)
 
@@ -321,6 +341,7 @@ class ObserverManager(Service):
         slot.active = should
         for key, handler in slot.inputs:
             feed = self._feeds[key]
+            feed.take()  # what came before is not the activated observer's
             if should:
                 feed.handlers = (*feed.handlers, handler)
             else:
@@ -352,8 +373,10 @@ class ObserverManager(Service):
                 active = [s for s in self._slots.values() if s.active]
                 due = [s for s in active if s.due <= now]
                 if not due:
+                    for feed in self._feeds.values():
+                        feed.take()  # the queues stay short between loops
                     wait = min((s.due for s in active), default=now + 3600.0) - now
-                    self._lock.wait(wait)
+                    self._lock.wait(min(wait, TAKE_EVERY))
                     continue
                 payloads = self._observe(due, now)
             for payload in payloads:
@@ -363,6 +386,8 @@ class ObserverManager(Service):
                     log.warning("cannot publish an observation: %s", e)
 
     def _observe(self, due: list[_Slot], now: float) -> list[dict[str, Any]]:
+        for feed in self._feeds.values():
+            feed.take()  # all that arrived before now, handled or not
         wall, robot_now = time.time(), self._time.now_ns()
         payloads: list[dict[str, Any]] = []
         for slot in due:

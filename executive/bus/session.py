@@ -56,6 +56,29 @@ def check_name(name: str, what: str = "name") -> str:
     return name
 
 
+POLL_CAPACITY = 4096  # messages a polled subscription holds until drained
+
+
+class Polled:
+    """A subscription whose messages wait until taken (see :meth:`Bus.poll`)."""
+
+    def __init__(self, subscriber: Any, message: Callable[..., Message | None]) -> None:
+        self._subscriber = subscriber
+        self._message = message
+
+    def drain(self) -> list[Message]:
+        """Take every message that has arrived, oldest first."""
+        messages: list[Message] = []
+        while (sample := self._subscriber.try_recv()) is not None:
+            message = self._message(sample, taken=True)
+            if message is not None:
+                messages.append(message)
+        return messages
+
+    def undeclare(self) -> None:
+        self._subscriber.undeclare()
+
+
 class _Dropped:
     """Counts dropped malformed messages per key; logs the first and then every 100th."""
 
@@ -272,25 +295,12 @@ class Bus:
         the handler sees them; without it the handler gets the raw message and decodes
         lazily. Exceptions in the handler are logged, never raised into zenoh.
         """
-        prefix_len = len(self.prefix)
         dropped = self._dropped
 
         def on_sample(sample: zenoh.Sample) -> None:
-            relative, sender = sender_of(str(sample.key_expr)[prefix_len:])
-            if len(sample.payload) > MAX_PAYLOAD:
-                dropped(relative, f"{len(sample.payload)} bytes (at most {MAX_PAYLOAD})")
+            message = self._message(sample)
+            if message is None:
                 return
-            attachment = sample.attachment
-            if not sender and attachment is not None:
-                sender = attachment.to_bytes().decode(errors="replace")
-            stamp = sample.timestamp
-            message = Message.at_ns(
-                relative,
-                sample.payload.to_bytes(),
-                sender,
-                round(stamp.get_time().timestamp() * 1e9) if stamp is not None else None,
-                time.time_ns(),
-            )
             try:
                 if decoded:
                     message.payload  # noqa: B018 - decode now, drop if malformed
@@ -304,6 +314,40 @@ class Bus:
         with self._lock:
             self._declared.append(subscriber)
         return subscriber
+
+    def poll(self, key: str, *, capacity: int = POLL_CAPACITY) -> Polled:
+        """Queue the messages on ``dura/<robot>/<key>`` for the caller to take with
+        :meth:`Polled.drain` on its own thread (wildcards allowed).
+
+        A handler of :meth:`subscribe` runs on a Python thread of its own, which a busy
+        process may leave waiting for the CPU or the interpreter: then what has arrived
+        is not handled yet. Zenoh fills this queue without Python, so a drain takes all
+        that has arrived. A message's ``received`` time is its ``sent`` time (the
+        publisher's clock, which the bus's timestamps keep close to this one), or that of
+        the drain if it has none or is later; once ``capacity`` messages wait, the oldest
+        is dropped. Malformed payloads are not looked for (the caller decodes lazily)."""
+        channel: Any = zenoh.handlers.RingChannel(capacity)
+        subscriber = self._session.declare_subscriber(self.key(listened_key(key)), channel)
+        with self._lock:
+            self._declared.append(subscriber)
+        return Polled(subscriber, self._message)
+
+    def _message(self, sample: zenoh.Sample, *, taken: bool = False) -> Message | None:
+        """The message of a sample received now, or (``taken`` from a queue) when it was
+        sent if that is earlier; ``None`` (dropped) if too large."""
+        relative, sender = sender_of(str(sample.key_expr)[len(self.prefix) :])
+        if len(sample.payload) > MAX_PAYLOAD:
+            self._dropped(relative, f"{len(sample.payload)} bytes (at most {MAX_PAYLOAD})")
+            return None
+        attachment = sample.attachment
+        if not sender and attachment is not None:
+            sender = attachment.to_bytes().decode(errors="replace")
+        stamp = sample.timestamp
+        sent = round(stamp.get_time().timestamp() * 1e9) if stamp is not None else None
+        received = time.time_ns()
+        if taken and sent is not None:
+            received = min(received, sent)  # it came between its sending and now
+        return Message.at_ns(relative, sample.payload.to_bytes(), sender, sent, received)
 
     # --- request / reply --------------------------------------------------------------
 
