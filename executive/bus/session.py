@@ -62,18 +62,38 @@ POLL_CAPACITY = 4096  # messages a polled subscription holds until drained
 class Polled:
     """A subscription whose messages wait until taken (see :meth:`Bus.poll`)."""
 
-    def __init__(self, subscriber: Any, message: Callable[..., Message | None]) -> None:
+    def __init__(
+        self,
+        subscriber: Any,
+        message: Callable[[zenoh.Sample], Message | None],
+        offsets: dict[str, int],
+    ) -> None:
         self._subscriber = subscriber
         self._message = message
+        self._offsets = offsets  # sender -> least (taken - sent) so far (ns), on any key
 
     def drain(self) -> list[Message]:
         """Take every message that has arrived, oldest first."""
         messages: list[Message] = []
         while (sample := self._subscriber.try_recv()) is not None:
-            message = self._message(sample, taken=True)
+            message = self._message(sample)
             if message is not None:
-                messages.append(message)
+                messages.append(self._arrival(message))
         return messages
+
+    def _arrival(self, message: Message) -> Message:
+        """The message with its ``received`` time when it arrived, as near as known: its
+        sent time on this clock, which is at most when it was taken. The least lag seen
+        from its sender (the transport's, plus the offset of the sender's clock) maps the
+        sender's clock onto this one."""
+        sent, taken = message.sent_ns, message.received_ns
+        if sent is None:
+            return message
+        offset = min(self._offsets.get(message.caller_id, taken - sent), taken - sent)
+        self._offsets[message.caller_id] = offset
+        return Message.at_ns(
+            message.key, message.raw, message.caller_id, sent, min(taken, sent + offset)
+        )
 
     def undeclare(self) -> None:
         self._subscriber.undeclare()
@@ -182,6 +202,7 @@ class Bus:
         self.prefix = f"dura/{self.robot}/"
         self._attachment = name.encode()
         self._dropped = _Dropped()
+        self._offsets: dict[str, int] = {}  # for Polled: each sender's clock, seen from here
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._declared: list[Any] = []
         self._lock = threading.Lock()
@@ -322,19 +343,19 @@ class Bus:
         A handler of :meth:`subscribe` runs on a Python thread of its own, which a busy
         process may leave waiting for the CPU or the interpreter: then what has arrived
         is not handled yet. Zenoh fills this queue without Python, so a drain takes all
-        that has arrived. A message's ``received`` time is its ``sent`` time (the
-        publisher's clock, which the bus's timestamps keep close to this one), or that of
-        the drain if it has none or is later; once ``capacity`` messages wait, the oldest
-        is dropped. Malformed payloads are not looked for (the caller decodes lazily)."""
+        that has arrived. A message's ``received`` time is when it arrived as near as
+        known: its ``sent`` time moved onto this process's clock by the least lag seen
+        from its sender (so a sender's clock offset does not count), at most the drain's
+        time; once ``capacity`` messages wait, the oldest is dropped. Malformed payloads
+        are not looked for (the caller decodes lazily)."""
         channel: Any = zenoh.handlers.RingChannel(capacity)
         subscriber = self._session.declare_subscriber(self.key(listened_key(key)), channel)
         with self._lock:
             self._declared.append(subscriber)
-        return Polled(subscriber, self._message)
+        return Polled(subscriber, self._message, self._offsets)
 
-    def _message(self, sample: zenoh.Sample, *, taken: bool = False) -> Message | None:
-        """The message of a sample received now, or (``taken`` from a queue) when it was
-        sent if that is earlier; ``None`` (dropped) if too large."""
+    def _message(self, sample: zenoh.Sample) -> Message | None:
+        """The message of a sample received now; ``None`` (dropped) if too large."""
         relative, sender = sender_of(str(sample.key_expr)[len(self.prefix) :])
         if len(sample.payload) > MAX_PAYLOAD:
             self._dropped(relative, f"{len(sample.payload)} bytes (at most {MAX_PAYLOAD})")
@@ -344,10 +365,7 @@ class Bus:
             sender = attachment.to_bytes().decode(errors="replace")
         stamp = sample.timestamp
         sent = round(stamp.get_time().timestamp() * 1e9) if stamp is not None else None
-        received = time.time_ns()
-        if taken and sent is not None:
-            received = min(received, sent)  # it came between its sending and now
-        return Message.at_ns(relative, sample.payload.to_bytes(), sender, sent, received)
+        return Message.at_ns(relative, sample.payload.to_bytes(), sender, sent, time.time_ns())
 
     # --- request / reply --------------------------------------------------------------
 

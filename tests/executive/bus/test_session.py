@@ -7,6 +7,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
 import pytest
@@ -190,3 +191,21 @@ def test_liveliness_tells_when_a_process_vanishes(executive_bus: Bus, endpoint: 
 def test_names_that_are_not_valid_keys_are_refused(name: str) -> None:
     with pytest.raises(BusError, match="invalid"):
         check_name(name)
+
+
+def test_a_polled_message_waits_for_its_taker_and_arrives_on_the_takers_clock(
+    executive_bus: Bus, endpoint: str
+) -> None:
+    polled = executive_bus.poll("topic/data")
+    with zenoh.open(session_config(connect=(endpoint,))) as far:  # its clock 2 s behind
+        behind = datetime.now(UTC) - timedelta(seconds=2)
+        stamp = zenoh.Timestamp(behind, zenoh.TimestampId(bytes(range(1, 17))))
+        before = time.time_ns()
+        far.put("dura/testbot/from/far/topic/data", b'{"i": 0}', timestamp=stamp)
+        got: list[Message] = []
+        assert wait_for(lambda: bool(got.extend(polled.drain()) or got))
+    [message] = got
+    assert (message.caller_id, message.payload) == ("far", {"i": 0})
+    assert message.sent_ns is not None and message.sent_ns < before - 1_000_000_000
+    assert message.received_ns >= before  # not 2 s ago: the sender's clock does not count
+    polled.undeclare()
