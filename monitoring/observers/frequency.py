@@ -16,7 +16,9 @@ Configuration, per topic and caller-id group (see :mod:`monitoring.caller_groups
 
 The filter smooths each publisher's periods: the time between two of its messages,
 taken from their send stamps (zenoh source timestamps), so that delays of reception
-(batching, a busy observer) do not distort them. The frequency of a group is the sum
+(batching, a busy observer) do not distort them; silences count from arrivals, which
+a busy executive does not delay either (see :mod:`monitoring.observer_manager`). A
+publisher starved of CPU is slow for everyone, and is reported. The frequency of a group is the sum
 of ``1 / filtered period`` over its publishers, and the states check it (for
 ``student_t`` the period's std ``s`` becomes ``s / p^2``). A slow topic therefore
 fits a slow state or none (``NO_STATE_FITS``). A publisher is

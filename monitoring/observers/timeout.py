@@ -11,7 +11,8 @@ Configuration (see :mod:`monitoring.caller_groups` for ``topics``)::
 
 Each loop a group reports ``GENERAL_OK`` while its publishers' last message is at most
 ``timeout`` seconds old (counted from the start when nothing came yet), else
-``TIMEOUT``; a hang is therefore reported at the first loop after ``timeout``. With
+``TIMEOUT``; its age counts from its arrival, not from when a busy executive got round
+to it (see :mod:`monitoring.observer_manager`); a hang is therefore reported at the first loop after ``timeout``. With
 ``max_timeouts_in_a_row`` it reports a silence only that many timeouts long, then
 stays quiet until a message comes (the last report stands); a silence is reported at
 least once, also one that began during the start-up time and is longer than that by
