@@ -43,8 +43,8 @@ from executive.bus.clock import Clock, system_clock
 from executive.bus.keys import OBSERVATIONS, component
 from executive.bus.message import Message
 from executive.bus.payloads import ComponentState
+from executive.bus.polled import Polled
 from executive.bus.service import Context, Service
-from executive.bus.session import Polled
 from executive.bus.states import Lifecycle
 from executive.bus.topic_source import TopicSource
 from knowledge.description import ObserverSpec

@@ -6,6 +6,7 @@ but :mod:`knowledge`.
 - :mod:`.session` — one Zenoh session under ``dura/<robot>/``: publish, subscribe,
   requests, liveliness, and waiting for a subscriber; :mod:`.message` — what travels on
   it: JSON objects within limits, and the :class:`~.message.Message` a handler gets;
+  :mod:`.polled` — a subscription drained by its taker, arrivals on the taker's clock;
 - :mod:`.security` — per-robot credentials and Zenoh's access control;
 - :mod:`.keys` — the key expressions, and the environment of a component process;
 - :mod:`.payloads` — what is published on those keys, as typed frozen dataclasses;

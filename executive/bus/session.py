@@ -27,6 +27,7 @@ import zenoh
 
 from executive.bus.keys import listened_key, sender_of, wire_key
 from executive.bus.message import MAX_PAYLOAD, Message, decode, encode
+from executive.bus.polled import POLL_CAPACITY, Polled
 from executive.bus.security import Login
 from knowledge.errors import QUOTED, BusError, DuraError, NoAnswer, excerpt
 
@@ -54,49 +55,6 @@ def check_name(name: str, what: str = "name") -> str:
     if not name or _BAD_KEY.search(name):
         raise BusError(f"invalid {what} '{name}' for the bus (no *, $, ?, #, spaces or //)")
     return name
-
-
-POLL_CAPACITY = 4096  # messages a polled subscription holds until drained
-
-
-class Polled:
-    """A subscription whose messages wait until taken (see :meth:`Bus.poll`)."""
-
-    def __init__(
-        self,
-        subscriber: Any,
-        message: Callable[[zenoh.Sample], Message | None],
-        offsets: dict[str, int],
-    ) -> None:
-        self._subscriber = subscriber
-        self._message = message
-        self._offsets = offsets  # sender -> least (taken - sent) so far (ns), on any key
-
-    def drain(self) -> list[Message]:
-        """Take every message that has arrived, oldest first."""
-        messages: list[Message] = []
-        while (sample := self._subscriber.try_recv()) is not None:
-            message = self._message(sample)
-            if message is not None:
-                messages.append(self._arrival(message))
-        return messages
-
-    def _arrival(self, message: Message) -> Message:
-        """The message with its ``received`` time when it arrived, as near as known: its
-        sent time on this clock, which is at most when it was taken. The least lag seen
-        from its sender (the transport's, plus the offset of the sender's clock) maps the
-        sender's clock onto this one."""
-        sent, taken = message.sent_ns, message.received_ns
-        if sent is None:
-            return message
-        offset = min(self._offsets.get(message.caller_id, taken - sent), taken - sent)
-        self._offsets[message.caller_id] = offset
-        return Message.at_ns(
-            message.key, message.raw, message.caller_id, sent, min(taken, sent + offset)
-        )
-
-    def undeclare(self) -> None:
-        self._subscriber.undeclare()
 
 
 class _Dropped:
