@@ -12,6 +12,7 @@ import zenoh
 from executive.bus.message import Message
 
 POLL_CAPACITY = 4096  # messages a polled subscription holds until drained
+SENDERS = 1024  # senders whose clock offset is kept (the oldest is forgotten first)
 
 
 class Polled:
@@ -45,7 +46,10 @@ class Polled:
         sent, taken = message.sent_ns, message.received_ns
         if sent is None:
             return message
-        offset = min(self._offsets.get(message.caller_id, taken - sent), taken - sent)
+        known = self._offsets.get(message.caller_id)
+        if known is None and len(self._offsets) >= SENDERS:
+            del self._offsets[next(iter(self._offsets))]
+        offset = taken - sent if known is None else min(known, taken - sent)
         self._offsets[message.caller_id] = offset
         return Message.at_ns(
             message.key, message.raw, message.caller_id, sent, min(taken, sent + offset)
