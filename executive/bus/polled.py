@@ -13,6 +13,32 @@ from executive.bus.message import Message
 
 POLL_CAPACITY = 4096  # messages a polled subscription holds until drained
 SENDERS = 1024  # senders whose clock offset is kept (the oldest is forgotten first)
+# how fast a sender's least lag is forgotten (ns per ns since it was learnt: 10 ms a
+# second), so that a sender's clock that steps back (a time service's correction) is
+# believed again within minutes instead of making its messages look old for ever
+FORGET = 0.01
+
+
+class SenderClocks:
+    """Each sender's clock seen from here: the least lag of its messages (its clock's
+    offset plus the transport's), forgotten slowly."""
+
+    def __init__(self) -> None:
+        self._least: dict[str, tuple[int, int]] = {}  # sender -> (least lag, learnt at)
+
+    def arrival(self, sender: str, sent: int, taken: int) -> int:
+        """When a message ``sent`` on its sender's clock and ``taken`` now (ns) arrived,
+        as near as known: its sent time on this clock, at most ``taken``."""
+        known = self._least.get(sender)
+        lag = taken - sent
+        if known is None:
+            if len(self._least) >= SENDERS:
+                del self._least[next(iter(self._least))]
+            least = lag
+        else:
+            least = min(known[0] + round((taken - known[1]) * FORGET), lag)
+        self._least[sender] = (least, taken)
+        return min(taken, sent + least)
 
 
 class Polled:
@@ -23,11 +49,11 @@ class Polled:
         self,
         subscriber: Any,
         message: Callable[[zenoh.Sample], Message | None],
-        offsets: dict[str, int],
+        clocks: SenderClocks,
     ) -> None:
         self._subscriber = subscriber
         self._message = message
-        self._offsets = offsets  # sender -> least (taken - sent) so far (ns), on any key
+        self._clocks = clocks  # shared by the session's polled keys
 
     def drain(self) -> list[Message]:
         """Take every message that has arrived, oldest first."""
@@ -42,18 +68,12 @@ class Polled:
         """The message with its ``received`` time when it arrived, as near as known: its
         sent time on this clock, which is at most when it was taken. The least lag seen
         from its sender (the transport's, plus the offset of the sender's clock) maps the
-        sender's clock onto this one."""
-        sent, taken = message.sent_ns, message.received_ns
+        sender's clock onto this one (see :class:`SenderClocks`)."""
+        sent = message.sent_ns
         if sent is None:
             return message
-        known = self._offsets.get(message.caller_id)
-        if known is None and len(self._offsets) >= SENDERS:
-            del self._offsets[next(iter(self._offsets))]
-        offset = taken - sent if known is None else min(known, taken - sent)
-        self._offsets[message.caller_id] = offset
-        return Message.at_ns(
-            message.key, message.raw, message.caller_id, sent, min(taken, sent + offset)
-        )
+        arrived = self._clocks.arrival(message.caller_id, sent, message.received_ns)
+        return Message.at_ns(message.key, message.raw, message.caller_id, sent, arrived)
 
     def undeclare(self) -> None:
         self._subscriber.undeclare()

@@ -27,7 +27,7 @@ import zenoh
 
 from executive.bus.keys import listened_key, sender_of, wire_key
 from executive.bus.message import MAX_PAYLOAD, Message, decode, encode
-from executive.bus.polled import POLL_CAPACITY, Polled
+from executive.bus.polled import POLL_CAPACITY, Polled, SenderClocks
 from executive.bus.security import Login
 from knowledge.errors import QUOTED, BusError, DuraError, NoAnswer, excerpt
 
@@ -160,7 +160,7 @@ class Bus:
         self.prefix = f"dura/{self.robot}/"
         self._attachment = name.encode()
         self._dropped = _Dropped()
-        self._offsets: dict[str, int] = {}  # for Polled: each sender's clock, seen from here
+        self._clocks = SenderClocks()  # for Polled: each sender's clock, seen from here
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._declared: list[Any] = []
         self._lock = threading.Lock()
@@ -310,7 +310,7 @@ class Bus:
         subscriber = self._session.declare_subscriber(self.key(listened_key(key)), channel)
         with self._lock:
             self._declared.append(subscriber)
-        return Polled(subscriber, self._message, self._offsets)
+        return Polled(subscriber, self._message, self._clocks)
 
     def _message(self, sample: zenoh.Sample) -> Message | None:
         """The message of a sample received now; ``None`` (dropped) if too large."""
