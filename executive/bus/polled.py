@@ -5,6 +5,7 @@ clock."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import zenoh
@@ -13,32 +14,44 @@ from executive.bus.message import Message
 
 POLL_CAPACITY = 4096  # messages a polled subscription holds until drained
 SENDERS = 1024  # senders whose clock offset is kept (the oldest is forgotten first)
-# how fast a sender's least lag is forgotten (ns per ns since it was learnt: 10 ms a
-# second), so that a sender's clock that steps back (a time service's correction) is
-# believed again within minutes instead of making its messages look old for ever
-FORGET = 0.01
+# a sender's least lag is the least of its messages of the last one or two such spans
+# (ns): a sender's clock that steps back (a time service's correction) is believed again
+# within two spans, and a message that waited in the queue does not count as slow
+SPAN = 30_000_000_000
+
+
+@dataclass
+class _Lag:
+    current: int  # the least lag of the current span
+    before: int | None  # of the span before it
+    since: int  # when the current span began (ns, this clock)
+
+    def least(self) -> int:
+        return self.current if self.before is None else min(self.current, self.before)
 
 
 class SenderClocks:
-    """Each sender's clock seen from here: the least lag of its messages (its clock's
-    offset plus the transport's), forgotten slowly."""
+    """Each sender's clock seen from here: the least lag of its recent messages (its
+    clock's offset plus the transport's, as near as seen)."""
 
     def __init__(self) -> None:
-        self._least: dict[str, tuple[int, int]] = {}  # sender -> (least lag, learnt at)
+        self._lags: dict[str, _Lag] = {}
 
     def arrival(self, sender: str, sent: int, taken: int) -> int:
         """When a message ``sent`` on its sender's clock and ``taken`` now (ns) arrived,
         as near as known: its sent time on this clock, at most ``taken``."""
-        known = self._least.get(sender)
         lag = taken - sent
+        known = self._lags.get(sender)
         if known is None:
-            if len(self._least) >= SENDERS:
-                del self._least[next(iter(self._least))]
-            least = lag
+            if len(self._lags) >= SENDERS:
+                del self._lags[next(iter(self._lags))]
+            known = self._lags[sender] = _Lag(lag, None, taken)
+        elif taken - known.since >= SPAN:  # a new span
+            recent = taken - known.since < 2 * SPAN
+            known.before, known.current, known.since = known.current if recent else None, lag, taken
         else:
-            least = min(known[0] + round((taken - known[1]) * FORGET), lag)
-        self._least[sender] = (least, taken)
-        return min(taken, sent + least)
+            known.current = min(known.current, lag)
+        return min(taken, sent + known.least())
 
 
 class Polled:
