@@ -5,7 +5,6 @@ clock."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 import zenoh
@@ -20,11 +19,16 @@ SENDERS = 1024  # senders whose clock offset is kept (the oldest is forgotten fi
 SPAN = 30_000_000_000
 
 
-@dataclass
 class _Lag:
-    current: int  # the least lag of the current span
-    before: int | None  # of the span before it
-    since: int  # when the current span began (ns, this clock)
+    """A sender's least lags (no dataclass: the quick commands' bus must not import
+    ``dataclasses``, whose ``inspect`` and ``copy`` cost them their start)."""
+
+    __slots__ = ("before", "current", "since")
+
+    def __init__(self, current: int, before: int | None, since: int) -> None:
+        self.current = current  # the least lag of the current span
+        self.before = before  # of the span before it
+        self.since = since  # when the current span began (ns, this clock)
 
     def least(self) -> int:
         return self.current if self.before is None else min(self.current, self.before)
