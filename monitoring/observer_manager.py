@@ -23,10 +23,11 @@ The loop itself takes a bus key's messages from its subscription's queue
 next round, however busy the process is. A handler thread of its own could be left
 waiting while the loop runs, and the observers would count that wait as the
 publisher's silence (a false timeout under CPU load). A message's ``received`` time is
-when it arrived as near as known (its send stamp moved onto the executive's clock, at
-most when the loop took it; see :meth:`~executive.bus.session.Bus.poll`): a silence, a
-delay between two topics or a stamp's age is the publisher's and the network's, never
-the executive's own lateness.
+when it arrived: when the executive's Python first saw it, as a recorder stamps it, or
+for one the loop took before that, its send stamp moved onto the executive's clock, at
+most when the loop took it (see :meth:`~executive.bus.session.Bus.poll`). So a
+silence is the publisher's and the network's, never the executive's own lateness, and
+no time depends on when the loop takes.
 """
 
 from __future__ import annotations

@@ -301,22 +301,33 @@ class Bus:
         A handler of :meth:`subscribe` runs on a Python thread of its own, which a busy
         process may leave waiting for the CPU or the interpreter: then what has arrived
         is not handled yet. Zenoh fills this queue without Python, so a drain takes all
-        that has arrived. A message's ``received`` time is when it arrived as near as
-        known: its ``sent`` time moved onto this process's clock by the least lag seen
-        from its sender (so a sender's clock offset does not count), at most the drain's
-        time; once ``capacity`` messages wait, the oldest is dropped. Malformed payloads
-        are not looked for (the caller decodes lazily)."""
+        that has arrived. A message's ``received`` time is when it arrived: when Python
+        first saw it (as a handler of :meth:`subscribe` stamps it), or for one taken
+        before that, its ``sent`` time moved onto this process's clock by the least lag
+        stamped from its sender (so a sender's clock offset does not count), at most the
+        drain's time (see :mod:`executive.bus.polled`); once ``capacity`` messages wait,
+        the oldest is dropped. Malformed payloads are not looked for (the caller decodes
+        lazily)."""
         channel: Any = zenoh.handlers.RingChannel(capacity)
-        subscriber = self._session.declare_subscriber(self.key(listened_key(key)), channel)
+        queue = self._session.declare_subscriber(self.key(listened_key(key)), channel)
         with self._lock:
-            self._declared.append(subscriber)
-        return Polled(subscriber, self._message, self._clocks)
+            self._declared.append(queue)
 
-    def _message(self, sample: zenoh.Sample) -> Message | None:
-        """The message of a sample received now; ``None`` (dropped) if too large."""
+        def stamper(stamp: Handler) -> Any:
+            return self.subscribe(key, stamp, decoded=False)
+
+        def message(sample: zenoh.Sample) -> Message | None:
+            return self._message(sample, report=False)  # the stamper reports a drop
+
+        return Polled(queue, message, self._clocks, stamper, capacity)
+
+    def _message(self, sample: zenoh.Sample, *, report: bool = True) -> Message | None:
+        """The message of a sample received now; ``None`` (dropped, and ``report``-ed)
+        if too large."""
         relative, sender = sender_of(str(sample.key_expr)[len(self.prefix) :])
         if len(sample.payload) > MAX_PAYLOAD:
-            self._dropped(relative, f"{len(sample.payload)} bytes (at most {MAX_PAYLOAD})")
+            if report:
+                self._dropped(relative, f"{len(sample.payload)} bytes (at most {MAX_PAYLOAD})")
             return None
         attachment = sample.attachment
         if not sender and attachment is not None:
