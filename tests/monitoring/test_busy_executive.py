@@ -10,17 +10,15 @@ process had received each within 14 ms.
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 import pytest
 
-from executive.bus.message import Message
 from executive.bus.payloads import GENERAL_OK
-from executive.bus.session import Bus, Handler
+from executive.bus.session import Bus
 from knowledge.description import RobotDescription
+from tests.executive.bus.test_polled import HeldBus
 from tests.monitoring.harness import (
     Observations,
     Publish,
@@ -37,30 +35,14 @@ __all__ = ["publish", "robot"]  # the fixtures this module uses
 HELD = 1.5  # seconds the handler threads wait: three times the observers' timeout
 
 
-class BusyBus(Bus):
-    """The executive's bus, whose subscription handlers wait while ``free`` is clear."""
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        self.free = threading.Event()
-        self.free.set()
-
-    def subscribe(self, key: str, handler: Handler, *, decoded: bool = True) -> Any:
-        def held(message: Message) -> None:
-            self.free.wait()
-            handler(message)
-
-        return super().subscribe(key, held, decoded=decoded)
-
-
 @pytest.fixture
-def busy(robot: RobotDescription) -> Iterator[BusyBus]:
-    with BusyBus(robot.name, name="executive", endpoint=robot.endpoint, listen=True) as opened:
+def busy(robot: RobotDescription) -> Iterator[HeldBus]:
+    with HeldBus(robot.name, name="executive", endpoint=robot.endpoint, listen=True) as opened:
         yield opened
 
 
 @pytest.fixture
-def watched(robot: RobotDescription, busy: BusyBus) -> Iterator[Observations]:
+def watched(robot: RobotDescription, busy: HeldBus) -> Iterator[Observations]:
     """The observations, as another process on the robot's bus sees them."""
     with Bus(robot.name, name="watcher", endpoint=robot.endpoint) as other:
         yield Observations(other)
@@ -68,7 +50,7 @@ def watched(robot: RobotDescription, busy: BusyBus) -> Iterator[Observations]:
 
 def test_handler_threads_held_back_are_not_counted_as_the_publishers_silence(
     robot: RobotDescription,
-    busy: BusyBus,
+    busy: HeldBus,
     watched: Observations,
     publish: Publish,
     tmp_path: Path,
