@@ -49,7 +49,8 @@ def test_a_hand_started_component_is_modelled_and_its_crash_is_a_fault_and_resta
     assert robot.events("FAULT")[0].subject == "lidar"
     assert wait_for(lambda: state_of(robot, "lidar")["state"] == "ready", 20)
     assert state_of(robot, "lidar")["pid"] != started["pid"]
-    assert "lidar" in modelled(robot)
+    # the model follows the restart on the monitoring service's side, a moment later
+    assert wait_for(lambda: "lidar" in modelled(robot), 10)
 
 
 def test_a_task_that_used_a_hand_started_component_leaves_it_running(
