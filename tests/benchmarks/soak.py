@@ -14,8 +14,10 @@ knowledge base's size (its file: the WAL beside it is bounded by SQLite's checkp
 The table gives each at the end of the warm-up and at the end, and the growth per goal;
 false repairs are the faults counted and the repair rules fired with nothing injected
 (0 is the only right answer). The executive's resident memory is also shown along the
-run, and its growth per goal in each half of it (a plateau: the second half's is near
-0), and the machine's load average (the machine may be shared: a high
+run, its growth per goal in each half of it (a plateau: the second half's is near 0)
+and its trend over all samples (a least-squares slope: the first and last samples hold
+whatever memory was in use at that moment, the trend is not swayed by one sample), and
+the machine's load average (the machine may be shared: a high
 load may cost observers their rates).
 """
 
@@ -26,6 +28,7 @@ import itertools
 import os
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -149,8 +152,22 @@ def main() -> None:
     middle = samples[len(samples) // 2]
     halves = [_slope(a, b) for a, b in ((first, middle), (middle, last))]
     print(f"executive RSS per goal: {halves[0]} in the first half, {halves[1]} in the second")
+    rss, anonymous = _trend(samples, lambda s: s.rss), _trend(samples, lambda s: s.anonymous)
+    print(f"executive trend (least squares over all {len(samples)} samples, which one "
+          f"sample's ups and downs do not sway): RSS {rss / 1024:+.2f} KiB per goal, "
+          f"anonymous {anonymous / 1024:+.2f}")  # fmt: skip
     for repair in repairs[:10]:
         print(f"  {repair}")
+
+
+def _trend(samples: list[Sample], value: Callable[[Sample], int]) -> float:
+    """The least-squares slope of ``value`` over the goals of ``samples``, per goal."""
+    goals = [s.goals for s in samples]
+    values = [value(s) for s in samples]
+    mean_goal, mean_value = sum(goals) / len(goals), sum(values) / len(values)
+    spread = sum((g - mean_goal) ** 2 for g in goals)
+    together = sum((g - mean_goal) * (v - mean_value) for g, v in zip(goals, values, strict=True))
+    return together / spread if spread else 0.0
 
 
 def _slope(a: Sample, b: Sample) -> str:
