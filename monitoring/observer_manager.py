@@ -13,7 +13,7 @@ and an observer starts afresh (start-up time, empty filters) each time it become
 active.
 
 Every bus key an observer listens to has one subscription, shared by all observers
-of that key; its handlers only queue. A key that a topic source serves (a ROS 2
+of that key. A key that a topic source serves (a ROS 2
 topic: :mod:`executive.bus.topic_source`) is subscribed there instead of on the bus. One loop thread runs each active observer at its
 rate and publishes each result on ``observations``.
 
@@ -375,8 +375,7 @@ class ObserverManager(Service):
                 active = [s for s in self._slots.values() if s.active]
                 due = [s for s in active if s.due <= now]
                 if not due:
-                    for feed in self._feeds.values():
-                        feed.take()  # the queues stay short between loops
+                    self._take()  # the queues stay short between loops
                     wait = min((s.due for s in active), default=now + 3600.0) - now
                     self._lock.wait(min(wait, TAKE_EVERY))
                     continue
@@ -387,9 +386,13 @@ class ObserverManager(Service):
                 except DuraError as e:
                     log.warning("cannot publish an observation: %s", e)
 
-    def _observe(self, due: list[_Slot], now: float) -> list[dict[str, Any]]:
+    def _take(self) -> None:
+        """Deliver every feed's queued messages (on the loop's thread)."""
         for feed in self._feeds.values():
-            feed.take()  # all that arrived before now, handled or not
+            feed.take()
+
+    def _observe(self, due: list[_Slot], now: float) -> list[dict[str, Any]]:
+        self._take()  # all that arrived before now, handled or not
         wall, robot_now = time.time(), self._time.now_ns()
         payloads: list[dict[str, Any]] = []
         for slot in due:
