@@ -9,6 +9,9 @@ the others.
 
 from __future__ import annotations
 
+import re
+from collections.abc import Callable
+
 OBSERVATIONS = "observations"  # observation infos from observers
 DIAGNOSES = "diagnoses"  # diagnosis results (diagnosis engine)
 RESOURCES = "resources"  # resource monitor node infos
@@ -18,6 +21,7 @@ EVENTS = "events"  # every KB event, as it is logged
 
 TOPICS = "topic/"  # the keys of topic data, as publishers and subscribers name them
 SENT = "from/"  # where topic data travels: ``from/<sender>/topic/<name>``
+_WILD = re.compile(r"[*$]")
 
 
 def wire_key(key: str, sender: str) -> str:
@@ -26,9 +30,35 @@ def wire_key(key: str, sender: str) -> str:
     return f"{SENT}{sender}/{key}" if key.startswith(TOPICS) else key
 
 
-def listened_key(key: str) -> str:
-    """The key a subscriber of ``key`` listens on: every sender of topic data."""
-    return f"{SENT}*/{key}" if key.startswith(TOPICS) else key
+def listened_key(key: str, *, component: bool = True) -> str:
+    """The key a subscriber of ``key`` listens on: every sender of topic data.
+
+    A component listens on ``from/*/topic/...``; every other session (the executive's,
+    a service's, the CLI's) on ``from/**/topic/...``, which also matches keys of other
+    topics (see :func:`heard`). The two never share a key expression: Zenoh's router
+    keeps a closed session's state for as long as another session subscribes the very
+    key expression it subscribed (or one under it; Zenoh 1.10), so a component that
+    shared the executive's would leave its state there at every start."""
+    if not key.startswith(TOPICS):
+        return key
+    return f"{SENT}{'*' if component else '**'}/{key}"
+
+
+def heard(key: str) -> Callable[[str], bool] | None:
+    """For a subscription of ``key`` on ``from/**/``, whether a message's key (as
+    published, see :func:`sender_of`) is one of ``key``'s; ``None`` if any is.
+
+    ``**`` may take chunks of the topic's name for the sender's: a topic ``a/topic/b``
+    of sender ``s`` matches ``from/**/topic/b``, and its key (``topic/a/topic/b``) is
+    not ``topic/b``."""
+    if not key.startswith(TOPICS):
+        return None
+    if not _WILD.search(key):
+        return key.__eq__
+    import zenoh  # here: a component's environment reads these keys without the bus
+
+    pattern = zenoh.KeyExpr(key)
+    return lambda published: bool(pattern.includes(zenoh.KeyExpr(published)))
 
 
 def sender_of(key: str) -> tuple[str, str]:

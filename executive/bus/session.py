@@ -25,10 +25,10 @@ from typing import TYPE_CHECKING, Any
 
 import zenoh
 
-from executive.bus.keys import listened_key, sender_of, wire_key
+from executive.bus.keys import heard, listened_key, sender_of, wire_key
 from executive.bus.message import MAX_PAYLOAD, Message, decode, encode
 from executive.bus.polled import POLL_CAPACITY, Polled, SenderClocks
-from executive.bus.security import Login
+from executive.bus.security import COMPONENT, Login
 from knowledge.errors import QUOTED, BusError, DuraError, NoAnswer, excerpt
 
 if TYPE_CHECKING:
@@ -130,6 +130,10 @@ class Bus:
         dictionary, access: (the executive) the users it accepts and what each may do.
         lease: seconds of silence after which a link counts as lost (and the tokens
             declared over it vanish), instead of Zenoh's default of 10.
+        component: a component's session, which comes and goes with each start (by
+            default: when ``login`` is a component's): it subscribes topics on key
+            expressions that no other session declares
+            (:func:`executive.bus.keys.listened_key`).
 
     Raises:
         BusError: the endpoint is unusable: in use (listen) or nobody listens (connect).
@@ -147,6 +151,7 @@ class Bus:
         dictionary: Path | None = None,
         access: Mapping[str, Any] | None = None,
         lease: float | None = None,
+        component: bool | None = None,
     ) -> None:
         if endpoint is None:
             # here: the robot description's module is not on a quick command's path
@@ -157,6 +162,9 @@ class Bus:
         self.name = name
         self._sender = check_name(name, "sender name").replace("/", "_") if name else "anonymous"
         self.endpoint = endpoint
+        if component is None:
+            component = login is not None and login.user.startswith(COMPONENT)
+        self.component = component
         self.prefix = f"dura/{self.robot}/"
         self._attachment = name.encode()
         self._dropped = _Dropped()
@@ -276,8 +284,10 @@ class Bus:
         """
         dropped = self._dropped
 
+        listened, wanted = self._listened(key)
+
         def on_sample(sample: zenoh.Sample) -> None:
-            message = self._message(sample)
+            message = self._message(sample, wanted)
             if message is None:
                 return
             try:
@@ -289,7 +299,7 @@ class Bus:
             except Exception:
                 _log().exception("handler for %s failed", message.key)
 
-        subscriber = self._session.declare_subscriber(self.key(listened_key(key)), on_sample)
+        subscriber = self._session.declare_subscriber(listened, on_sample)
         with self._lock:
             self._declared.append(subscriber)
         return subscriber
@@ -309,7 +319,8 @@ class Bus:
         the oldest is dropped. Malformed payloads are not looked for (the caller decodes
         lazily)."""
         channel: Any = zenoh.handlers.RingChannel(capacity)
-        queue = self._session.declare_subscriber(self.key(listened_key(key)), channel)
+        listened, wanted = self._listened(key)
+        queue = self._session.declare_subscriber(listened, channel)
         with self._lock:
             self._declared.append(queue)
 
@@ -317,14 +328,25 @@ class Bus:
             return self.subscribe(key, stamp, decoded=False)
 
         def message(sample: zenoh.Sample) -> Message | None:
-            return self._message(sample, report=False)  # the stamper reports a drop
+            return self._message(sample, wanted, report=False)  # the stamper reports a drop
 
         return Polled(queue, message, self._clocks, stamper, capacity)
 
-    def _message(self, sample: zenoh.Sample, *, report: bool = True) -> Message | None:
-        """The message of a sample received now; ``None`` (dropped, and ``report``-ed)
-        if too large."""
+    def _listened(self, key: str) -> tuple[str, Callable[[str], bool] | None]:
+        """The key expression a subscription of ``key`` declares, and which of the keys
+        it matches are ``key``'s (``None``: all)."""
+        if self.component:
+            return self.key(listened_key(key)), None
+        return self.key(listened_key(key, component=False)), heard(key)
+
+    def _message(
+        self, sample: zenoh.Sample, wanted: Callable[[str], bool] | None, *, report: bool = True
+    ) -> Message | None:
+        """The message of a sample received now; ``None`` if it is another key's than
+        ``wanted``, or too large (dropped, and ``report``-ed)."""
         relative, sender = sender_of(str(sample.key_expr)[len(self.prefix) :])
+        if wanted is not None and not wanted(relative):
+            return None
         if len(sample.payload) > MAX_PAYLOAD:
             if report:
                 self._dropped(relative, f"{len(sample.payload)} bytes (at most {MAX_PAYLOAD})")

@@ -309,6 +309,7 @@ class Component:
                 name=name,
                 endpoint=os.environ[keys.ENV_ENDPOINT],
                 login=login,
+                component=True,
             ) as bus:
                 instance = os.environ.get(keys.ENV_INSTANCE) or str(os.getpid())
                 return cls(name, bus, *args)._framework.run(instance)

@@ -2,14 +2,23 @@
 
     python -m tests.benchmarks.bus_logins [--logins N] [--together K]
 
-Three routers of the use case's bus (its access control, its credentials) run side by
-side, each in a process of its own, with the C heap as glibc sets it up (the baseline),
-with malloc's arenas capped, and as ``dura run`` has it (capped, and trimmed before each
-sample as its trimmer does every 30 s: :mod:`executive.runtime.native_heap`). Short-lived
-client processes log in as the use case's components, ``--together`` at a time (the
-executive starts a configuration's components at once), and do what a component does on
-the bus: a liveliness token, a subscription, a command queryable, a message on a topic
-it publishes; then they close the bus and end. Each login goes to the three routers in
+Four routers of the use case's bus (its access control, its credentials) run side by
+side, each in a process of its own:
+
+- with the C heap as glibc sets it up (the baseline of the heap);
+- with the heap as ``dura run`` has it: malloc's arenas capped, and trimmed before each
+  sample as its trimmer does every 30 s (:mod:`executive.runtime.native_heap`);
+- as ``dura run`` has it, and subscribed to every topic as the executive's observers
+  are, but on the key expressions the components subscribe (the baseline of the keys:
+  as dura did before 0.2.0);
+- the same on the executive's own key expressions, as ``dura run`` has them now
+  (:func:`executive.bus.keys.listened_key`).
+
+Short-lived client processes log in as the use case's components, ``--together`` at a
+time (the executive starts a configuration's components at once), and do what a
+component does on the bus: a liveliness token, a watch of the executive's, its
+subscriptions, a command queryable, a message on each topic it publishes; then they
+close the bus and end. Each login goes to the three routers in
 turn. After a warm-up of a tenth of the logins, and at the end once the routers are idle,
 each router's anonymous resident memory and malloc's bytes in use are sampled; the table
 gives their growth per login.
@@ -32,7 +41,8 @@ from executive.testing.harness import free_endpoint
 from knowledge.robot import load_robot
 from tests.conftest import USECASE
 
-VARIANTS = ("glibc's defaults", "arenas capped", "dura run (capped, trimmed)")
+VARIANTS = ("glibc's defaults", "dura run's heap", "+ topics, components' keys",
+            "+ topics, own keys (dura run)")  # fmt: skip
 MALLINFO2 = ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks",
              "uordblks", "fordblks", "keepcost")  # fmt: skip
 IDLE = 5.0  # seconds the routers are left alone before the last sample
@@ -44,16 +54,22 @@ def router(variant: int, endpoint: str, folder: Path) -> None:
 
     if variant > 0:
         limit_arenas()
+    topics = variant >= 2
     robot = load_robot(USECASE, domain=False)
     credentials = security.read_credentials(folder / "bus.json")
     access = security.access_control(robot.name, robot.components, topics=security.topics_of(robot))
     dictionary = security.dictionary(credentials, folder / f"dictionary{variant}")
     with Bus(robot.name, name="executive", endpoint=endpoint, listen=True,
              login=credentials.login(security.EXECUTIVE), dictionary=dictionary,
-             access=access):  # fmt: skip
+             access=access, component=variant == 2) as bus:  # fmt: skip
+        bus.declare_alive(keys.EXECUTIVE_ALIVE)
+        observed = {t for spec in robot.components.values() for t in spec.publishes}
+        polled = [bus.poll(keys.topic(t)) for t in sorted(observed) if topics]
         print("ready", flush=True)
         for _ in sys.stdin:
-            if variant == 2:
+            for queue in polled:
+                queue.drain()
+            if variant > 0:
                 trim()
             print(json.dumps({"anonymous": _anonymous(), "in_use": _in_use()}), flush=True)
 
@@ -64,8 +80,10 @@ def client(endpoints: list[str], folder: Path, component: str, instance: str) ->
     spec = robot.components[component]
     login = security.read_credentials(folder / "bus.json").login(security.component_user(component))
     for endpoint in endpoints:
-        with Bus(robot.name, name=component, endpoint=endpoint, login=login) as bus:
+        with Bus(robot.name, name=component, endpoint=endpoint, login=login,
+                 component=True) as bus:  # fmt: skip
             bus.declare_alive(keys.component_alive(component, instance))
+            bus.watch_alive(keys.EXECUTIVE_ALIVE, lambda *_: None)
             for name in spec.subscribes:
                 bus.subscribe(keys.topic(name), lambda *_: None)
             bus.serve(keys.component(component, "cmd"), lambda *_: None)
@@ -142,11 +160,11 @@ def main() -> None:
                 r.wait()
     print(f"{args.logins} component logins after a warm-up of {warm_up}, {args.together} "
           f"at a time, {time.monotonic() - began:.0f} s, routers idle {IDLE:g} s at the end")  # fmt: skip
-    print(f"{'router heap':<28} {'anonymous KiB':>14} {'per login':>10} "
+    print(f"{'router heap':<30} {'anonymous KiB':>14} {'per login':>10} "
           f"{'malloc in use KiB':>18} {'per login':>10}")  # fmt: skip
     for variant, a, b in zip(VARIANTS, first, last, strict=True):
         grown, used = b["anonymous"] - a["anonymous"], b["in_use"] - a["in_use"]
-        print(f"{variant:<28} {a['anonymous']:>6} -> {b['anonymous']:<5} "
+        print(f"{variant:<30} {a['anonymous']:>6} -> {b['anonymous']:<5} "
               f"{grown / args.logins:>+10.2f} {a['in_use']:>8} -> {b['in_use']:<6} "
               f"{used / args.logins:>+10.2f}")  # fmt: skip
 

@@ -251,3 +251,15 @@ def test_the_executive_writes_the_fleets_login_alone_for_the_owner_only(
     assert stat.S_IMODE(path.stat().st_mode) == 0o600
     written = security.read_credentials(path)
     assert dict(written.passwords) == {"fleet": credentials.passwords["fleet"]}
+
+
+def test_a_session_is_a_components_when_its_login_is(
+    router: Bus, endpoint: str, credentials: Credentials
+) -> None:
+    assert not router.component
+    with Bus(ROBOT, name="cli", endpoint=endpoint,
+             login=credentials.login(security.OPERATOR)) as cli:  # fmt: skip
+        assert not cli.component
+    login = credentials.login(security.component_user("lidar"))
+    with Bus(ROBOT, name="lidar", endpoint=endpoint, login=login) as lidar:
+        assert lidar.component

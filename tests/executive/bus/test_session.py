@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 import zenoh
 
+from executive.bus.keys import listened_key
 from executive.bus.message import Message
 from executive.bus.session import Bus, check_name, session_config
 from knowledge.errors import BusError
@@ -210,3 +211,43 @@ def test_a_polled_message_waits_for_its_taker_and_arrives_on_the_takers_clock(
     assert message.sent_ns is not None and message.sent_ns < before - 1_000_000_000
     assert message.received_ns >= before  # not 2 s ago: the sender's clock does not count
     polled.undeclare()
+
+
+@pytest.mark.parametrize("polled", [False, True], ids=["subscribed", "polled"])
+def test_the_executive_hears_a_topic_on_keys_no_component_declares_and_only_that_topic(
+    executive_bus: Bus, endpoint: str, polled: bool
+) -> None:
+    """Its subscriptions match ``from/**/...``: what they match of other topics (a
+    topic named ``x/topic/data``, or ``topic/data`` of a ``topic/*``) is not theirs."""
+    exact: list[Message] = []
+    each: list[Message] = []
+    if polled:
+        queues = [executive_bus.poll("topic/data"), executive_bus.poll("topic/*")]
+    else:
+        executive_bus.subscribe("topic/data", exact.append)
+        executive_bus.subscribe("topic/*", each.append)
+    with zenoh.open(session_config(connect=(endpoint,))) as raw:
+        for key in ("from/s/x/topic/data", "from/s/topic/topic/data", "from/s/topic/data"):
+            raw.put(f"dura/testbot/{key}", f'{{"key": "{key}"}}'.encode())
+        if polled:
+            assert wait_for(lambda: bool(exact.extend(queues[0].drain()) or exact))
+            time.sleep(0.2)  # the other two came first, from the same session: a margin
+            exact.extend(queues[0].drain())
+            each.extend(queues[1].drain())
+        else:
+            assert wait_for(lambda: exact and each)
+            time.sleep(0.2)
+    assert [(m.key, m.caller_id) for m in exact] == [("topic/data", "s")]
+    assert [(m.key, m.caller_id) for m in each] == [("topic/data", "s")]
+
+
+def test_a_component_and_the_executive_never_subscribe_the_same_key_expression() -> None:
+    """Zenoh's router (1.10) keeps a closed session's state while another session
+    subscribes the key expression it subscribed, or one under it: a component, which
+    comes and goes at every start, must share neither with the executive."""
+    for key in ("topic/scan", "topic/camera/image", "topic/*", "topic/**"):
+        theirs = zenoh.KeyExpr(listened_key(key))
+        ours = zenoh.KeyExpr(listened_key(key, component=False))
+        assert str(theirs) != str(ours)
+        assert not str(ours).startswith(f"{theirs}/")
+        assert ours.includes(theirs)  # the executive hears all the component hears
