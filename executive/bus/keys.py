@@ -37,7 +37,7 @@ def listened_key(key: str, *, component: bool = True) -> str:
     a service's, the CLI's) on ``from/**/topic/...``, which also matches keys of other
     topics (see :func:`heard`). The two never share a key expression: Zenoh's router
     keeps a closed session's state for as long as another session subscribes the very
-    key expression it subscribed (or one under it; Zenoh 1.10), so a component that
+    wildcard key expression it subscribed (or one under it; Zenoh 1.10), so a component that
     shared the executive's would leave its state there at every start."""
     if not key.startswith(TOPICS):
         return key

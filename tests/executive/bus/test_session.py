@@ -243,7 +243,7 @@ def test_the_executive_hears_a_topic_on_keys_no_component_declares_and_only_that
 
 def test_a_component_and_the_executive_never_subscribe_the_same_key_expression() -> None:
     """Zenoh's router (1.10) keeps a closed session's state while another session
-    subscribes the key expression it subscribed, or one under it: a component, which
+    subscribes the wildcard key expression it subscribed, or one under it: a component, which
     comes and goes at every start, must share neither with the executive."""
     for key in ("topic/scan", "topic/camera/image", "topic/*", "topic/**"):
         theirs = zenoh.KeyExpr(listened_key(key))
