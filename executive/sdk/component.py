@@ -236,7 +236,9 @@ class Component:
         :meth:`on_reconfigure`).
 
         Deadlines are absolute, so the rate does not drift; a loop that falls more
-        than a period behind skips ahead instead of bursting.
+        than a period behind (a long step, a stopped process, a pause) skips ahead
+        instead of bursting: its next step comes a period after the late one
+        (:func:`next_due`).
         """
         rate = Rate(hz)
         framework = self._framework
@@ -244,16 +246,15 @@ class Component:
         def loop() -> None:
             due = time.monotonic()
             while framework.wait_running():
+                started = time.monotonic()
                 try:
                     step()
                 except Exception:
                     framework.fail(f"the rate loop {getattr(step, '__name__', step)!r}")
                     return
-                period = self.clock.wall(1.0 / rate.hz)
-                due += period / self.faults.rate_factor()
+                period = self.clock.wall(1.0 / rate.hz) / self.faults.rate_factor()
                 now = time.monotonic()
-                if due < now - period:
-                    due = now
+                due = next_due(due, period, started, now)
                 framework.wait(lambda: framework.ended, timeout=max(0.0, due - now))
 
         threading.Thread(target=loop, daemon=True, name=f"rate-{self.name}").start()
@@ -316,6 +317,23 @@ class Component:
         except DuraError as e:
             logging.getLogger(f"dura.component.{name}").error("%s", e)
             return 1
+
+
+def next_due(due: float, period: float, started: float, now: float) -> float:
+    """When a rate loop's next step is due, ``now`` that the step due at ``due``, which
+    ``started`` then, is done.
+
+    On time, or less than a period late: a ``period`` after ``due`` (absolute deadlines:
+    the loop catches up and does not drift). Started more than a period late (the
+    process was stopped, or held up): a period after it started, so that the next step
+    does not follow at once, a burst whose one short period a frequency observer would
+    read as a rate far too high. A step that itself took more than two periods is
+    followed at once.
+    """
+    if started - due > period:
+        return started + period
+    due += period
+    return now if due < now - period else due
 
 
 class Rate:
