@@ -58,7 +58,7 @@ def heard(key: str) -> Callable[[str], bool] | None:
     import zenoh  # here: a component's environment reads these keys without the bus
 
     pattern = zenoh.KeyExpr(key)
-    return lambda published: bool(pattern.includes(zenoh.KeyExpr(published)))
+    return lambda published: bool(pattern.includes(published))  # no KeyExpr per message
 
 
 def sender_of(key: str) -> tuple[str, str]:

@@ -335,9 +335,8 @@ class Bus:
     def _listened(self, key: str) -> tuple[str, Callable[[str], bool] | None]:
         """The key expression a subscription of ``key`` declares, and which of the keys
         it matches are ``key``'s (``None``: all)."""
-        if self.component:
-            return self.key(listened_key(key)), None
-        return self.key(listened_key(key, component=False)), heard(key)
+        listened = self.key(listened_key(key, component=self.component))
+        return listened, None if self.component else heard(key)
 
     def _message(
         self, sample: zenoh.Sample, wanted: Callable[[str], bool] | None, *, report: bool = True
