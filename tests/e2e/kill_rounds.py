@@ -263,6 +263,9 @@ class KillRounds:
     step runs), waits a random moment, kills it (SIGKILL) and checks the facts the dead
     executive left. The moment: up to ``longest`` seconds after the goal, or a moment
     into the first step that starts after it, or (sometimes) while the executive starts.
+    A round with ``replan`` leaves nothing to chance but the moment: it waits for a step
+    of the first plan, gives a second goal that is not yet true, and kills a moment into
+    the first step of the plan that follows.
     """
 
     def __init__(self, folder: Path, seed: int) -> None:
@@ -284,15 +287,16 @@ class KillRounds:
             self.rounds[-1].recovered = found
         return found
 
-    def round(self, longest: float = 3.0) -> Round:
+    def round(self, longest: float = 3.0, *, replan: bool = False) -> Round:
         """One round (see the class docstring)."""
         robot, rng = self.robot, self.random
         began = time.monotonic()
         first = not self.rounds
+        mark = self.checker.seen  # the dead executive's last event
         at_start = self._restart()  # the previous round's recovery
         before = at_start if first else []
         did = []
-        if rng.random() < 0.15:  # while it starts: recovering, its planner warming up
+        if not replan and rng.random() < 0.15:  # while it starts: recovering, warming up
             time.sleep(rng.uniform(0.0, 1.0))
             robot.kill()
             did.append(f"killed {time.monotonic() - began:.1f} s after the start")
@@ -313,20 +317,34 @@ class KillRounds:
         last = max((e.id for e in robot.events(limit=1)), default=0)
         moment = rng.uniform(0.0, longest)
         since = time.monotonic()
-        if rng.random() < 0.6:  # a second goal while the first plan runs: a replan
-            time.sleep(rng.uniform(0.0, moment))
+        if replan or rng.random() < 0.6:  # a second goal while the first plan runs: a replan
+            if replan:
+                self._wait_for_step(mark)
+            else:
+                time.sleep(rng.uniform(0.0, moment))
             last = max((e.id for e in robot.events(limit=1)), default=0)
-            goal = rng.choice(GOALS)
+            goal = self._untrue_goal() if replan else rng.choice(GOALS)
             robot.submit_goal(goal)
             did.append(f"goal {goal} after {time.monotonic() - since:.1f} s")
-        if rng.random() < 0.5:  # while a step (of the newest plan) runs
+        if replan or rng.random() < 0.5:  # while a step (of the newest plan) runs
             self._wait_for_step(last)
-            time.sleep(rng.uniform(0.0, FAST["behaviors"]["move_to"]["params"]["duration"]))
+            shortest = FAST["behaviors"]["take_picture"]["params"]["duration"]
+            longest_step = FAST["behaviors"]["move_to"]["params"]["duration"]
+            time.sleep(rng.uniform(0.0, shortest if replan else longest_step))
         else:
             time.sleep(max(0.0, moment - (time.monotonic() - since)))
         robot.kill()
         did.append(f"killed after {time.monotonic() - since:.1f} s")
         return self._killed(began, did, before)
+
+    def _untrue_goal(self) -> str:
+        """A goal that is not true yet and no open goal asks for: one the executive
+        must plan for again."""
+        facts = set(self.robot.facts())
+        asked = {g.expression for g in self.robot.goals() if g.state.is_open}
+        return self.random.choice(
+            [g for g in GOALS[:5] if g not in facts and g not in asked] or list(GOALS[5:])
+        )
 
     def _wait_for_step(self, after: int, timeout: float = 20.0) -> None:
         """Wait (a while at most) until a step starts after the first plan that starts

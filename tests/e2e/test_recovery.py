@@ -21,6 +21,7 @@ pytestmark = pytest.mark.slow
 
 Start = Callable[..., RobotProcess]
 ROUNDS = 12  # tests/benchmarks/recovery.py kills 200 times
+FORCED = 5  # rounds at most that replan and kill mid-step, if the random ones did not
 
 
 def test_a_kill_while_the_replanned_drive_runs_leaves_the_robot_in_one_place(
@@ -61,6 +62,10 @@ def test_the_facts_are_exact_after_kills_at_random_moments_across_replans(
     try:
         for _ in range(ROUNDS):
             rounds.round()
+        for _ in range(FORCED):  # random moments on a loaded machine may miss the case
+            if any(r.running and r.plans > 1 for r in rounds.rounds):
+                break
+            rounds.round(replan=True)
         final = rounds.final_check()
     finally:
         rounds.close()
@@ -68,7 +73,7 @@ def test_the_facts_are_exact_after_kills_at_random_moments_across_replans(
     mid_step = [r for r in rounds.rounds if r.running]
     replanned = [r for r in mid_step if r.plans > 1]
     print(
-        f"facts correct after {ROUNDS - len(wrong)} of {ROUNDS} kills "
+        f"facts correct after {len(rounds.rounds) - len(wrong)} of {len(rounds.rounds)} kills "
         f"({len(mid_step)} while a step ran, {len(replanned)} of them after a replan)"
     )
     assert wrong == [], "\n".join(f"round {r.number} ({r.did}): {r.problems}" for r in wrong)
