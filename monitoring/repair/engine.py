@@ -7,7 +7,8 @@ lets ``rules.lp`` (with the user's ASP files) decide which rules fire; several c
 fire at once, highest priority first.
 
 A rule fires when its condition becomes true; with ``recall_duration`` it fires again
-while the condition holds, at most once per ``recall_duration`` seconds.
+while the condition holds, at most once per ``recall_duration`` seconds (a condition
+that comes back sooner after a firing waits until the time is up).
 """
 
 from __future__ import annotations

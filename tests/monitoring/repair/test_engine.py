@@ -98,6 +98,26 @@ def test_a_rule_fires_again_after_its_recall_duration_while_the_condition_holds(
     assert fired(e) == ["slow"]
 
 
+def test_a_condition_back_within_the_recall_duration_waits_until_it_is_up(
+    tmp_path: Path,
+) -> None:
+    clock = Clock()
+    e = engine(tmp_path, RESTART_ON_SLOW_SCAN + "    recall_duration: 5\n", clock)
+    e.observe(hz(-1))
+    e.observe(hz(-1))
+    assert fired(e) == ["slow"]
+    clock.now = 1.0
+    for _ in range(3):
+        e.observe(hz(0))
+    assert fired(e) == []  # repaired
+    clock.now = 2.0
+    for _ in range(2):
+        e.observe(hz(-1))
+    assert fired(e) == []  # back 2 s after the firing
+    clock.now = 5.0
+    assert fired(e) == ["slow"]
+
+
 def test_a_single_shot_rule_fires_only_once(tmp_path: Path) -> None:
     clock = Clock()
     e = engine(
