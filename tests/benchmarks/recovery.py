@@ -43,7 +43,7 @@ def rounds(count: int) -> tuple[int, int, str]:
     done = kill_rounds(count)
     correct = sum(not r.problems for r in done)
     mid_step = [r for r in done if r.running]
-    replanned = sum(r.plans > 1 for r in mid_step)
+    replanned = sum(r.replanned_mid_step for r in mid_step)
     return correct, len(done), f"{len(mid_step)} while a step ran, {replanned} after a replan"
 
 
@@ -61,7 +61,7 @@ def main() -> None:
     after_kill = sum(not r.left for r in done_rounds)
     after_restart = sum(r.recovered == [] for r in done_rounds)
     mid_step = [r for r in done_rounds if r.running]
-    replanned = [r for r in mid_step if r.plans > 1]
+    replanned = [r for r in mid_step if r.replanned_mid_step]
     two_places = sum(any("places" in p for p in r.problems) for r in done_rounds)
     seconds = [r.seconds for r in done_rounds]
     section(

@@ -38,12 +38,15 @@ EFFECTS: Mapping[str, Callable[..., tuple[dict[Key, bool], dict[Key, bool]]]] = 
 }
 STEP_KINDS = ("DISPATCH", "START", "ADOPT", "END", "FAIL", "CANCEL")
 USER_KINDS = ("STATE_SET", "STATE_UNSET")
-GOALS = (
+ATOMS = (  # the goals of one fact
     "(robot_at lab)",
     "(robot_at office)",
     "(robot_at dock)",
     "(picture_taken lab)",
     "(picture_taken office)",
+)
+GOALS = (
+    *ATOMS,
     "(and (picture_taken lab) (robot_at office))",
     "(and (picture_taken office) (robot_at dock))",
 )
@@ -248,6 +251,11 @@ class Round:
     seconds: float = 0.0
 
     @property
+    def replanned_mid_step(self) -> bool:
+        """The kill came while a step ran, after the executive had replanned."""
+        return bool(self.running) and self.plans > 1
+
+    @property
     def problems(self) -> list[str]:
         return [
             *(f"after the kill: {p}" for p in self.left),
@@ -343,7 +351,8 @@ class KillRounds:
         facts = set(self.robot.facts())
         asked = {g.expression for g in self.robot.goals() if g.state.is_open}
         return self.random.choice(
-            [g for g in GOALS[:5] if g not in facts and g not in asked] or list(GOALS[5:])
+            [g for g in ATOMS if g not in facts and g not in asked]
+            or [g for g in GOALS if g not in ATOMS]
         )
 
     def _wait_for_step(self, after: int, timeout: float = 20.0) -> None:

@@ -63,7 +63,7 @@ def test_the_facts_are_exact_after_kills_at_random_moments_across_replans(
         for _ in range(ROUNDS):
             rounds.round()
         for _ in range(FORCED):  # random moments on a loaded machine may miss the case
-            if any(r.running and r.plans > 1 for r in rounds.rounds):
+            if any(r.replanned_mid_step for r in rounds.rounds):
                 break
             rounds.round(replan=True)
         final = rounds.final_check()
@@ -71,7 +71,7 @@ def test_the_facts_are_exact_after_kills_at_random_moments_across_replans(
         rounds.close()
     wrong = [r for r in rounds.rounds if r.problems]
     mid_step = [r for r in rounds.rounds if r.running]
-    replanned = [r for r in mid_step if r.plans > 1]
+    replanned = [r for r in mid_step if r.replanned_mid_step]
     print(
         f"facts correct after {len(rounds.rounds) - len(wrong)} of {len(rounds.rounds)} kills "
         f"({len(mid_step)} while a step ran, {len(replanned)} of them after a replan)"
