@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -61,6 +62,25 @@ def run_dura(
 @pytest.fixture
 def dura() -> Callable[..., subprocess.CompletedProcess[str]]:
     return run_dura
+
+
+def ended(process: subprocess.Popen[str], timeout: float) -> tuple[str, str]:
+    """Wait up to ``timeout`` seconds for ``process`` to end; its stdout and stderr.
+
+    A process that does not end fails the test with the stacks of its threads (from
+    ``faulthandler``, which ``PYTHONFAULTHANDLER=1`` in its environment turns on), and is
+    killed: it is never left behind to fail the tests after it.
+    """
+    try:
+        return process.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        process.send_signal(signal.SIGABRT)  # faulthandler: every thread's stack on stderr
+        try:
+            _, err = process.communicate(timeout=10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            _, err = process.communicate()
+        raise AssertionError(f"{process.args} did not end within {timeout:g} s:\n{err}") from None
 
 
 def wait_for(condition: Callable[[], object], timeout: float = 5.0) -> bool:

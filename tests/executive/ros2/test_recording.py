@@ -26,7 +26,7 @@ from executive.ros2.link import Ros2Link
 from executive.service_groups import recording_group
 from knowledge.description import RobotDescription
 from knowledge.errors import BagError
-from tests.conftest import ROOT, wait_for
+from tests.conftest import ROOT, ended, wait_for
 from tests.executive.ros2.messages import LaserScan, ParticipantEntitiesInfo
 from tests.executive.ros2.peer import RosPeer, ros_qos, streaming
 
@@ -98,8 +98,8 @@ def test_dura_record_records_the_robots_ros2_topics_as_cdr_from_a_node_of_its_ow
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        env={**os.environ, "PYTHONPATH": str(ROOT)},  # CYCLONEDDS_URI: loopback
-    )
+        env={**os.environ, "PYTHONPATH": str(ROOT), "PYTHONFAULTHANDLER": "1"},
+    )  # the environment's CYCLONEDDS_URI: loopback
     try:
         assert recorder.stdout is not None
         assert recorder.stdout.readline().startswith("dura: recording robot 'monitored'")
@@ -110,7 +110,7 @@ def test_dura_record_records_the_robots_ros2_topics_as_cdr_from_a_node_of_its_ow
             assert wait_for(recorder_node)
     finally:
         recorder.send_signal(signal.SIGINT)
-        stdout, stderr = recorder.communicate(timeout=30)
+        stdout, stderr = ended(recorder, 30)
     assert recorder.returncode == 0, stderr
     assert stdout.startswith("dura: recorded ") and not stderr
     with out.open("rb") as f:

@@ -109,8 +109,10 @@ def rig(
 ) -> Iterator[Rig]:
     """A launcher on a real, listening bus (with the executive's token) and a real KB.
 
-    Leaving it stops every component; it fails if any child process is left.
+    Leaving it stops every component; it fails if any child process it started is left
+    (a process that was there before, another test's, is not its to judge).
     """
+    before = set(psutil.Process().children(recursive=True))
     with (
         Bus(robot.name, name="executive", endpoint=endpoint, listen=True) as bus,
         KnowledgeBase(folder / "kb.db") as kb,
@@ -119,7 +121,7 @@ def rig(
         recorder = Recorder(bus, component("*", "state"))
         with Launcher(robot, bus, kb, log_dir=folder / "logs", grace=grace) as launcher:
             yield Rig(launcher, bus, kb, robot, recorder)
-    leftovers = psutil.Process().children(recursive=True)
+    leftovers = [p for p in psutil.Process().children(recursive=True) if p not in before]
     for child in leftovers:
         with contextlib.suppress(psutil.NoSuchProcess):
             child.kill()
