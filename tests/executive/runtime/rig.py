@@ -101,6 +101,12 @@ class Rig:
     kb: KnowledgeBase
     robot: RobotDescription
     states: Recorder
+    others: frozenset[psutil.Process]  # child processes that were there before the rig
+
+    def children(self) -> set[psutil.Process]:
+        """The child processes of this test that the rig's launcher started (and not
+        yet reaped): another test's leftovers are not its to judge."""
+        return set(psutil.Process().children(recursive=True)) - self.others
 
 
 @contextlib.contextmanager
@@ -112,7 +118,7 @@ def rig(
     Leaving it stops every component; it fails if any child process it started is left
     (a process that was there before, another test's, is not its to judge).
     """
-    before = set(psutil.Process().children(recursive=True))
+    others = frozenset(psutil.Process().children(recursive=True))
     with (
         Bus(robot.name, name="executive", endpoint=endpoint, listen=True) as bus,
         KnowledgeBase(folder / "kb.db") as kb,
@@ -120,8 +126,9 @@ def rig(
         bus.declare_alive(EXECUTIVE_ALIVE)
         recorder = Recorder(bus, component("*", "state"))
         with Launcher(robot, bus, kb, log_dir=folder / "logs", grace=grace) as launcher:
-            yield Rig(launcher, bus, kb, robot, recorder)
-    leftovers = [p for p in psutil.Process().children(recursive=True) if p not in before]
+            made = Rig(launcher, bus, kb, robot, recorder, others)
+            yield made
+    leftovers = list(made.children())
     for child in leftovers:
         with contextlib.suppress(psutil.NoSuchProcess):
             child.kill()

@@ -67,7 +67,6 @@ def test_two_hundred_start_stop_crash_cycles_leave_nothing_behind(
 ) -> None:
     name = f"cycles{os.getpid()}"
     probes = [scripted(f"probe{w}", "tests.executive.runtime.probe") for w in range(WORKERS)]
-    others = set(psutil.Process().children(recursive=True))  # not this test's to judge
     with rig(robot(*probes, name=name), endpoint, tmp_path, grace=1.0) as r:
         for probe in probes:  # warm up: the first start opens what stays open
             cycle(r, probe.name, 0)
@@ -87,8 +86,7 @@ def test_two_hundred_start_stop_crash_cycles_leave_nothing_behind(
         for worker in workers:
             worker.join()
         assert not errors, errors
-        ours = set(psutil.Process().children(recursive=True)) - others
-        assert ours == set()  # no zombies: all reaped
+        assert r.children() == set()  # no zombies: all reaped
         assert orphans(name) == []
         assert open_files() == before
         restarts = WORKERS * sum(1 for i in range(CYCLES // WORKERS) if i % 4 == 3)
