@@ -28,7 +28,8 @@ but :mod:`knowledge`.
   in order, deactivate and shut down in reverse;
 - :mod:`.event_relay` — the events every process logs, on the bus for all and handed to
   the followers of each process;
-- :mod:`.worker` — the one thread that touches an object's state.
+- :mod:`.worker` — the one thread that touches an object's state; :mod:`.helpers` —
+  reused threads for work that may wait (threaded requests, component starts).
 """
 
 from __future__ import annotations

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 import zenoh
 
+from executive.bus.helpers import Helpers
 from executive.bus.keys import heard, listened_key, sender_of, wire_key
 from executive.bus.message import MAX_PAYLOAD, Message, decode, encode
 from executive.bus.polled import POLL_CAPACITY, Polled, SenderClocks
@@ -90,8 +91,7 @@ def session_config(
     config.insert_json5("mode", json.dumps("router" if listen else "client"))
     if listen:
         config.insert_json5("listen/endpoints", json.dumps(list(listen)))
-        # a router waits this long for scouting answers before it opens (500 ms by
-        # default); without scouting nothing answers, and the executive starts later
+        # no scouting answers to wait for before it opens (by default 500 ms: later start)
         config.insert_json5("scouting/delay", "0")
         # a router's own messages are the control plane (events, replies): none needs
         # Zenoh's implicit shared memory, whose pool (16 MiB) is resident from the first
@@ -171,6 +171,7 @@ class Bus:
         self._clocks = SenderClocks()  # for Polled: each sender's clock, seen from here
         self._publishers: dict[str, zenoh.Publisher] = {}
         self._declared: list[Any] = []
+        self._helpers = Helpers("bus-request")  # threaded handlers answer on them
         self._lock = threading.Lock()
         config = session_config(
             listen=(endpoint,) if listen else (),
@@ -207,6 +208,7 @@ class Bus:
             self._declared.clear()
             self._publishers.clear()
             self._session.close()  # type: ignore[no-untyped-call]
+        self._helpers.close()
 
     def __enter__(self) -> Bus:
         return self
@@ -370,8 +372,8 @@ class Bus:
 
         A :class:`DuraError` raised by the handler becomes an error reply with its
         message; a malformed request gets an error reply naming the problem. With
-        ``threaded`` each request is answered from a thread of its own: handlers that
-        wait (for other messages, for processes) must not hold zenoh's callback thread.
+        ``threaded`` each request is answered at once on a helper thread (:mod:`.helpers`):
+        handlers that wait (for other messages, processes) must not hold zenoh's thread.
         """
 
         def respond(query: zenoh.Query) -> None:
@@ -393,7 +395,7 @@ class Bus:
 
         def on_query(query: zenoh.Query) -> None:
             if threaded:
-                threading.Thread(target=respond, args=(query,), daemon=True).start()
+                self._helpers.run(lambda: respond(query))
             else:
                 respond(query)
 

@@ -18,10 +18,9 @@ it) or a permanent fault does.
 from __future__ import annotations
 
 import logging
-import threading
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
 
+from executive.bus.helpers import Helpers
 from executive.bus.payloads import ComponentState
 from executive.bus.states import Lifecycle
 from executive.runtime.launcher import Launcher
@@ -66,6 +65,7 @@ class Configurator:
         self._configuration = SystemConfiguration()
         self._expected: set[str] = set()  # components we started and keep running
         self._by_hand: set[str] = set()  # started by hand: only a stop by hand ends them
+        self._helpers = Helpers("configure")  # the starts and stops that run at once
 
     @property
     def configuration(self) -> SystemConfiguration:
@@ -114,7 +114,7 @@ class Configurator:
         return self._started(name, self.launcher.start(name))
 
     def start_soon(self, name: str, post: Callable[[Callable[[], None]], None]) -> None:
-        """Start a component on a thread of its own and return at once; what follows its
+        """Start a component on a helper thread and return at once; what follows its
         start (the diagnosis model, or its failure) is posted. A start or a stop of the
         same component meanwhile waits for this one."""
         self._expected.add(name)
@@ -128,7 +128,7 @@ class Configurator:
                 state = self.launcher.state(name)
             post(lambda: self._started_soon(name, state))
 
-        threading.Thread(target=start, name=f"start {name}", daemon=True).start()
+        self._helpers.run(start)
 
     def _started_soon(self, name: str, state: ComponentState) -> None:
         """A start begun by :meth:`start_soon` is over (a failed one is tried again when
@@ -155,8 +155,7 @@ class Configurator:
             return [n for n in names if self.start(n).state not in RUNNING]
         self._expected.update(names)
         self._before_start()
-        with ThreadPoolExecutor(len(names), thread_name_prefix="start") as pool:
-            states = list(pool.map(self.launcher.start, names))
+        states = self._helpers.map(self.launcher.start, names)
         return [n for n, s in zip(names, states, strict=True)
                 if self._started(n, s).state not in RUNNING]  # fmt: skip
 
@@ -166,8 +165,7 @@ class Configurator:
         for name in stopping:
             self._expected.discard(name)
             self._unmodel(name)
-        with ThreadPoolExecutor(max(1, len(stopping)), thread_name_prefix="stop") as pool:
-            list(pool.map(lambda n: self.launcher.stop(n, "no task needs it"), stopping))
+        self._helpers.map(lambda n: self.launcher.stop(n, "no task needs it"), stopping)
 
     def _switch(self, name: str, *, pause: bool) -> ComponentState:
         """Pause a spare no task needs, or resume one a task needs now."""
