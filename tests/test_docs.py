@@ -115,6 +115,7 @@ def test_the_tutorial_runs_as_written(tmp_path: Path) -> None:
     changing_from = text[: text.index(CHANGES_FROM)].count("\n") + 1
     cwd, made = tmp_path, set()
     env = {**os.environ, "DURA_TIME_SCALE": "10", "COLUMNS": "200"}
+    env.pop("PYTEST_ADDOPTS", None)  # the options of this suite's run are not the reader's
     for line, language, title, body in blocks(text):
         where = f"{TUTORIAL.name}:{line}"
         if title is not None:
