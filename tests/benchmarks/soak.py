@@ -7,7 +7,7 @@ Each goal sends the robot to another place, ``(robot_at lab)``, ``(robot_at offi
 ``(robot_at dock)`` in turn, and waits until it is achieved; nothing is injected. With
 ``--every`` a goal is sent at most that often (the issue's robot takes one every ~10 s;
 without it, one right after another); with ``--minutes`` goals are sent until that
-time has passed instead of ``--goals``. After the warm-up, the executive's process (and
+time has passed after the warm-up, instead of ``--goals``. After the warm-up, the executive's process (and
 its planner worker, measured apart) is sampled after every goal: resident memory (and
 how much of it is anonymous: the heap, not mapped files), threads, open files, and the
 knowledge base's size (its file: the WAL beside it is bounded by SQLite's checkpoints).
@@ -94,7 +94,8 @@ def _rss(process: psutil.Process) -> int:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--goals", type=int, default=60, help="goals after the warm-up")
-    parser.add_argument("--minutes", type=float, help="send goals for this long instead")
+    parser.add_argument("--minutes", type=float,
+                        help="send goals for this long after the warm-up instead")  # fmt: skip
     parser.add_argument("--every", type=float, default=0.0, help="seconds between goals")
     parser.add_argument("--warm-up", type=int, default=10, help="goals before measuring")
     parser.add_argument("--time-scale", type=float, default=10.0, help="robot time speed-up")
@@ -107,9 +108,9 @@ def main() -> None:
         samples: list[Sample] = []
         places = itertools.cycle(PLACES)
         missed = 0
-        until = began + args.minutes * 60 if args.minutes else None
+        until: float | None = None  # with --minutes: set once the warm-up is done
         for n in itertools.count(1):
-            if until is None and n > args.warm_up + args.goals:
+            if not args.minutes and n > args.warm_up + args.goals:
                 break
             if until is not None and time.monotonic() >= until and n > args.warm_up + 1:
                 break
@@ -121,6 +122,8 @@ def main() -> None:
                 missed += 1
             if n >= args.warm_up:
                 samples.append(sample(robot, n))
+            if n == max(1, args.warm_up) and args.minutes:
+                until = time.monotonic() + args.minutes * 60
             time.sleep(max(0.0, sent + args.every - time.monotonic()))
         repairs = [f"{e.kind} {e.subject}: {e.data.get('reason', e.data.get('faulty', ''))}"
                    for kind in ("FAULT", "RULE_FIRED") for e in robot.events(kind)]  # fmt: skip
