@@ -20,7 +20,8 @@ but :mod:`knowledge`.
   :mod:`.event_text` — an event as one readable line; :mod:`.wording` — counts,
   numbers, durations and values as every view writes them;
 - :mod:`.undecodable` — messages whose payload does not decode, counted per topic;
-- :mod:`.clock` — robot time, possibly faster than the wall clock;
+- :mod:`.clock` — robot time, possibly faster than the wall clock; :mod:`.timers` —
+  every timer of a process on one thread (a step's timeout, a goal's deadline, a retry);
 - :mod:`.topic_source` — topics whose messages do not travel on the bus (ROS 2's);
 - :mod:`.service` — the executive's services and their one lifecycle (that of a ROS 2
   managed node), and what each gets (:class:`~.service.Context`);

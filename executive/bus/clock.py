@@ -19,12 +19,15 @@ from __future__ import annotations
 import functools
 import math
 import os
-import threading
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from knowledge.errors import ConfigError
+
+if TYPE_CHECKING:
+    from executive.bus.timers import Timer
 
 SCALE_VARIABLE = "DURA_TIME_SCALE"
 
@@ -80,12 +83,12 @@ class Clock:
         """Sleep ``seconds`` of robot time."""
         time.sleep(max(0.0, self.wall(seconds)))
 
-    def timer(self, seconds: float, fn: Callable[[], object]) -> threading.Timer:
-        """Start a daemon timer that calls ``fn`` after ``seconds`` of robot time."""
-        timer = threading.Timer(max(0.0, self.wall(seconds)), fn)
-        timer.daemon = True
-        timer.start()
-        return timer
+    def timer(self, seconds: float, fn: Callable[[], object]) -> Timer:
+        """Call ``fn`` after ``seconds`` of robot time, on this process's timer thread
+        (:mod:`.timers`: ``fn`` must be short)."""
+        from executive.bus.timers import later  # only where timers are set
+
+        return later(self.wall(seconds), fn)
 
     def environment(self) -> dict[str, str]:
         """Return the environment variables that give a child process this clock."""

@@ -18,12 +18,12 @@ of it changes them when the world changes, with the timing of
 from __future__ import annotations
 
 import logging
-import threading
 import time
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass
 
 from executive.bus.clock import Clock
+from executive.bus.timers import Timer, later
 from executive.planning.expression import Signature, WorldState
 from executive.planning.goal_watch import GoalWatch
 from executive.planning.goals import GoalSpec, specs
@@ -81,7 +81,7 @@ class GoalKeeper:
         self.watch = watch or GoalWatch()
         self._looking = False  # a look is on the search thread
         self._reason = ""  # the latest change outside the plan
-        self._timer: threading.Timer | None = None
+        self._timer: Timer | None = None
         self._stopped = False
 
     def stop(self) -> None:
@@ -178,12 +178,10 @@ class GoalKeeper:
         """Look again at ``when`` (monotonic seconds): one timer at a time."""
         if self._timer is not None:
             self._timer.cancel()
-        self._timer = threading.Timer(
-            max(0.0, when - time.monotonic()),
+        self._timer = later(
+            when - time.monotonic(),
             lambda: self.links.post(lambda: self.changed("", outside=False)),
         )
-        self._timer.daemon = True
-        self._timer.start()
 
     # --- the search thread --------------------------------------------------------------
 

@@ -46,6 +46,7 @@ from typing import Any, TypeVar
 
 from executive.bus.clock import Clock, system_clock
 from executive.bus.reports import ExecutionStatus, GoalProgress, StepStatus
+from executive.bus.timers import Timer
 from executive.bus.worker import Worker
 from executive.planning.expression import WorldState, atoms
 from executive.planning.goals import GoalSpec
@@ -88,7 +89,7 @@ class _Goal:
     mentions: frozenset[Key]
     done: bool = False
     in_time: bool = False
-    timer: threading.Timer | None = None
+    timer: Timer | None = None
 
 
 class PlanExecutor:

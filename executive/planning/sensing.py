@@ -19,7 +19,6 @@ All rule state lives on one worker thread; bus and ROS 2 handlers only post to i
 from __future__ import annotations
 
 import logging
-import threading
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -27,6 +26,7 @@ from typing import Any
 from executive.bus.clock import Clock
 from executive.bus.keys import topic as topic_key
 from executive.bus.message import Message
+from executive.bus.timers import Timer
 from executive.bus.topic_source import Subscription
 from executive.bus.worker import Worker
 from executive.planning.expression import Signature, parse_fact
@@ -95,7 +95,7 @@ class _Rule:
     since: float = 0.0  # robot time it began
     value: Any = None  # the newest field value
     written: float | None = None  # robot time of the last value written
-    timer: threading.Timer | None = None
+    timer: Timer | None = None
 
 
 class Sensing:

@@ -8,13 +8,13 @@ counts towards its timeout.
 from __future__ import annotations
 
 import enum
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from executive.bus.clock import Clock
+from executive.bus.timers import Timer, later
 from executive.planning.partial_order import Step
 from executive.planning.task_runner import Progress, StepReport, StepTask
 
@@ -73,7 +73,7 @@ class StepRun:
     undo: dict[Key, bool | float | None] = field(default_factory=dict)
     elapsed: float = 0.0  # seconds run before the current stretch
     since: float = 0.0  # monotonic time the current stretch began
-    timer: threading.Timer | None = None
+    timer: Timer | None = None
     token: int = 0
     held: tuple[Progress, Any] | None = None  # an end reported while paused, handled on resume
 
@@ -103,14 +103,11 @@ class StepRun:
 
 def start_timer(
     seconds: float, post: Callable[[Callable[[], None]], None], fn: Callable[[], None]
-) -> threading.Timer:
+) -> Timer:
     """Run ``fn`` through ``post`` (on the executor's thread) after ``seconds``."""
-    timer = threading.Timer(max(0.0, seconds), lambda: post(fn))
-    timer.daemon = True
-    timer.start()
-    return timer
+    return later(seconds, lambda: post(fn))
 
 
-def cancel_timer(timer: threading.Timer | None) -> None:
+def cancel_timer(timer: Timer | None) -> None:
     if timer is not None:
         timer.cancel()

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import threading
 from collections.abc import Callable
 
 from executive.bus.api.monitoring import DIAGNOSIS_MODEL_CHANGE, ModelChange
 from executive.bus.keys import service_alive
 from executive.bus.session import Bus
+from executive.bus.timers import Timer, later
 from knowledge.description import RobotDescription
 from knowledge.errors import DuraError
 
@@ -53,7 +53,7 @@ class DiagnosisModelSync:
         self._modelled: set[str] = set()  # the nodes the engine holds, as far as we know
         self._refused: set[str] = set()  # refused until the component's next start
         self._pause = RETRY
-        self._timer: threading.Timer | None = None
+        self._timer: Timer | None = None
         self._watch = None if post is None else bus.watch_alive(MONITORING_ALIVE, self._joined)
 
     def add(self, name: str) -> None:
@@ -124,9 +124,7 @@ class DiagnosisModelSync:
         post = self._post
         if post is None or self._timer is not None:
             return
-        self._timer = threading.Timer(self._pause, lambda: post(self.resync))
-        self._timer.daemon = True
-        self._timer.start()
+        self._timer = later(self._pause, lambda: post(self.resync))
         self._pause = min(RETRY_MAX, 2 * self._pause)
 
     def _joined(self, _: str, alive: bool) -> None:

@@ -27,12 +27,12 @@ It composes the parts that act: the :class:`~executive.tasks.ledger.TaskLedger`,
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Callable
 
 from executive.bus.clock import Clock, system_clock
 from executive.bus.service import Context
+from executive.bus.timers import Timer, later
 from executive.runtime.launcher import Launcher
 from executive.tasks.configuration import SystemConfiguration, Transition
 from executive.tasks.configurator import Configurator
@@ -98,7 +98,7 @@ class Enactor:
         self.clock = clock or system_clock()
         self.standby = True  # keep the warm spares (until the executive stops)
         self._post = post
-        self._timer: threading.Timer | None = None
+        self._timer: Timer | None = None
         self.upcoming: tuple[str, ...] = ()  # behaviors of the plan's steps to come
         self._warm: set[str] = set()  # behaviors running for steps to come, with no task
         self._lingering: dict[str, float] = {}  # functionality -> until (epoch seconds)
@@ -280,12 +280,10 @@ class Enactor:
                    if f in decision.configuration.functionalities]  # fmt: skip
         wake = min([*lingers, *([] if decision.wake is None else [decision.wake])], default=None)
         if wake is not None:
-            self._timer = threading.Timer(
-                max(0.0, wake - time.time()),
+            self._timer = later(
+                wake - time.time(),
                 lambda: self._post(lambda: self.reschedule("a task is due, or a linger ended")),
             )
-            self._timer.daemon = True
-            self._timer.start()
 
     def _apply(self, target: SystemConfiguration, transition: Transition, why: str) -> None:
         failed = self.configurator.apply(target, transition, why)
