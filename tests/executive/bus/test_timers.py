@@ -10,6 +10,7 @@ import random
 import threading
 import time
 import tracemalloc
+from collections.abc import Iterator
 
 import pytest
 
@@ -18,89 +19,77 @@ from executive.bus.timers import Timers, later, timers
 from tests.conftest import wait_for
 
 
-def test_calls_run_in_the_order_they_are_due_on_one_thread() -> None:
-    box = Timers("order")
+@pytest.fixture
+def box() -> Iterator[Timers]:
+    """Timers of the test's own, closed after it."""
+    own = Timers("test-timers")
+    yield own
+    own.close()
+
+
+def test_calls_run_in_the_order_they_are_due_on_one_thread(box: Timers) -> None:
     ran: list[tuple[int, int]] = []
     dues: list[float] = []
-    try:
-        for n in range(40):
-            timer = box.later(random.uniform(0.0, 0.3),
-                              lambda n=n: ran.append((n, threading.get_ident())))  # fmt: skip
-            dues.append(timer.due)
-        assert wait_for(lambda: len(ran) == len(dues), 10)
-        assert [dues[n] for n, _ in ran] == sorted(dues)
-        assert len({ident for _, ident in ran}) == 1 and box.threads == 1
-    finally:
-        box.close()
+    for n in range(40):
+        timer = box.later(random.uniform(0.0, 0.3),
+                          lambda n=n: ran.append((n, threading.get_ident())))  # fmt: skip
+        dues.append(timer.due)
+    assert wait_for(lambda: len(ran) == len(dues), 10)
+    assert [dues[n] for n, _ in ran] == sorted(dues)
+    assert len({ident for _, ident in ran}) == 1 and box.threads == 1
 
 
-def test_a_sooner_call_set_while_the_thread_waits_for_a_later_one_runs_first() -> None:
-    box = Timers("sooner")
+def test_a_sooner_call_set_while_the_thread_waits_for_a_later_one_runs_first(box: Timers) -> None:
     late, soon = threading.Event(), threading.Event()
-    try:
-        box.later(3600.0, late.set)
-        time.sleep(0.05)  # the thread waits for the hour
-        box.later(0.0, soon.set)
-        assert soon.wait(5) and not late.is_set()
-        assert len(box) == 1
-    finally:
-        box.close()
+    box.later(3600.0, late.set)
+    time.sleep(0.05)  # the thread waits for the hour
+    box.later(0.0, soon.set)
+    assert soon.wait(5) and not late.is_set()
+    assert len(box) == 1
 
 
-def test_a_cancelled_call_never_runs_and_cancelling_is_idempotent() -> None:
-    box = Timers("cancel")
+def test_a_cancelled_call_never_runs_and_cancelling_is_idempotent(box: Timers) -> None:
     kept, taken = threading.Event(), threading.Event()
-    try:
-        timer = box.later(0.2, taken.set)
-        box.later(0.4, kept.set)
-        timer.cancel()
-        timer.cancel()
-        assert not timer.pending
-        assert kept.wait(5) and not taken.is_set()
-        ran = box.later(0.0, lambda: None)
-        assert wait_for(lambda: not ran.pending)
-        ran.cancel()  # after it ran: nothing happens
-        assert len(box) == 0
-    finally:
-        box.close()
+    timer = box.later(0.2, taken.set)
+    box.later(0.4, kept.set)
+    timer.cancel()
+    timer.cancel()
+    assert not timer.pending
+    assert kept.wait(5) and not taken.is_set()
+    ran = box.later(0.0, lambda: None)
+    assert wait_for(lambda: not ran.pending)
+    ran.cancel()  # after it ran: nothing happens
+    assert len(box) == 0
 
 
-def test_cancelled_timers_are_not_kept_until_they_would_have_been_due() -> None:
+def test_cancelled_timers_are_not_kept_until_they_would_have_been_due(box: Timers) -> None:
     """A step's timeout is set and cancelled at every step: an hour's worth of them is
     not kept for the hour."""
-    box = Timers("churn")
-    try:
-        box.later(3600.0, lambda: None).cancel()  # the thread exists before measuring
-        tracemalloc.start()
-        before, _ = tracemalloc.get_traced_memory()
-        for _ in range(20_000):
-            box.later(3600.0, lambda: None).cancel()
-        after, _ = tracemalloc.get_traced_memory()
-        tracemalloc.stop()
-        assert len(box) == 0
-        assert after - before < 64 * 1024, after - before  # 20,000 kept would be > 2 MB
-    finally:
-        box.close()
+    box.later(3600.0, lambda: None).cancel()  # the thread exists before measuring
+    tracemalloc.start()
+    before, _ = tracemalloc.get_traced_memory()
+    for _ in range(20_000):
+        box.later(3600.0, lambda: None).cancel()
+    after, _ = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert len(box) == 0
+    assert after - before < 64 * 1024, after - before  # 20,000 kept would be > 2 MB
 
 
 def test_a_call_that_raises_is_logged_and_the_next_one_runs(
-    caplog: pytest.LogCaptureFixture,
+    box: Timers, caplog: pytest.LogCaptureFixture
 ) -> None:
-    box = Timers("raises")
     after = threading.Event()
 
     def broken() -> None:
         raise RuntimeError("boom")
 
-    try:
-        with caplog.at_level(logging.ERROR, logger="executive.bus.timers"):
-            box.later(0.0, broken)
-            box.later(0.05, after.set)
-            assert after.wait(5)
-        assert any("boom" in (r.exc_text or "") for r in caplog.records), caplog.records
-        assert box.threads == 1
-    finally:
-        box.close()
+    with caplog.at_level(logging.ERROR, logger="executive.bus.timers"):
+        box.later(0.0, broken)
+        box.later(0.05, after.set)
+        assert after.wait(5)
+    assert any("boom" in (r.exc_text or "") for r in caplog.records), caplog.records
+    assert box.threads == 1
 
 
 def test_closing_ends_the_thread_and_drops_what_was_to_come() -> None:
