@@ -36,9 +36,16 @@ import psutil
 
 from executive.testing.client import GoalEnded
 from executive.testing.harness import RobotProcess
+from tests.benchmarks import heap_probe
 from tests.conftest import USECASE
 
 PLACES = ("lab", "office", "dock")
+HEAP_ROWS = (  # what heap_probe tells, as the table names it
+    ("in_use", "  C heap in use (KiB)"),
+    ("free", "  C heap free, kept (KiB)"),
+    ("sqlite", "  of it in use, SQLite's (KiB)"),
+    ("blocks", "Python objects (blocks)"),
+)
 
 
 @dataclass
@@ -51,9 +58,10 @@ class Sample:
     files: int
     kb: int
     load: float
+    heap: dict[str, int]  # what the executive's heap holds (heap_probe), if it could tell
 
 
-def sample(robot: RobotProcess, goals: int) -> Sample:
+def sample(robot: RobotProcess, goals: int, probe: Path) -> Sample:
     process = psutil.Process(robot.pid)
     workers = [c for c in process.children(recursive=True) if _is_worker(c)]
     kb = robot.kb_path.stat().st_size  # its WAL is bounded by SQLite's checkpoints
@@ -66,6 +74,7 @@ def sample(robot: RobotProcess, goals: int) -> Sample:
         process.num_fds(),
         kb,
         os.getloadavg()[0],
+        heap_probe.latest(probe),
     )
 
 
@@ -101,66 +110,93 @@ def main() -> None:
     parser.add_argument("--time-scale", type=float, default=10.0, help="robot time speed-up")
     args = parser.parse_args()
     began = time.monotonic()
-    with (
-        tempfile.TemporaryDirectory(prefix="dura-soak-") as folder,
-        RobotProcess(USECASE, Path(folder), time_scale=args.time_scale) as robot,
-    ):
-        samples: list[Sample] = []
-        places = itertools.cycle(PLACES)
-        missed = 0
-        until: float | None = None  # with --minutes: set once the warm-up is done
-        for n in itertools.count(1):
-            if not args.minutes and n > args.warm_up + args.goals:
-                break
-            if until is not None and time.monotonic() >= until and n > args.warm_up + 1:
-                break
-            sent = time.monotonic()
-            goal = robot.submit_goal(f"(robot_at {next(places)})")
-            try:
-                robot.wait_for(goal, timeout=120)
-            except GoalEnded:  # e.g. an integrity goal after a false repair came first
-                missed += 1
-            if n >= args.warm_up:
-                samples.append(sample(robot, n))
-            if n == max(1, args.warm_up) and args.minutes:
-                until = time.monotonic() + args.minutes * 60
-            time.sleep(max(0.0, sent + args.every - time.monotonic()))
-        repairs = [f"{e.kind} {e.subject}: {e.data.get('reason', e.data.get('faulty', ''))}"
-                   for kind in ("FAULT", "RULE_FIRED") for e in robot.events(kind)]  # fmt: skip
-        faults = sum(r.startswith("FAULT") for r in repairs)
-        fired = len(repairs) - faults
+    with tempfile.TemporaryDirectory(prefix="dura-soak-") as temporary:
+        folder = Path(temporary)
+        probe = folder / "heap.jsonl"
+        os.environ.update(heap_probe.install(folder / "probe", probe))  # the executive's
+        with RobotProcess(USECASE, folder / "robot", time_scale=args.time_scale) as robot:
+            samples, missed = _soak(robot, args, probe)
+            repairs = [f"{e.kind} {e.subject}: {e.data.get('reason', e.data.get('faulty', ''))}"
+                       for kind in ("FAULT", "RULE_FIRED") for e in robot.events(kind)]  # fmt: skip
+    loads = [s.load for s in samples]
+    print(f"{samples[-1].goals - samples[0].goals} goals after a warm-up of {args.warm_up}, "
+          f"time scale {args.time_scale:g}, {time.monotonic() - began:.0f} s, load average "
+          f"{sum(loads) / len(loads):.1f} (at most {max(loads):.1f})")  # fmt: skip
+    _report(samples, missed, repairs)
+
+
+def _soak(robot: RobotProcess, args: argparse.Namespace, probe: Path) -> tuple[list[Sample], int]:
+    """Send the goals; the samples after the warm-up, and how many goals were missed."""
+    samples: list[Sample] = []
+    places = itertools.cycle(PLACES)
+    missed = 0
+    until: float | None = None  # with --minutes: set once the warm-up is done
+    for n in itertools.count(1):
+        if not args.minutes and n > args.warm_up + args.goals:
+            break
+        if until is not None and time.monotonic() >= until and n > args.warm_up + 1:
+            break
+        sent = time.monotonic()
+        goal = robot.submit_goal(f"(robot_at {next(places)})")
+        try:
+            robot.wait_for(goal, timeout=120)
+        except GoalEnded:  # e.g. an integrity goal after a false repair came first
+            missed += 1
+        if n >= args.warm_up:
+            samples.append(sample(robot, n, probe))
+        if n == max(1, args.warm_up) and args.minutes:
+            until = time.monotonic() + args.minutes * 60
+        time.sleep(max(0.0, sent + args.every - time.monotonic()))
+    return samples, missed
+
+
+def _report(samples: list[Sample], missed: int, repairs: list[str]) -> None:
     first, last = samples[0], samples[-1]
     count = max(1, last.goals - first.goals)
     rows = [
         ("executive RSS (KiB)", first.rss >> 10, last.rss >> 10),
         ("  of it anonymous (KiB)", first.anonymous >> 10, last.anonymous >> 10),
+    ]
+    for key, name in HEAP_ROWS:
+        if key in first.heap and key in last.heap:
+            rows.append((name, first.heap[key] >> (0 if key == "blocks" else 10),
+                         last.heap[key] >> (0 if key == "blocks" else 10)))  # fmt: skip
+    rows += [
         ("planner worker RSS (KiB)", first.worker_rss >> 10, last.worker_rss >> 10),
         ("threads", first.threads, last.threads),
         ("open files", first.files, last.files),
         ("knowledge base (KiB)", first.kb >> 10, last.kb >> 10),
     ]
-    loads = [s.load for s in samples]
-    print(f"{count} goals after a warm-up of {args.warm_up}, time scale {args.time_scale:g}, "
-          f"{time.monotonic() - began:.0f} s, load average {sum(loads) / len(loads):.1f} "
-          f"(at most {max(loads):.1f})")  # fmt: skip
-    print(f"{'what':<26} {'after warm-up':>14} {'at the end':>12} {'per goal':>10}")
+    faults = sum(r.startswith("FAULT") for r in repairs)
+    fired = len(repairs) - faults
+    print(f"{'what':<30} {'after warm-up':>14} {'at the end':>12} {'per goal':>10}")
     for name, before, after in rows:
-        print(f"{name:<26} {before:>14} {after:>12} {(after - before) / count:>+10.2f}")
-    print(f"{'false repairs':<26} {'':>14} {faults + fired:>12}  ({faults} faults, "
+        print(f"{name:<30} {before:>14} {after:>12} {(after - before) / count:>+10.2f}")
+    print(f"{'false repairs':<30} {'':>14} {faults + fired:>12}  ({faults} faults, "
           f"{fired} rules fired)")  # fmt: skip
-    print(f"{'goals not achieved':<26} {'':>14} {missed:>12}")
+    print(f"{'goals not achieved':<30} {'':>14} {missed:>12}")
     tenth = max(1, len(samples) // 10)
     trend = ", ".join(f"{s.goals}: {s.rss >> 10}" for s in samples[::tenth])
     print(f"executive RSS (KiB) along the run, after goal N: {trend}")
     middle = samples[len(samples) // 2]
     halves = [_slope(a, b) for a, b in ((first, middle), (middle, last))]
     print(f"executive RSS per goal: {halves[0]} in the first half, {halves[1]} in the second")
-    rss, anonymous = _trend(samples, lambda s: s.rss), _trend(samples, lambda s: s.anonymous)
+    trends: list[tuple[str, Callable[[Sample], int]]] = [
+        ("RSS", lambda s: s.rss),
+        ("anonymous", lambda s: s.anonymous),
+    ]
+    trends += [(name.strip().removesuffix(" (KiB)"), _heap(key))
+               for key, name in HEAP_ROWS
+               if key != "blocks" and all(key in s.heap for s in samples)]  # fmt: skip
+    slopes = ", ".join(f"{name} {_trend(samples, value) / 1024:+.2f}" for name, value in trends)
     print(f"executive trend (least squares over all {len(samples)} samples, which one "
-          f"sample's ups and downs do not sway): RSS {rss / 1024:+.2f} KiB per goal, "
-          f"anonymous {anonymous / 1024:+.2f}")  # fmt: skip
+          f"sample's ups and downs do not sway), KiB per goal: {slopes}")  # fmt: skip
     for repair in repairs[:10]:
         print(f"  {repair}")
+
+
+def _heap(key: str) -> Callable[[Sample], int]:
+    return lambda s: s.heap.get(key, 0)
 
 
 def _trend(samples: list[Sample], value: Callable[[Sample], int]) -> float:
