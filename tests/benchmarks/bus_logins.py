@@ -1,6 +1,6 @@
 """Bus logins: what the executive's Zenoh router keeps of components that logged in and left.
 
-    python -m tests.benchmarks.bus_logins [--logins N] [--together K]
+    python -m tests.benchmarks.bus_logins [--logins N] [--together K] [--warm-up N]
 
 Four routers of the use case's bus (its access control, its credentials) run side by
 side, each in a process of its own:
@@ -19,7 +19,7 @@ time (the executive starts a configuration's components at once), and do what a
 component does on the bus: a liveliness token, a watch of the executive's, its
 subscriptions, a command queryable, a message on each topic it publishes; then they
 close the bus and end. Each login goes to the three routers in
-turn. After a warm-up of a tenth of the logins, and at the end once the routers are idle,
+turn. After a warm-up (a tenth of the logins, or ``--warm-up``), and at the end once the routers are idle,
 each router's anonymous resident memory and malloc's bytes in use are sampled; the table
 gives their growth per login.
 """
@@ -39,12 +39,11 @@ from executive.bus import keys, security
 from executive.bus.session import Bus
 from executive.testing.harness import free_endpoint
 from knowledge.robot import load_robot
+from tests.benchmarks import heap_probe
 from tests.conftest import USECASE
 
 VARIANTS = ("glibc's defaults", "dura run's heap", "+ topics, components' keys",
             "+ topics, own keys (dura run)")  # fmt: skip
-MALLINFO2 = ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks",
-             "uordblks", "fordblks", "keepcost")  # fmt: skip
 IDLE = 5.0  # seconds the routers are left alone before the last sample
 
 
@@ -100,21 +99,15 @@ def _anonymous() -> int:
 
 
 def _in_use() -> int:
-    import ctypes
-
-    class Mallinfo2(ctypes.Structure):  # glibc's struct mallinfo2: ten sizes
-        _fields_ = [(name, ctypes.c_size_t) for name in MALLINFO2]
-
-    libc = ctypes.CDLL("libc.so.6")
-    libc.mallinfo2.restype = Mallinfo2
-    info = libc.mallinfo2()
-    return int(info.uordblks + info.hblkhd) >> 10
+    heap = heap_probe.malloc()
+    return 0 if heap is None else heap[0] >> 10
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--logins", type=int, default=400, help="component logins")
     parser.add_argument("--together", type=int, default=4, help="clients at a time")
+    parser.add_argument("--warm-up", type=int, help="logins before measuring (a tenth)")
     parser.add_argument("--role", nargs="+", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.role:  # a router or a client of this benchmark
@@ -137,7 +130,7 @@ def main() -> None:
         try:
             for r in routers:
                 assert r.stdout is not None and r.stdout.readline().strip() == "ready"
-            warm_up = max(1, args.logins // 10)
+            warm_up = args.warm_up if args.warm_up is not None else max(1, args.logins // 10)
             began = time.monotonic()
             running: list[subprocess.Popen[bytes]] = []
             first: list[dict[str, int]] = []

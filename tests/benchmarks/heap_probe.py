@@ -83,16 +83,23 @@ def _write(out: Path) -> None:
             time.sleep(EVERY)
 
 
-def _figures() -> dict[str, int]:
-    figures = {"blocks": sys.getallocatedblocks()}
+def malloc() -> tuple[int, int] | None:
+    """The bytes glibc's ``malloc`` handed out and did not have back (in its arenas and
+    mapped on their own), and the bytes it keeps free; ``None`` with another C library."""
     try:
         libc = ctypes.CDLL("libc.so.6")
         libc.mallinfo2.restype = _MallInfo2
-        info = libc.mallinfo2()
-        figures["in_use"] = info.uordblks + info.hblkhd
-        figures["free"] = info.fordblks
     except (OSError, AttributeError):
-        pass
+        return None
+    info = libc.mallinfo2()
+    return int(info.uordblks + info.hblkhd), int(info.fordblks)
+
+
+def _figures() -> dict[str, int]:
+    figures = {"blocks": sys.getallocatedblocks()}
+    heap = malloc()
+    if heap is not None:
+        figures["in_use"], figures["free"] = heap
     try:  # Python's sqlite3 module uses the shared library, not a copy of its own
         if "libsqlite3" not in Path("/proc/self/maps").read_text():
             return figures
