@@ -18,9 +18,9 @@ Short-lived client processes log in as the use case's components, ``--together``
 time (the executive starts a configuration's components at once), and do what a
 component does on the bus: a liveliness token, a watch of the executive's, its
 subscriptions, a command queryable, a message on each topic it publishes; then they
-close the bus and end. Each login goes to the three routers in
-turn. After a warm-up (a tenth of the logins, or ``--warm-up``), and at the end once the routers are idle,
-each router's anonymous resident memory and malloc's bytes in use are sampled; the table
+close the bus and end. Each login goes to the three routers in turn. After a warm-up (a
+tenth of the logins, or ``--warm-up``), and at the end once the routers are idle, each
+router's anonymous resident memory and malloc's bytes in use are sampled; the table
 gives their growth per login.
 """
 

@@ -20,6 +20,7 @@ Python) the figures it cannot get are absent.
 from __future__ import annotations
 
 import ctypes
+import functools
 import json
 import os
 import sys
@@ -76,52 +77,72 @@ def _write(out: Path) -> None:
         return
     if "run" not in sys.argv[1:2]:
         return
+    sqlite: ctypes.CDLL | None = None
     with out.open("a") as file:
         while True:
-            file.write(json.dumps(_figures()) + "\n")
+            sqlite = sqlite or _sqlite()  # looked for until the executive has loaded it
+            file.write(json.dumps(_figures(sqlite)) + "\n")
             file.flush()
             time.sleep(EVERY)
 
 
-def malloc() -> tuple[int, int] | None:
-    """The bytes glibc's ``malloc`` handed out and did not have back (in its arenas and
-    mapped on their own), and the bytes it keeps free; ``None`` with another C library."""
+@functools.cache
+def _libc() -> ctypes.CDLL | None:
     try:
         libc = ctypes.CDLL("libc.so.6")
         libc.mallinfo2.restype = _MallInfo2
     except (OSError, AttributeError):
         return None
+    return libc
+
+
+def malloc() -> tuple[int, int] | None:
+    """The bytes glibc's ``malloc`` handed out and did not have back (in its arenas and
+    mapped on their own), and the bytes it keeps free; ``None`` with another C library."""
+    libc = _libc()
+    if libc is None:
+        return None
     info = libc.mallinfo2()
     return int(info.uordblks + info.hblkhd), int(info.fordblks)
 
 
-def _figures() -> dict[str, int]:
+def _sqlite() -> ctypes.CDLL | None:
+    """SQLite's shared library, once Python's ``sqlite3`` module has loaded it (not a
+    copy of its own)."""
+    try:
+        if "libsqlite3" not in Path("/proc/self/maps").read_text():
+            return None
+        return ctypes.CDLL("libsqlite3.so.0")
+    except OSError:
+        return None
+
+
+def _figures(sqlite: ctypes.CDLL | None) -> dict[str, int]:
     figures = {"blocks": sys.getallocatedblocks()}
     heap = malloc()
     if heap is not None:
         figures["in_use"], figures["free"] = heap
-    try:  # Python's sqlite3 module uses the shared library, not a copy of its own
-        if "libsqlite3" not in Path("/proc/self/maps").read_text():
-            return figures
-        sqlite = ctypes.CDLL("libsqlite3.so.0")
-        now, peak = ctypes.c_int64(), ctypes.c_int64()
-        if sqlite.sqlite3_status64(0, ctypes.byref(now), ctypes.byref(peak), 0) == 0:
-            figures["sqlite"] = now.value  # SQLITE_STATUS_MEMORY_USED
-    except (OSError, AttributeError):
-        pass
+    now, peak = ctypes.c_int64(), ctypes.c_int64()
+    if (
+        sqlite is not None
+        and sqlite.sqlite3_status64(0, ctypes.byref(now), ctypes.byref(peak), 0) == 0
+    ):
+        figures["sqlite"] = now.value  # SQLITE_STATUS_MEMORY_USED
     return figures
 
 
 def latest(out: Path) -> dict[str, int]:
-    """The newest figures written to ``out`` ({} before the first)."""
+    """The newest figures written to ``out`` ({} before the first): its last lines only."""
     try:
-        lines = out.read_text().splitlines()
+        with out.open("rb") as file:
+            file.seek(max(0, file.seek(0, os.SEEK_END) - 4096))
+            lines = file.read().decode(errors="replace").splitlines()
     except FileNotFoundError:
         return {}
     for line in reversed(lines):
         try:
             figures = json.loads(line)
-        except ValueError:  # a line being written
+        except ValueError:  # a line being written, or cut by the seek
             continue
         return {k: int(v) for k, v in figures.items()}
     return {}

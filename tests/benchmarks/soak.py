@@ -18,7 +18,10 @@ run, its growth per goal in each half of it (a plateau: the second half's is nea
 and its trend over all samples (a least-squares slope: the first and last samples hold
 whatever memory was in use at that moment, the trend is not swayed by one sample), and
 the machine's load average (the machine may be shared: a high
-load may cost observers their rates).
+load may cost observers their rates). The executive also tells what its heap holds
+(:mod:`tests.benchmarks.heap_probe`): malloc's bytes in use and kept free, SQLite's
+memory and Python's objects, so that a growing RSS can be told apart from memory the
+executive keeps.
 """
 
 from __future__ import annotations
@@ -40,11 +43,11 @@ from tests.benchmarks import heap_probe
 from tests.conftest import USECASE
 
 PLACES = ("lab", "office", "dock")
-HEAP_ROWS = (  # what heap_probe tells, as the table names it
-    ("in_use", "  C heap in use (KiB)"),
-    ("free", "  C heap free, kept (KiB)"),
-    ("sqlite", "  of it in use, SQLite's (KiB)"),
-    ("blocks", "Python objects (blocks)"),
+HEAP_ROWS = (  # what heap_probe tells, as the table names it, and its shift to the unit
+    ("in_use", "  C heap in use (KiB)", 10),
+    ("free", "  C heap free, kept (KiB)", 10),
+    ("sqlite", "  of it in use, SQLite's (KiB)", 10),
+    ("blocks", "Python objects (blocks)", 0),
 )
 
 
@@ -157,10 +160,9 @@ def _report(samples: list[Sample], missed: int, repairs: list[str]) -> None:
         ("executive RSS (KiB)", first.rss >> 10, last.rss >> 10),
         ("  of it anonymous (KiB)", first.anonymous >> 10, last.anonymous >> 10),
     ]
-    for key, name in HEAP_ROWS:
-        if key in first.heap and key in last.heap:
-            rows.append((name, first.heap[key] >> (0 if key == "blocks" else 10),
-                         last.heap[key] >> (0 if key == "blocks" else 10)))  # fmt: skip
+    rows += [(name, first.heap[key] >> shift, last.heap[key] >> shift)
+             for key, name, shift in HEAP_ROWS
+             if key in first.heap and key in last.heap]  # fmt: skip
     rows += [
         ("planner worker RSS (KiB)", first.worker_rss >> 10, last.worker_rss >> 10),
         ("threads", first.threads, last.threads),
@@ -186,8 +188,8 @@ def _report(samples: list[Sample], missed: int, repairs: list[str]) -> None:
         ("anonymous", lambda s: s.anonymous),
     ]
     trends += [(name.strip().removesuffix(" (KiB)"), _heap(key))
-               for key, name in HEAP_ROWS
-               if key != "blocks" and all(key in s.heap for s in samples)]  # fmt: skip
+               for key, name, shift in HEAP_ROWS
+               if shift == 10 and all(key in s.heap for s in samples)]  # fmt: skip
     slopes = ", ".join(f"{name} {_trend(samples, value) / 1024:+.2f}" for name, value in trends)
     print(f"executive trend (least squares over all {len(samples)} samples, which one "
           f"sample's ups and downs do not sway), KiB per goal: {slopes}")  # fmt: skip
