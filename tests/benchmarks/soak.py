@@ -21,7 +21,8 @@ the machine's load average (the machine may be shared: a high
 load may cost observers their rates). The executive also tells what its heap holds
 (:mod:`tests.benchmarks.heap_probe`): malloc's bytes in use and kept free, SQLite's
 memory and Python's objects, so that a growing RSS can be told apart from memory the
-executive keeps.
+executive keeps. A soak that saw a false repair (or was stopped) keeps its folder (the knowledge base
+and the components' logs), to be read afterwards; a soak that ended well removes it.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from __future__ import annotations
 import argparse
 import itertools
 import os
+import shutil
 import tempfile
 import time
 from collections.abc import Callable
@@ -113,14 +115,17 @@ def main() -> None:
     parser.add_argument("--time-scale", type=float, default=10.0, help="robot time speed-up")
     args = parser.parse_args()
     began = time.monotonic()
-    with tempfile.TemporaryDirectory(prefix="dura-soak-") as temporary:
-        folder = Path(temporary)
-        probe = folder / "heap.jsonl"
-        os.environ.update(heap_probe.install(folder / "probe", probe))  # the executive's
-        with RobotProcess(USECASE, folder / "robot", time_scale=args.time_scale) as robot:
-            samples, missed = _soak(robot, args, probe)
-            repairs = [f"{e.kind} {e.subject}: {e.data.get('reason', e.data.get('faulty', ''))}"
-                       for kind in ("FAULT", "RULE_FIRED") for e in robot.events(kind)]  # fmt: skip
+    folder = Path(tempfile.mkdtemp(prefix="dura-soak-"))
+    probe = folder / "heap.jsonl"
+    os.environ.update(heap_probe.install(folder / "probe", probe))  # the executive's
+    with RobotProcess(USECASE, folder / "robot", time_scale=args.time_scale) as robot:
+        samples, missed = _soak(robot, args, probe)
+        repairs = [f"{e.kind} {e.subject}: {e.data.get('reason', e.data.get('faulty', ''))}"
+                   for kind in ("FAULT", "RULE_FIRED") for e in robot.events(kind)]  # fmt: skip
+    if repairs:  # its knowledge base and logs tell what the observers saw
+        print(f"kept {folder} (false repairs: read its knowledge base with dura)")
+    else:
+        shutil.rmtree(folder)
     loads = [s.load for s in samples]
     print(f"{samples[-1].goals - samples[0].goals} goals after a warm-up of {args.warm_up}, "
           f"time scale {args.time_scale:g}, {time.monotonic() - began:.0f} s, load average "
