@@ -122,7 +122,7 @@ def build_parser(argv: Sequence[str] = ()) -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    named = next((word for word in argv if not word.startswith("-")), None)
+    named = _command(argv)
     for module in [named] if named in COMMANDS else COMMANDS:
         importlib.import_module(f"executive.cli.{module}").register(sub)
     return parser
@@ -134,6 +134,11 @@ def _configure_logging(verbose: int) -> None:
 
     level = {0: logging.WARNING, 1: logging.INFO}.get(verbose, logging.DEBUG)
     logging.basicConfig(level=level, format="%(asctime)s %(name)s %(levelname)s: %(message)s")
+
+
+def _command(argv: Sequence[str]) -> str | None:
+    """The command ``argv`` names (its first word that is not an option), if any."""
+    return next((word for word in argv if not word.startswith("-")), None)
 
 
 def parse(argv: Sequence[str] | None = None) -> argparse.Namespace:
@@ -169,6 +174,10 @@ def execute(args: argparse.Namespace) -> int:
 def entry() -> None:
     """The console script (and ``python -m executive.cli``): a command started as fast
     as :mod:`executive.fast_start` makes it."""
+    if _command(sys.argv[1:]) == "run":  # a long run: glibc's thread caches off
+        from executive.runtime.native_heap import restart_without_thread_caches
+
+        restart_without_thread_caches()
     fast_start.defer_modules()  # the modules that the imports name but no quick command uses
     try:
         with fast_start.collection_paused():  # the command's imports
