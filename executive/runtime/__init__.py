@@ -18,7 +18,8 @@ It owns the launcher and the component processes. It may import :mod:`executive.
 - :mod:`.behavior_goals` — goals sent to behaviors, their feedback and results;
 - :mod:`.component_api` — the launcher's bus API for the command line;
 - :mod:`.run_lock` — one executive per knowledge base, and what a killed one left;
-- :mod:`.native_heap` — the C heap of a long-running process: few arenas, trimmed;
+- :mod:`.native_heap` — the C heap of a long-running process: few arenas, trimmed,
+  no caches of freed blocks per thread;
 - :mod:`.translator` — lifecycle commands for programs not written with the SDK (the
   plug-ins that come with dura in :mod:`.translators`);
 - :mod:`.ros2_launch` — a ROS 2 program started under a host of dura's

@@ -1,7 +1,9 @@
-"""The C heap of a long-running process: arenas capped, free pages given back (glibc).
+"""The C heap of a long-running process: arenas capped, free pages given back, no cache
+of freed blocks per thread (glibc).
 
 Each check runs in a Python process of its own: an arena cap holds for a whole process,
-and only threads that have no arena yet heed it."""
+only threads that have no arena yet heed it, and glibc reads its tunables when a program
+starts."""
 
 from __future__ import annotations
 
@@ -10,10 +12,14 @@ import os
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
+import psutil
 import pytest
 
 from executive.runtime.native_heap import _glibc
+from executive.testing.harness import RobotProcess
+from tests.conftest import USECASE
 
 pytestmark = pytest.mark.skipif(_glibc() is None, reason="glibc's malloc only")
 
@@ -108,3 +114,74 @@ def test_a_trim_gives_free_pages_back() -> None:
 def test_the_trimmer_trims_on_its_own() -> None:
     result = _run(TRIM, MODE="thread")
     assert int(result["after"]) < int(result["before"]) - 20000  # type: ignore[call-overload]
+
+
+# the program started again with the thread caches off, as `dura run` is: its pid at
+# each start (stderr), the variable it has and gives what it starts, and by how many
+# bytes malloc's count in use falls when seven blocks of 1000 bytes are freed (a thread
+# cache keeps them, and glibc counts them in use). glibc cuts GLIBC_TUNABLES short at its
+# first tunable in the environment a program sees (its tunables all hold, though).
+RESTART = """
+import ctypes, os, subprocess, sys
+print("started", os.getpid(), file=sys.stderr, flush=True)
+from executive.runtime.native_heap import restart_without_thread_caches
+restart_without_thread_caches()
+class Info(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_size_t) for name in ("arena", "ordblks", "smblks", "hblks",
+                "hblkhd", "usmblks", "fsmblks", "uordblks", "fordblks", "keepcost")]
+libc = ctypes.CDLL("libc.so.6")
+libc.mallinfo2.restype = Info
+libc.malloc.restype = ctypes.c_void_p
+libc.free.argtypes = [ctypes.c_void_p]
+blocks = [libc.malloc(1000) for _ in range(7)]
+before = libc.mallinfo2().uordblks
+for b in blocks:
+    libc.free(b)
+child = subprocess.run([sys.executable, "-c", "import os; print(os.environ.get('GLIBC_TUNABLES'))"],
+                       capture_output=True, text=True, check=True).stdout.strip()
+print(json.dumps({"pid": os.getpid(), "later": os.environ.get("GLIBC_TUNABLES"), "child": child,
+                  "held": before - libc.mallinfo2().uordblks}))
+"""
+
+
+def _restarted(tunables: str | None) -> tuple[dict[str, object], str]:
+    env = {k: v for k, v in os.environ.items() if k != "GLIBC_TUNABLES"}
+    if tunables is not None:
+        env["GLIBC_TUNABLES"] = tunables
+    done = subprocess.run([sys.executable, "-c", "import json\n" + RESTART],
+                          capture_output=True, text=True, env=env, timeout=60, check=True)  # fmt: skip
+    result: dict[str, object] = json.loads(done.stdout)
+    return result, done.stderr
+
+
+def test_the_program_starts_again_in_its_process_with_the_thread_caches_off() -> None:
+    result, said = _restarted(None)
+    assert said.split() == ["started", str(result["pid"])] * 2  # twice, in the same process
+    assert result["later"] is None and result["child"] == "None"  # what it starts: as before
+    assert int(result["held"]) >= 7 * 1000  # type: ignore[call-overload]  # free at once
+
+
+def test_the_users_tunables_are_kept_and_their_thread_caches_win() -> None:
+    others, said = _restarted("glibc.malloc.arena_max=4")
+    assert said.split() == ["started", str(others["pid"])] * 2
+    assert others["later"] == others["child"] == "glibc.malloc.arena_max=4"
+    assert int(others["held"]) >= 7 * 1000  # type: ignore[call-overload]  # both tunables hold
+    chosen, said = _restarted("glibc.malloc.tcache_count=7")
+    assert said.split() == ["started", str(chosen["pid"])]  # not started again
+    assert chosen["later"] == chosen["child"] == "glibc.malloc.tcache_count=7"
+    assert int(chosen["held"]) < 1000  # type: ignore[call-overload]  # kept by the cache
+
+
+@pytest.mark.slow
+def test_dura_run_runs_without_thread_caches_and_its_components_as_they_were(
+    tmp_path: Path,
+) -> None:
+    os.environ.pop("GLIBC_TUNABLES", None)
+    with RobotProcess(USECASE, tmp_path) as robot:
+        state = robot.request("component/start", {"name": "lidar"})
+        assert state["state"] == "ready", state
+        executive = psutil.Process(robot.pid)  # the process the harness started
+        component = psutil.Process(int(state["pid"]))
+        assert executive.environ().get("GLIBC_TUNABLES") == "glibc.malloc.tcache_count=0"
+        assert component in executive.children(recursive=True)
+        assert "GLIBC_TUNABLES" not in component.environ()
