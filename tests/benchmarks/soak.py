@@ -1,7 +1,7 @@
 """Soak: N goals one after another on a real executive of the use case; what grows.
 
     python -m tests.benchmarks.soak [--goals N | --minutes M] [--every SECONDS]
-                                    [--warm-up N] [--time-scale S]
+                                    [--warm-up N] [--time-scale S] [--heaptrack RECORD]
 
 Each goal sends the robot to another place, ``(robot_at lab)``, ``(robot_at office)``,
 ``(robot_at dock)`` in turn, and waits until it is achieved; nothing is injected. With
@@ -23,11 +23,15 @@ load may cost observers their rates). The executive also tells what its heap hol
 memory and Python's objects, so that a growing RSS can be told apart from memory the
 executive keeps. A soak that saw a false repair (or was stopped) keeps its folder (the knowledge base
 and the components' logs), to be read afterwards; a soak that ended well removes it.
+With ``--heaptrack`` the executive runs under heaptrack, whose record
+:mod:`tests.benchmarks.heaptrack_growth` reads: the blocks it holds, what grows and who
+asked for it.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import itertools
 import os
 import shutil
@@ -41,7 +45,7 @@ import psutil
 
 from executive.testing.client import GoalEnded
 from executive.testing.harness import RobotProcess
-from tests.benchmarks import heap_probe
+from tests.benchmarks import heap_probe, heaptrack_growth
 from tests.conftest import USECASE
 
 PLACES = ("lab", "office", "dock")
@@ -113,12 +117,17 @@ def main() -> None:
     parser.add_argument("--every", type=float, default=0.0, help="seconds between goals")
     parser.add_argument("--warm-up", type=int, default=10, help="goals before measuring")
     parser.add_argument("--time-scale", type=float, default=10.0, help="robot time speed-up")
+    parser.add_argument("--heaptrack", type=Path, help="record the executive's heap here (.zst)")
     args = parser.parse_args()
     began = time.monotonic()
     folder = Path(tempfile.mkdtemp(prefix="dura-soak-"))
     probe = folder / "heap.jsonl"
     os.environ.update(heap_probe.install(folder / "probe", probe))  # the executive's
-    with RobotProcess(USECASE, folder / "robot", time_scale=args.time_scale) as robot:
+    traced = heaptrack_growth.recording(args.heaptrack) if args.heaptrack else None
+    with (
+        traced or contextlib.nullcontext(),
+        RobotProcess(USECASE, folder / "robot", time_scale=args.time_scale) as robot,
+    ):
         samples, missed = _soak(robot, args, probe)
         repairs = [f"{e.kind} {e.subject}: {e.data.get('reason', e.data.get('faulty', ''))}"
                    for kind in ("FAULT", "RULE_FIRED") for e in robot.events(kind)]  # fmt: skip
