@@ -5,8 +5,8 @@
 
 Each goal sends the robot to another place, ``(robot_at lab)``, ``(robot_at office)``,
 ``(robot_at dock)`` in turn, and waits until it is achieved; nothing is injected. With
-``--every`` a goal is sent at most that often (the issue's robot takes one every ~10 s;
-without it, one right after another); with ``--minutes`` goals are sent until that
+``--every`` a goal after the warm-up is sent at most that often (the issue's robot takes
+one every ~10 s; without it, and in the warm-up, one right after another); with ``--minutes`` goals are sent until that
 time has passed after the warm-up, instead of ``--goals``. After the warm-up, the executive's process (and
 its planner worker, measured apart) is sampled after every goal: resident memory (and
 how much of it is anonymous: the heap, not mapped files), threads, open files, and the
@@ -163,7 +163,8 @@ def _soak(robot: RobotProcess, args: argparse.Namespace, probe: Path) -> tuple[l
             samples.append(sample(robot, n, probe))
         if n == max(1, args.warm_up) and args.minutes:
             until = time.monotonic() + args.minutes * 60
-        time.sleep(max(0.0, sent + args.every - time.monotonic()))
+        if n >= args.warm_up:  # the warm-up only fills what fills up: as fast as it goes
+            time.sleep(max(0.0, sent + args.every - time.monotonic()))
     return samples, missed
 
 
