@@ -124,11 +124,12 @@ def read(path: Path) -> Record:
     return record
 
 
-def _trend(times: list[float], values: list[int]) -> float:
-    """Least-squares slope of ``values`` over ``times``, per second."""
-    mean_t, mean_v = sum(times) / len(times), sum(values) / len(values)
-    spread = sum((t - mean_t) ** 2 for t in times)
-    return sum((t - mean_t) * (v - mean_v) for t, v in zip(times, values, strict=True)) / spread
+def trend(xs: list[float], ys: list[float]) -> float:
+    """The least-squares slope of ``ys`` over ``xs`` (0 if the ``xs`` are all the same)."""
+    mean_x, mean_y = sum(xs) / len(xs), sum(ys) / len(ys)
+    spread = sum((x - mean_x) ** 2 for x in xs)
+    together = sum((x - mean_x) * (y - mean_y) for x, y in zip(xs, ys, strict=True))
+    return together / spread if spread else 0.0
 
 
 def main() -> None:
@@ -150,8 +151,8 @@ def main() -> None:
     print(f"blocks not yet freed (KiB) along {times[0]:.0f}-{times[-1]:.0f} s: {along}")
     growth = {}
     for trace in set().union(*(h.keys() for _, h in window)):
-        growth[trace] = _trend(times, [h.get(trace, 0) for _, h in window]) * span
-    total = _trend(times, [sum(h.values()) for _, h in window]) * span
+        growth[trace] = trend(times, [h.get(trace, 0) for _, h in window]) * span
+    total = trend(times, [sum(h.values()) for _, h in window]) * span
     print(f"trend over the window: {total / 1024:+.1f} KiB in all")
     owners: dict[str, float] = {}
     for trace, grown in growth.items():

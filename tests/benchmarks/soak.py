@@ -6,11 +6,11 @@
 Each goal sends the robot to another place, ``(robot_at lab)``, ``(robot_at office)``,
 ``(robot_at dock)`` in turn, and waits until it is achieved; nothing is injected. With
 ``--every`` a goal after the warm-up is sent at most that often (the issue's robot takes
-one every ~10 s; without it, and in the warm-up, one right after another); with ``--minutes`` goals are sent until that
-time has passed after the warm-up, instead of ``--goals``. After the warm-up, the executive's process (and
-its planner worker, measured apart) is sampled after every goal: resident memory (and
-how much of it is anonymous: the heap, not mapped files), threads, open files, and the
-knowledge base's size (its file: the WAL beside it is bounded by SQLite's checkpoints).
+one every ~10 s; without it, and in the warm-up, one right after another); with
+``--minutes`` goals are sent until that time has passed after the warm-up, instead of
+``--goals``. After the warm-up, the executive's process (and its planner worker,
+measured apart) is sampled after every goal: resident memory (and how much of it is
+anonymous: the heap, not mapped files), threads, open files, and the knowledge base's size (its file: the WAL beside it is bounded by SQLite's checkpoints).
 The table gives each at the end of the warm-up and at the end, and the growth per goal;
 false repairs are the faults counted and the repair rules fired with nothing injected
 (0 is the only right answer). The executive's resident memory is also shown along the
@@ -21,8 +21,9 @@ the machine's load average (the machine may be shared: a high
 load may cost observers their rates). The executive also tells what its heap holds
 (:mod:`tests.benchmarks.heap_probe`): malloc's bytes in use and kept free, SQLite's
 memory and Python's objects, so that a growing RSS can be told apart from memory the
-executive keeps. A soak that saw a false repair (or was stopped) keeps its folder (the knowledge base
-and the components' logs), to be read afterwards; a soak that ended well removes it.
+executive keeps. A soak that saw a false repair (or was stopped) keeps its folder (the
+knowledge base and the components' logs), to be read afterwards; a soak that ended well
+removes it.
 With ``--heaptrack`` the executive runs under heaptrack, whose record
 :mod:`tests.benchmarks.heaptrack_growth` reads: the blocks it holds, what grows and who
 asked for it.
@@ -218,12 +219,7 @@ def _heap(key: str) -> Callable[[Sample], int]:
 
 def _trend(samples: list[Sample], value: Callable[[Sample], int]) -> float:
     """The least-squares slope of ``value`` over the goals of ``samples``, per goal."""
-    goals = [s.goals for s in samples]
-    values = [value(s) for s in samples]
-    mean_goal, mean_value = sum(goals) / len(goals), sum(values) / len(values)
-    spread = sum((g - mean_goal) ** 2 for g in goals)
-    together = sum((g - mean_goal) * (v - mean_value) for g, v in zip(goals, values, strict=True))
-    return together / spread if spread else 0.0
+    return heaptrack_growth.trend([s.goals for s in samples], [value(s) for s in samples])
 
 
 def _slope(a: Sample, b: Sample) -> str:
