@@ -22,6 +22,7 @@ import argparse
 import contextlib
 import os
 import shutil
+import statistics
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -126,10 +127,9 @@ def read(path: Path) -> Record:
 
 def trend(xs: list[float], ys: list[float]) -> float:
     """The least-squares slope of ``ys`` over ``xs`` (0 if the ``xs`` are all the same)."""
-    mean_x, mean_y = sum(xs) / len(xs), sum(ys) / len(ys)
-    spread = sum((x - mean_x) ** 2 for x in xs)
-    together = sum((x - mean_x) * (y - mean_y) for x, y in zip(xs, ys, strict=True))
-    return together / spread if spread else 0.0
+    if len(set(xs)) < 2:
+        return 0.0
+    return statistics.linear_regression(xs, ys).slope
 
 
 def main() -> None:

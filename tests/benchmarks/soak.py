@@ -10,7 +10,8 @@ one every ~10 s; without it, and in the warm-up, one right after another); with
 ``--minutes`` goals are sent until that time has passed after the warm-up, instead of
 ``--goals``. After the warm-up, the executive's process (and its planner worker,
 measured apart) is sampled after every goal: resident memory (and how much of it is
-anonymous: the heap, not mapped files), threads, open files, and the knowledge base's size (its file: the WAL beside it is bounded by SQLite's checkpoints).
+anonymous: the heap, not mapped files), threads, open files, and the knowledge base's
+size (its file: the WAL beside it is bounded by SQLite's checkpoints).
 The table gives each at the end of the warm-up and at the end, and the growth per goal;
 false repairs are the faults counted and the repair rules fired with nothing injected
 (0 is the only right answer). The executive's resident memory is also shown along the
